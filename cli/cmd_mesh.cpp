@@ -1,0 +1,114 @@
+// `squeeze mesh INPUT -o OUT`: convex shells and one coarse tetrahedral mesh of any surface.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <spdlog/spdlog.h>
+
+#include "commands.h"
+#include "squeeze/common/atomic_file.h"
+#include "squeeze/common/error.h"
+#include "squeeze/common/log.h"
+#include "squeeze/common/progress.h"
+#include "squeeze/meshing/mesh_pipeline.h"
+#include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/tet_io.h"
+
+namespace squeeze::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct MeshArgs {
+  std::string input, output, shells, report;
+  MeshOptions options;
+};
+
+void check_output_dir(const fs::path& p) {
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw InputError(p.string() + ": output directory " + dir.string() + " does not exist");
+}
+
+}  // namespace
+
+Runner add_mesh_command(CLI::App& app, const Global& global) {
+  auto args = std::make_shared<MeshArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "mesh",
+      "Decompose a surface into convex shells and tetrahedralize them into one coarse tetrahedral mesh.\n"
+      "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
+      "non-manifold scans are fine. OUT: .mesh (Medit), .msh (Gmsh 2.2), .vtk, .vtu or .node/.ele (TetGen).\n"
+      "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");
+  cmd->add_option("INPUT", args->input, "Input surface")->required();
+  cmd->add_option("-o,--output", args->output, "Output tetrahedral mesh; the format follows the extension")->required();
+  cmd->add_option("--concavity", args->options.decomposition.concavity,
+                  "Split pieces until their concavity (depth of the deepest surface point below the piece's "
+                  "convex hull) is at most this fraction of the bounding-box diagonal")
+      ->capture_default_str();
+  cmd->add_option("--max-hulls", args->options.decomposition.max_hulls, "At most this many convex shells")
+      ->capture_default_str();
+  cmd->add_option("--target-tets", args->options.tetrahedralize.target_tets,
+                  "Desired number of tetrahedra (met within about 35%); the planner's cost grows with it")
+      ->capture_default_str();
+  cmd->add_option("--voxel-resolution", args->options.decomposition.voxel_resolution,
+                  "Voxels along the longest side for inside/outside and cut evaluation")
+      ->capture_default_str();
+  cmd->add_option("--facet-distance", args->options.tetrahedralize.facet_distance,
+                  "Largest distance of boundary facets from the shells, as a fraction of the diagonal")
+      ->capture_default_str();
+  cmd->add_option("--offset", args->options.tetrahedralize.offset,
+                  "Dilation of the shells before meshing, as a fraction of the diagonal (keeps their corners inside)")
+      ->capture_default_str();
+  cmd->add_option("--shells", args->shells, "Also write the convex shells as one surface file (.off, .obj, .ply, .stl, ...)");
+  cmd->add_option("--report", args->report, "Also write a JSON report (input, hulls, tets, quality, coverage, seconds)");
+
+  return [args, &global]() -> int {
+    MeshArgs& a = *args;
+    // Fail fast, before any work, on outputs that cannot be written.
+    if (!is_tet_format(a.output))
+      throw InputError(a.output + ": unknown tetrahedral mesh format (use .mesh, .msh, .vtk, .vtu or .node/.ele)");
+    check_output_dir(a.output);
+    if (!a.shells.empty()) check_output_dir(a.shells);
+    if (!a.report.empty()) check_output_dir(a.report);
+    if (!(a.options.decomposition.concavity > 0)) throw InputError("--concavity must be > 0");
+    if (a.options.decomposition.max_hulls < 1) throw InputError("--max-hulls must be at least 1");
+    if (a.options.tetrahedralize.target_tets < 1) throw InputError("--target-tets must be at least 1");
+
+    Progress progress(!global.quiet);
+    MeshResult r = mesh_file(a.input, a.options, &progress);
+    progress.finish();
+    if (r.quality.min_dihedral < a.options.tetrahedralize.min_dihedral)
+      spdlog::warn("{}: smallest dihedral angle {:.2f} deg is below {:.1f} deg", a.input, r.quality.min_dihedral,
+                   a.options.tetrahedralize.min_dihedral);
+    if (r.decomposition.hit_max_hulls)
+      spdlog::info("{}: stopped at --max-hulls {} with concavity {:.4g} above the threshold {:.4g}", a.input,
+                   a.options.decomposition.max_hulls, r.decomposition.max_concavity, r.decomposition.threshold);
+
+    save_tet_mesh(a.output, r.tets);
+    if (!a.shells.empty()) save_surface(a.shells, shells_surface(r.decomposition));
+    if (!a.report.empty()) {
+      const auto json = mesh_report(r, a.input);
+      write_atomically(a.report, [&](const fs::path& tmp) {
+        std::ofstream out(tmp);
+        out << json.dump(2) << '\n';
+        if (!out) throw InputError(a.report + ": write failed");
+      });
+    }
+    if (!global.quiet) {
+      double total = 0;
+      for (const auto& s : r.seconds) total += s.second;
+      std::fprintf(stderr,
+                   "squeeze: %s: %zu convex shells (max concavity %.3g%% of diagonal), %d tetrahedra, %d vertices, "
+                   "dihedral %.1f..%.1f deg, volume ratio %.3f, %.2f%% of input vertices covered, %.2f s\n",
+                   a.input.c_str(), r.decomposition.shells.size(),
+                   100.0 * r.decomposition.max_concavity / bounding_box_diagonal(r.input.V), r.quality.tets,
+                   r.quality.vertices, r.quality.min_dihedral, r.quality.max_dihedral,
+                   r.input_volume > 0 ? r.quality.volume / r.input_volume : 0.0, 100.0 * r.covered_fraction, total);
+    }
+    return kExitOk;
+  };
+}
+
+}  // namespace squeeze::cli

@@ -1,0 +1,25 @@
+// The squeeze command line: each subcommand registers itself on the CLI11 app and returns the
+// callback that runs it (after parsing), which returns the process exit code.
+#pragma once
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace squeeze::cli {
+
+/// Options shared by every subcommand.
+struct Global {
+  bool quiet = false;
+  int verbose = 0;
+  int threads = 0;  // 0: all cores
+};
+
+using Runner = std::function<int()>;
+
+Runner add_mesh_command(CLI::App& app, const Global& global);
+
+/// Exit codes.
+constexpr int kExitOk = 0;
+constexpr int kExitInputError = 1;   // bad input, configuration or output path
+constexpr int kExitUsage = 2;        // bad command line
+
+}  // namespace squeeze::cli

@@ -1,0 +1,59 @@
+// squeeze — plans and renders the motion of deformable objects among deformable and rigid
+// obstacles (Rodriguez, Lien, Amato, ICRA 2006, and beyond).
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "commands.h"
+#include "squeeze/common/error.h"
+#include "squeeze/common/log.h"
+
+int main(int argc, char** argv) {
+  using namespace squeeze::cli;
+  CLI::App app{
+      "squeeze: motion planning for deformable objects among deformable and rigid obstacles.\n"
+      "Pipeline: mesh (convex shells -> coarse tetrahedral mesh) -> ffd -> fem -> plan -> render.\n"
+      "Run `squeeze COMMAND --help` for a command's options."};
+  app.require_subcommand(1);
+  Global global;
+  app.add_flag("-q,--quiet", global.quiet, "Print errors only (no progress, no warnings)");
+  app.add_flag("-v,--verbose", global.verbose, "More detail on stderr (-vv for debug output)");
+  app.add_option("-j,--threads", global.threads, "Worker threads (default: all cores); results do not depend on it")
+      ->check(CLI::NonNegativeNumber);
+  app.set_version_flag("--version", "squeeze 0.1.0");
+  app.fallthrough();
+
+  const Runner mesh = add_mesh_command(app, global);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUsage;
+  }
+  squeeze::set_verbosity(global.quiet          ? squeeze::Verbosity::quiet
+                         : global.verbose >= 2 ? squeeze::Verbosity::debug
+                         : global.verbose == 1 ? squeeze::Verbosity::verbose
+                                               : squeeze::Verbosity::normal);
+  std::unique_ptr<tbb::global_control> threads;
+  if (global.threads > 0)
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    static_cast<size_t>(global.threads));
+  try {
+    for (CLI::App* sub : app.get_subcommands()) {
+      if (sub->get_name() == "mesh") return mesh();
+    }
+  } catch (const squeeze::InputError& e) {
+    std::fprintf(stderr, "squeeze: error: %s\n", e.what());
+    return kExitInputError;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "squeeze: error: out of memory\n");
+    return kExitInputError;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "squeeze: internal error: %s\n", e.what());
+    return 70;
+  }
+  return kExitUsage;
+}

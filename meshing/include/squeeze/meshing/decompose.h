@@ -1,0 +1,74 @@
+// squeeze::meshing — approximate convex decomposition by plane cuts.
+//
+// The solid bounded by a (possibly open, self-intersecting) surface is cut recursively by planes
+// until every piece's concavity is at most a threshold or a hull budget is reached; each piece's
+// convex hull is a "convex shell". Because every cut is a plane, the hulls of the two sides lie in
+// opposite closed half-spaces: the shells are interior-disjoint and meet on the cutting planes.
+//
+// Concavity (exactly what is measured): for a piece P = S ∩ C, where S is the solid and C the
+// convex cell bounded by the cutting planes so far,
+//     concavity(P) = max over points x of ∂S ∩ C of  dist(x, ∂conv(P))
+// i.e. the depth, below the hull boundary, of the deepest point of the piece's outer surface — the
+// concavity of Lien & Amato's ACD (the paper's [15]: J.-M. Lien, N. M. Amato, "Approximate convex
+// decomposition of polyhedra", SPM 2007, doi:10.1145/1236246.1236265). dist to the boundary of a
+// convex polytope from inside is the minimum over its facet planes, so it is exact. Points of the
+// cutting planes lie on ∂conv(P) and do not count. The points x are the vertices of the input
+// triangles clipped to C (original vertices plus edge/plane intersections); surface that lies
+// inside the solid (walls between touching parts, self-intersections) is not ∂S and is excluded,
+// as judged on the voxel grid below. Units: model units (the threshold is given as a fraction of the
+// bounding-box diagonal).
+//
+// Inside/outside: voxels of a grid (voxel_resolution along the longest side) are surface voxels
+// (touched by a triangle) or classified by the generalized winding number at their centre
+// (> 0.5 inside); no closedness is assumed. Connected parts of the solid are 26-connected
+// components of the occupied voxels: parts that touch or overlap (organs made of several closed
+// pieces) form one part; parts farther apart than a voxel stay apart.
+//
+// Choosing a cut (in the family of V-HACD, K. Mamou 2009/2016, and CoACD, X. Wei et al. 2022,
+// doi:10.1145/3528223.3530103): the piece with the largest concavity is split next. Candidate
+// planes are normal to the piece's three principal axes, at cut_samples even positions and
+// through the deepest point; each candidate is scored by the summed volume of the convex hulls of
+// the two sides' boundary voxels (the excess volume the shells would add), the lowest wins, ties
+// by candidate order. Everything is deterministic and independent of the number of threads.
+#pragma once
+#include <vector>
+
+#include "squeeze/meshing/convex_hull.h"
+#include "squeeze/meshing/surface.h"
+
+namespace squeeze {
+
+class Progress;
+
+struct DecompositionOptions {
+  double concavity = 0.02;       // threshold, as a fraction of the input's bounding-box diagonal
+  int max_hulls = 32;            // at most this many shells (splitting stops there)
+  int voxel_resolution = 64;     // voxels along the longest bounding-box side
+  int cut_samples = 10;          // candidate positions per principal axis per split
+  double flat_thickness = 0.004; // fraction of the diagonal given to flat (zero-volume) pieces
+};
+
+struct ConvexShell {
+  ConvexHull hull;      // the convex shell
+  double concavity;     // concavity of its piece (model units)
+  int part;             // connected part of the solid it belongs to (0-based)
+};
+
+struct Decomposition {
+  std::vector<ConvexShell> shells;
+  int parts = 0;                 // connected parts of the solid (see above)
+  double threshold = 0.0;        // concavity threshold used (model units)
+  double max_concavity = 0.0;    // largest concavity over the shells (model units)
+  double solid_volume = 0.0;     // volume of the solid by winding number on the voxel grid
+  bool hit_max_hulls = false;    // stopped by max_hulls with a piece still above threshold
+};
+
+/// Decomposes the solid bounded by `mesh` (faces oriented outward per component, see
+/// orient_outward) into convex shells.
+///   mesh  V #V by 3, F #F by 3 (model units)
+/// Returns the shells; together they contain every vertex of `mesh`.
+/// Throws InputError on impossible options (concavity <= 0, max_hulls < 1, resolution < 8).
+Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& options = {},
+                        Progress* progress = nullptr);
+
+}  // namespace squeeze

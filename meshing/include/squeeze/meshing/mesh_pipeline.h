@@ -1,0 +1,56 @@
+// squeeze::meshing — the whole `squeeze mesh` pipeline: load, analyse, decompose into convex
+// shells, tetrahedralize, measure. Paper: Rodriguez, Lien, Amato, ICRA 2006, Section VI-A, Fig. 3.
+#pragma once
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "squeeze/meshing/decompose.h"
+#include "squeeze/meshing/surface.h"
+#include "squeeze/meshing/surface_analysis.h"
+#include "squeeze/meshing/tet_mesh.h"
+#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tetrahedralize.h"
+
+namespace squeeze {
+
+class Progress;
+
+struct MeshOptions {
+  DecompositionOptions decomposition;   // concavity threshold, hull budget, voxel grid
+  TetrahedralizeOptions tetrahedralize; // target tet count, facet distance, sliver bound
+  double coverage_tolerance = 0.005;    // fraction of the bbox diagonal for the coverage figure
+  bool check_self_intersection = true;  // for the report (costs about a tenth of a second per 100k faces)
+};
+
+/// Everything `squeeze mesh` computes.
+struct MeshResult {
+  SurfaceMesh input;            // as loaded (welded), faces oriented outward per component
+  SurfaceInfo info;             // counts, closedness, self-intersection, volume
+  Decomposition decomposition;  // convex shells
+  TetMesh tets;                 // the coarse tetrahedral mesh
+  TetQuality quality;
+  TetrahedralizeStats tet_stats;
+  double input_volume = 0;      // closed: enclosed volume; open: winding-number volume
+  bool input_volume_from_winding_number = false;
+  double inside_fraction = 0;   // input vertices inside the tet mesh
+  double covered_fraction = 0;  // ... inside or within coverage_tolerance × diagonal of it
+  double max_outside_distance = 0;  // worst distance of an input vertex outside the mesh (units)
+  std::vector<std::pair<std::string, double>> seconds;  // per stage
+};
+
+/// Runs the pipeline on an already loaded surface (faces need not be consistently oriented).
+/// Throws InputError on bad options or an input that yields no volume at all.
+MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& options, Progress* progress = nullptr);
+
+/// Loads `path` (see load_surface) and runs mesh_surface on it.
+MeshResult mesh_file(const std::filesystem::path& path, const MeshOptions& options, Progress* progress = nullptr);
+
+/// All convex shells as one surface (for --shells).
+SurfaceMesh shells_surface(const Decomposition& d);
+
+/// The report of `squeeze mesh --report` (keys documented in docs/meshing.md).
+nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name);
+
+}  // namespace squeeze

@@ -1,0 +1,21 @@
+// squeeze::meshing — a triangle surface as libigl-style matrices.
+#pragma once
+#include <Eigen/Core>
+
+namespace squeeze {
+
+/// A triangle soup or mesh.
+///   V  #V by 3 vertex positions (model units; metres in scenes)
+///   F  #F by 3 vertex indices into V (0-based); orientation not assumed consistent
+struct SurfaceMesh {
+  Eigen::MatrixX3d V;
+  Eigen::MatrixX3i F;
+};
+
+/// Axis-aligned bounding box of the rows of V: min and max corners (#V must be > 0).
+void bounding_box(const Eigen::MatrixX3d& V, Eigen::RowVector3d& lo, Eigen::RowVector3d& hi);
+
+/// Length of the bounding-box diagonal of V (0 for an empty V).
+double bounding_box_diagonal(const Eigen::MatrixX3d& V);
+
+}  // namespace squeeze

@@ -1,0 +1,42 @@
+// squeeze::meshing — topology of a triangle soup: components, closedness, consistent orientation,
+// enclosed volume, self-intersection.
+#pragma once
+#include <Eigen/Core>
+
+#include "squeeze/meshing/surface.h"
+
+namespace squeeze {
+
+/// What squeeze mesh reports about its input.
+struct SurfaceInfo {
+  int vertices = 0;
+  int faces = 0;
+  int components = 0;          // face-connected components (faces sharing an edge)
+  int boundary_edges = 0;      // edges with one incident face
+  int nonmanifold_edges = 0;   // edges with three or more incident faces
+  bool closed = false;         // no boundary edge
+  bool self_intersecting = false;  // two faces that share no vertex intersect (exact predicates)
+  double volume = 0.0;         // enclosed volume (units³): signed-volume sum over oriented
+                               // components when closed, else by winding number (see report)
+};
+
+/// Face-connected components (through edges shared by exactly two faces, so non-manifold edges
+/// separate). Returns the number of components; C  #F component id per face, 0-based, numbered in
+/// order of their first face.
+int face_components(const Eigen::MatrixX3i& F, Eigen::VectorXi& C);
+
+/// Orients the faces of every component consistently (breadth-first over manifold edges), then
+/// flips each component whose signed volume (about its centroid) is negative, so closed
+/// components face outward. Returns the re-oriented F. Source of the idea: Jacobson et al. 2013
+/// (winding numbers need consistent orientation); the propagation is the standard BFS.
+Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F);
+
+/// Edge counts, components, closedness and (for closed meshes) volume of `mesh`. The
+/// self_intersecting flag is left false here; see does_self_intersect().
+SurfaceInfo analyse_surface(const SurfaceMesh& mesh);
+
+/// True when two faces that share no vertex intersect (CGAL exact predicates, box intersection).
+/// Faces sharing a vertex are not tested (the usual approximation for soups).
+bool does_self_intersect(const SurfaceMesh& mesh);
+
+}  // namespace squeeze

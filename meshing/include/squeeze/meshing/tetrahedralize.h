@@ -1,0 +1,44 @@
+// squeeze::meshing — one conforming tetrahedral mesh of the union of convex shells.
+#pragma once
+#include <vector>
+
+#include "squeeze/meshing/decompose.h"
+#include "squeeze/meshing/tet_mesh.h"
+
+namespace squeeze {
+
+class Progress;
+
+struct TetrahedralizeOptions {
+  int target_tets = 1000;         // desired tetrahedron count; met within about ±35% (the mesh
+                                  // size is re-estimated up to 4 times)
+  double facet_distance = 0.006;  // fraction of the shells' bounding-box diagonal: how far boundary
+                                  // facets may stray from the shells' surface
+  double offset = 0.003;          // fraction of the diagonal: the shells are dilated by this much
+                                  // before meshing, so that boundary facets (chords of the
+                                  // shells' surface) still enclose the shells' corners
+  double min_dihedral = 5.0;      // degrees; boundary slivers below it are peeled off afterwards
+  double optimize_seconds = 1.0;  // time limit of each of Mesh_3's sliver perturber and exuder
+  unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
+};
+
+/// What tetrahedralize() reports beside the mesh.
+struct TetrahedralizeStats {
+  int attempts = 0;            // Mesh_3 runs needed to land near target_tets
+  double cell_size = 0.0;      // Mesh_3 cell_size used (model units)
+  int peeled_slivers = 0;      // boundary tetrahedra removed for a dihedral angle < min_dihedral
+};
+
+/// Meshes the union of the shells as one domain with CGAL Mesh_3 (Delaunay refinement of a
+/// labeled implicit domain whose function is the union's plane-based signed value, followed by
+/// sliver perturbation and exudation; Jamin, Alliez, Yvinec, Boissonnat, "CGALmesh", ACM TOMS
+/// 41(4), 2015, doi:10.1145/2699463). Being a subcomplex of one Delaunay triangulation, the
+/// result is conforming: shells that meet share vertices and faces, every interior face has
+/// exactly two tetrahedra. Tetrahedra come out positively oriented; each is labelled with the
+/// (1-based) shell that holds its centroid; unused vertices are dropped.
+/// Throws InputError if shells is empty or target_tets < 1; returns an empty mesh if Mesh_3
+/// produced no tetrahedron (the caller reports it).
+TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const TetrahedralizeOptions& options = {},
+                       TetrahedralizeStats* stats = nullptr, Progress* progress = nullptr);
+
+}  // namespace squeeze

@@ -1,0 +1,145 @@
+#include "squeeze/meshing/surface_analysis.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <queue>
+#include <vector>
+
+namespace squeeze {
+namespace {
+
+struct HalfEdge {
+  int a, b;   // sorted vertex pair
+  int face;
+  bool forward;  // the face traverses a->b
+};
+
+// Incident faces per undirected edge, sorted by edge for run-length grouping.
+std::vector<HalfEdge> edge_incidences(const Eigen::MatrixX3i& F) {
+  std::vector<HalfEdge> e;
+  e.reserve(static_cast<size_t>(F.rows()) * 3);
+  for (int f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int u = F(f, k), v = F(f, (k + 1) % 3);
+      e.push_back({std::min(u, v), std::max(u, v), f, u < v});
+    }
+  std::sort(e.begin(), e.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.face < y.face;
+  });
+  return e;
+}
+
+template <class Fn>
+void for_each_edge(const std::vector<HalfEdge>& e, Fn fn) {
+  for (size_t i = 0; i < e.size();) {
+    size_t j = i + 1;
+    while (j < e.size() && e[j].a == e[i].a && e[j].b == e[i].b) ++j;
+    fn(i, j);
+    i = j;
+  }
+}
+
+}  // namespace
+
+int face_components(const Eigen::MatrixX3i& F, Eigen::VectorXi& C) {
+  const auto e = edge_incidences(F);
+  std::vector<std::vector<int>> adj(static_cast<size_t>(F.rows()));
+  for_each_edge(e, [&](size_t i, size_t j) {
+    if (j - i == 2) {
+      adj[e[i].face].push_back(e[i + 1].face);
+      adj[e[i + 1].face].push_back(e[i].face);
+    }
+  });
+  C = Eigen::VectorXi::Constant(F.rows(), -1);
+  int n = 0;
+  std::vector<int> stack;
+  for (int f = 0; f < F.rows(); ++f) {
+    if (C(f) >= 0) continue;
+    C(f) = n;
+    stack.push_back(f);
+    while (!stack.empty()) {
+      const int g = stack.back();
+      stack.pop_back();
+      for (int h : adj[g])
+        if (C(h) < 0) {
+          C(h) = n;
+          stack.push_back(h);
+        }
+    }
+    ++n;
+  }
+  return n;
+}
+
+Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+  Eigen::MatrixX3i out = F;
+  const auto e = edge_incidences(F);
+  // adjacency with "same direction" flag: two faces on a manifold edge are consistent when they
+  // traverse it in opposite directions.
+  struct Link { int face; bool same; };
+  std::vector<std::vector<Link>> adj(static_cast<size_t>(F.rows()));
+  for_each_edge(e, [&](size_t i, size_t j) {
+    if (j - i != 2) return;
+    const bool same = e[i].forward == e[i + 1].forward;
+    adj[e[i].face].push_back({e[i + 1].face, same});
+    adj[e[i + 1].face].push_back({e[i].face, same});
+  });
+  std::vector<signed char> flip(static_cast<size_t>(F.rows()), -1);
+  std::vector<int> comp_faces;
+  std::queue<int> q;
+  for (int seed = 0; seed < F.rows(); ++seed) {
+    if (flip[seed] >= 0) continue;
+    comp_faces.clear();
+    flip[seed] = 0;
+    q.push(seed);
+    while (!q.empty()) {
+      const int f = q.front();
+      q.pop();
+      comp_faces.push_back(f);
+      for (const Link& l : adj[f])
+        if (flip[l.face] < 0) {
+          flip[l.face] = static_cast<signed char>(l.same ? !flip[f] : flip[f]);
+          q.push(l.face);
+        }
+    }
+    // Signed volume of the component about its centroid, with the propagated orientation.
+    Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
+    for (int f : comp_faces) c += (V.row(F(f, 0)) + V.row(F(f, 1)) + V.row(F(f, 2))) / 3.0;
+    c /= static_cast<double>(comp_faces.size());
+    double vol = 0.0;
+    for (int f : comp_faces) {
+      const Eigen::Vector3d a = (V.row(F(f, 0)) - c).transpose(), b = (V.row(F(f, 1)) - c).transpose(),
+                            d = (V.row(F(f, 2)) - c).transpose();
+      const double s = a.dot(b.cross(d));
+      vol += flip[f] ? -s : s;
+    }
+    const bool flip_all = vol < 0.0;
+    for (int f : comp_faces)
+      if (static_cast<bool>(flip[f]) != flip_all) std::swap(out(f, 1), out(f, 2));
+  }
+  return out;
+}
+
+SurfaceInfo analyse_surface(const SurfaceMesh& mesh) {
+  SurfaceInfo info;
+  info.vertices = static_cast<int>(mesh.V.rows());
+  info.faces = static_cast<int>(mesh.F.rows());
+  const auto e = edge_incidences(mesh.F);
+  for_each_edge(e, [&](size_t i, size_t j) {
+    if (j - i == 1) ++info.boundary_edges;
+    if (j - i >= 3) ++info.nonmanifold_edges;
+  });
+  Eigen::VectorXi C;
+  info.components = face_components(mesh.F, C);
+  info.closed = info.boundary_edges == 0;
+  if (info.closed) {
+    const Eigen::MatrixX3i F = orient_outward(mesh.V, mesh.F);
+    double vol = 0.0;
+    for (int f = 0; f < F.rows(); ++f)
+      vol += mesh.V.row(F(f, 0)).dot(mesh.V.row(F(f, 1)).cross(mesh.V.row(F(f, 2)))) / 6.0;
+    info.volume = std::abs(vol);
+  }
+  return info;
+}
+
+}  // namespace squeeze
