@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   app.fallthrough();
 
   const Runner mesh = add_mesh_command(app, global);
+  const Runner deform = add_deform_command(app, global);
 
   try {
     app.parse(argc, argv);
@@ -44,6 +45,7 @@ int main(int argc, char** argv) {
   try {
     for (CLI::App* sub : app.get_subcommands()) {
       if (sub->get_name() == "mesh") return mesh();
+      if (sub->get_name() == "deform") return deform();
     }
   } catch (const squeeze::InputError& e) {
     std::fprintf(stderr, "squeeze: error: %s\n", e.what());

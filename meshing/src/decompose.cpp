@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <spdlog/spdlog.h>
+
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/winding_number.h"
@@ -93,6 +95,18 @@ Grid build_grid(const SurfaceMesh& mesh, int resolution, Progress* progress) {
   const Vec3 lo = mesh.V.colwise().minCoeff().transpose(), hi = mesh.V.colwise().maxCoeff().transpose();
   const double longest = std::max((hi - lo).maxCoeff(), 1e-300);
   g.h = longest / resolution;
+  // Thin objects (a spinal cord, a plate) need voxels finer than the longest side suggests: at
+  // least about two across their thickness, estimated as 3 V / A (the radius of a sphere, 1.5 times
+  // that of a long tube), down to a quarter of the nominal size.
+  double area = 0.0, volume = 0.0;
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
+    const Vec3 a = mesh.V.row(mesh.F(f, 0)).transpose(), b = mesh.V.row(mesh.F(f, 1)).transpose(),
+               c = mesh.V.row(mesh.F(f, 2)).transpose();
+    area += 0.5 * (b - a).cross(c - a).norm();
+    volume += (a - lo).dot((b - lo).cross(c - lo)) / 6.0;
+  }
+  const double thickness = area > 0 ? 3.0 * std::abs(volume) / area : longest;
+  if (thickness > 0) g.h = std::min(g.h, std::max(thickness / 1.5, longest / (4.0 * resolution)));
   g.origin = lo - Vec3::Constant(1.5 * g.h);
   g.nx = static_cast<int>(std::ceil((hi(0) - lo(0)) / g.h)) + 3;
   g.ny = static_cast<int>(std::ceil((hi(1) - lo(1)) / g.h)) + 3;
@@ -161,6 +175,7 @@ struct Piece {
   int order = 0;            // creation order, for deterministic tie-breaks
   ConvexHull hull;
   double concavity = 0.0;
+  double voxel_volume = 0.0;  // interior voxels + half the surface voxels, times h³
   Vec3 deepest = Vec3::Zero();
 };
 
@@ -201,16 +216,24 @@ void thicken_if_flat(Eigen::MatrixX3d& pts, ConvexHull& hull, double thickness) 
 }
 
 void evaluate_piece(Piece& piece, double flat_thickness) {
-  size_t n = 0;
-  for (const auto& poly : piece.polys) n += poly.p.size();
+  // Polygon corners, each once (neighbouring polygons share them); outer wins over inner.
+  struct Corner { double x, y, z; char outer; };
+  std::vector<Corner> corners;
+  for (const auto& poly : piece.polys)
+    for (const Vec3& p : poly.p) corners.push_back({p(0), p(1), p(2), static_cast<char>(poly.outer)});
+  std::sort(corners.begin(), corners.end(), [](const Corner& a, const Corner& b) {
+    return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z != b.z ? a.z < b.z : a.outer > b.outer;
+  });
+  corners.erase(std::unique(corners.begin(), corners.end(),
+                            [](const Corner& a, const Corner& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }),
+                corners.end());
+  const size_t n = corners.size();
   Eigen::MatrixX3d pts(static_cast<Eigen::Index>(n), 3);
   std::vector<char> outer(n);
-  size_t r = 0;
-  for (const auto& poly : piece.polys)
-    for (const Vec3& p : poly.p) {
-      outer[r] = poly.outer;
-      pts.row(static_cast<Eigen::Index>(r++)) = p.transpose();
-    }
+  for (size_t r = 0; r < n; ++r) {
+    outer[r] = corners[r].outer;
+    pts.row(static_cast<Eigen::Index>(r)) << corners[r].x, corners[r].y, corners[r].z;
+  }
   piece.hull = convex_hull(pts);
   thicken_if_flat(pts, piece.hull, flat_thickness);
   // Deepest outer point: parallel max with ties to the lowest index (deterministic).
@@ -260,7 +283,9 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
   if (progress) progress->stage("voxelizing");
   Grid g = build_grid(mesh, opt.voxel_resolution, progress);
   size_t interior = 0, surface = 0;
+  spdlog::debug("voxel grid {}x{}x{}, h {:.17g}", g.nx, g.ny, g.nz, g.h);
   for (unsigned char s : g.state) interior += s == kInterior, surface += s == kSurface;
+  spdlog::debug("voxels: {} interior, {} surface", interior, surface);
   result.solid_volume = (static_cast<double>(interior) + 0.5 * static_cast<double>(surface)) * g.h * g.h * g.h;
 
   // Connected parts: 26-connected components of occupied voxels.
@@ -303,7 +328,12 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     if (part[v] >= 0) pieces[part[v]].voxels.push_back(v);
 
   if (progress) progress->stage("decomposing", opt.max_hulls);
-  for (auto& piece : pieces) evaluate_piece(piece, thickness);
+  auto measure_voxels = [&](Piece& q) {
+    double n = 0;
+    for (int v : q.voxels) n += g.state[v] == kInterior ? 1.0 : 0.5;
+    q.voxel_volume = n * g.h * g.h * g.h;
+  };
+  for (auto& piece : pieces) evaluate_piece(piece, thickness), measure_voxels(piece);
 
   // owner[v]: index into `pieces` of the piece holding voxel v (for the boundary-voxel test).
   std::vector<int> owner(g.size(), -1);
@@ -316,13 +346,23 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
   int next_order = parts;
 
   while (count_alive() < opt.max_hulls) {
-    // The most concave splittable piece (ties: older first).
+    // The worst splittable piece (ties: older first). A piece needs splitting when its concavity
+    // is above the threshold, or when its hull is far larger than the piece (thin curved parts,
+    // whose concavity can stay below a threshold measured against the whole diagonal).
+    auto badness = [&](const Piece& q) {
+      const double voxel_volume = q.voxel_volume > 0 ? q.voxel_volume : INFINITY;
+      return std::max(q.concavity / result.threshold, q.hull.volume / (opt.max_hull_volume_ratio * voxel_volume));
+    };
     int pick = -1;
+    double pick_bad = 1.0;
     for (size_t i = 0; i < pieces.size(); ++i) {
-      if (!alive[i] || !splittable[i] || pieces[i].concavity <= result.threshold) continue;
-      if (pick < 0 || pieces[i].concavity > pieces[pick].concavity ||
-          (pieces[i].concavity == pieces[pick].concavity && pieces[i].order < pieces[pick].order))
+      if (!alive[i] || !splittable[i]) continue;
+      const double b = badness(pieces[i]);
+      if (b <= 1.0) continue;
+      if (pick < 0 || b > pick_bad || (b == pick_bad && pieces[i].order < pieces[pick].order)) {
         pick = static_cast<int>(i);
+        pick_bad = b;
+      }
     }
     if (pick < 0) break;
     Piece& P = pieces[pick];
@@ -377,7 +417,7 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
       if (piece_hull_pts.rows() == 0) piece_hull_pts = all;
     }
     std::vector<double> cost(cand.size(), INFINITY);
-    tbb::parallel_for(size_t(0), cand.size(), [&](size_t c) {
+    auto eval_candidate = [&](size_t c) {
       const Candidate& k = cand[c];
       const double slab = 0.5 * g.h * k.n.cwiseAbs().sum();
       std::vector<Vec3> side_pts[2];
@@ -399,7 +439,11 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
         total += convex_hull(m).volume;
       }
       cost[c] = total;
-    });
+    };
+    // Sequential on purpose: CGAL's convex_hull_3 run concurrently gave volumes differing in the
+    // last bits between runs, and near-ties between candidates are common on a voxel lattice, so
+    // the chosen cut (and the shells) changed from run to run. Determinism comes first.
+    for (size_t c = 0; c < cand.size(); ++c) eval_candidate(c);
     size_t best = 0;
     for (size_t c = 1; c < cand.size(); ++c)
       if (cost[c] < cost[best]) best = c;
@@ -410,6 +454,8 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
 
     // Apply the cut.
     const Candidate k = cand[best];
+    spdlog::debug("split piece {} (concavity {:.17g}, {} voxels): candidate {}/{} cost {:.17g}", pieces[pick].order,
+                  pieces[pick].concavity, pieces[pick].voxels.size(), best, cand.size(), cost[best]);
     Piece children[2];
     std::vector<Vec3> clipped;
     for (int s = 0; s < 2; ++s) {
@@ -433,6 +479,7 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     for (int s = 0; s < 2; ++s) {
       if (children[s].polys.empty()) continue;
       evaluate_piece(children[s], thickness);
+      measure_voxels(children[s]);
       const int id = static_cast<int>(pieces.size());
       for (int v : children[s].voxels) owner[v] = id;
       pieces.push_back(std::move(children[s]));
@@ -447,7 +494,10 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
   const bool at_budget = count_alive() >= opt.max_hulls;
   for (size_t i = 0; i < pieces.size(); ++i) {
     if (!alive[i]) continue;
-    if (at_budget && pieces[i].concavity > result.threshold) result.hit_max_hulls = true;
+    if (at_budget && splittable[i] &&
+        (pieces[i].concavity > result.threshold ||
+         pieces[i].hull.volume > opt.max_hull_volume_ratio * pieces[i].voxel_volume))
+      result.hit_max_hulls = true;
     result.max_concavity = std::max(result.max_concavity, pieces[i].concavity);
     result.shells.push_back({std::move(pieces[i].hull), pieces[i].concavity, pieces[i].part});
   }

@@ -7,8 +7,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -59,6 +61,120 @@ void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent
   for (unsigned c = 0; c < node->mNumChildren; ++c) collect(scene, node->mChildren[c], m, pts, tris);
 }
 
+// OBJ in file order (assimp duplicates OBJ vertices per face corner): `v` and `f` lines only;
+// f tokens are i, i/t, i//n or i/t/n, 1-based or negative (relative); polygons become fans.
+void read_obj_in_order(const fs::path& path, std::vector<std::array<double, 3>>& pts,
+                       std::vector<std::array<int, 3>>& tris) {
+  const std::string name = path.string();
+  std::ifstream in(path);
+  if (!in) throw InputError(name + ": cannot open for reading");
+  std::string line;
+  std::vector<long> poly;
+  std::vector<long> face_line;  // line of each triangle, for the range check
+  long lineno = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.size() < 2 || (line[1] != ' ' && line[1] != '\t')) continue;
+    if (line[0] == 'v') {
+      std::array<double, 3> p{};
+      char* cur = line.data() + 1;
+      for (double& d : p) {
+        char* end = nullptr;
+        d = std::strtod(cur, &end);
+        if (end == cur) throw InputError(name + ": line " + std::to_string(lineno) + ": malformed vertex");
+        cur = end;
+      }
+      pts.push_back(p);
+    } else if (line[0] == 'f') {
+      poly.clear();
+      const char* cur = line.c_str() + 1;
+      while (true) {
+        while (*cur == ' ' || *cur == '\t' || *cur == '\r') ++cur;
+        if (!*cur) break;
+        char* end = nullptr;
+        long i = std::strtol(cur, &end, 10);
+        if (end == cur || i == 0)
+          throw InputError(name + ": line " + std::to_string(lineno) + ": malformed face");
+        poly.push_back(i < 0 ? static_cast<long>(pts.size()) + i : i - 1);
+        cur = end;
+        while (*cur && *cur != ' ' && *cur != '\t' && *cur != '\r') ++cur;  // skip /t/n
+      }
+      for (size_t j = 2; j < poly.size(); ++j) {
+        tris.push_back({static_cast<int>(poly[0]), static_cast<int>(poly[j - 1]), static_cast<int>(poly[j])});
+        face_line.push_back(lineno);
+        for (long v : {poly[0], poly[j - 1], poly[j]})
+          if (v < 0 || v >= (1L << 31) - 1)
+            throw InputError(name + ": line " + std::to_string(lineno) + ": vertex index out of range");
+      }
+    }
+  }
+  for (size_t t = 0; t < tris.size(); ++t)
+    for (int v : tris[t])
+      if (v >= static_cast<int>(pts.size()))
+        throw InputError(name + ": line " + std::to_string(face_line[t]) + ": vertex index " + std::to_string(v + 1) +
+                         " out of range (" + std::to_string(pts.size()) + " vertices)");
+}
+
+// OFF in file order and full double precision (assimp parses OFF in single precision): header
+// OFF, COFF, NOFF or CNOFF (extra per-vertex columns ignored), '#' comments, polygons as fans.
+void read_off_in_order(const fs::path& path, std::vector<std::array<double, 3>>& pts,
+                       std::vector<std::array<int, 3>>& tris) {
+  const std::string name = path.string();
+  std::ifstream in(path);
+  if (!in) throw InputError(name + ": cannot open for reading");
+  std::string line;
+  long lineno = 0;
+  auto next = [&](std::istringstream& ss) {  // next non-empty, non-comment line
+    while (std::getline(in, line)) {
+      ++lineno;
+      const auto hash = line.find('#');
+      if (hash != std::string::npos) line.resize(hash);
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      ss.clear();
+      ss.str(line);
+      return true;
+    }
+    return false;
+  };
+  auto fail = [&](const std::string& what) {
+    throw InputError(name + ": line " + std::to_string(lineno) + ": " + what);
+  };
+  std::istringstream ss;
+  std::string header;
+  if (!next(ss) || !(ss >> header) ||
+      !(header == "OFF" || header == "COFF" || header == "NOFF" || header == "CNOFF"))
+    fail("not an ASCII OFF file (header " + header + ")");
+  long nv = -1, nf = -1;
+  if (!(ss >> nv)) {
+    if (!next(ss) || !(ss >> nv)) fail("missing vertex and face counts");
+  }
+  if (!(ss >> nf) || nv < 0 || nf < 0) fail("malformed vertex and face counts");
+  if (nv == 0) throw InputError(name + ": holds no vertices");
+  pts.resize(static_cast<size_t>(nv));
+  for (auto& p : pts) {
+    if (!next(ss)) fail("ends before its " + std::to_string(nv) + " vertices");
+    std::string tok;
+    for (double& d : p) {  // strtod, unlike >>, reads nan and inf (rejected by the caller)
+      if (!(ss >> tok)) fail("malformed vertex");
+      char* end = nullptr;
+      d = std::strtod(tok.c_str(), &end);
+      if (*end) fail("malformed vertex coordinate '" + tok + "'");
+    }
+  }
+  std::vector<long> poly;
+  for (long f = 0; f < nf; ++f) {
+    if (!next(ss)) fail("ends before its " + std::to_string(nf) + " faces");
+    long n = 0;
+    if (!(ss >> n) || n < 0) fail("malformed face");
+    poly.resize(static_cast<size_t>(n));
+    for (long& v : poly)
+      if (!(ss >> v)) fail("malformed face");
+      else if (v < 0 || v >= nv) fail("vertex index " + std::to_string(v) + " out of range");
+    for (size_t j = 2; j < poly.size(); ++j)
+      tris.push_back({static_cast<int>(poly[0]), static_cast<int>(poly[j - 1]), static_cast<int>(poly[j])});
+  }
+}
+
 }  // namespace
 
 SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
@@ -71,25 +187,45 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
     if (!probe) throw InputError(name + ": cannot open for reading");
     if (probe.peek() == std::ifstream::traits_type::eof()) throw InputError(name + ": file is empty");
   }
-  Assimp::Importer importer;
-  // Keep only triangles; polygons are triangulated, points and lines dropped.
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const aiScene* scene = importer.ReadFile(
-      name, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_JoinIdenticalVertices);
-  if (!scene || !scene->mRootNode) {
-    std::string why = importer.GetErrorString();
-    if (why.empty()) why = "unknown or unreadable format";
-    std::replace(why.begin(), why.end(), '\n', ' ');
-    throw InputError(name + ": cannot read: " + why);
-  }
   std::vector<std::array<double, 3>> pts;
   std::vector<std::array<int, 3>> tris;
-  collect(scene, scene->mRootNode, aiMatrix4x4(), pts, tris);
+  const std::string ext = lower(path.extension().string());
+  if (options.keep_order && ext == ".obj") {
+    read_obj_in_order(path, pts, tris);
+  } else if (options.keep_order && ext == ".off") {
+    read_off_in_order(path, pts, tris);
+  } else {
+    Assimp::Importer importer;
+    // Keep only triangles; polygons are triangulated, points and lines dropped.
+    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    const aiScene* scene = importer.ReadFile(
+        name, options.keep_order ? 0u
+                                 : aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_JoinIdenticalVertices);
+    if (!scene || !scene->mRootNode) {
+      std::string why = importer.GetErrorString();
+      if (why.empty()) why = "unknown or unreadable format";
+      std::replace(why.begin(), why.end(), '\n', ' ');
+      throw InputError(name + ": cannot read: " + why);
+    }
+    collect(scene, scene->mRootNode, aiMatrix4x4(), pts, tris);
+  }
+  if (pts.empty()) throw InputError(name + ": holds no vertices");
   if (tris.empty()) throw InputError(name + ": holds no triangles");
   for (size_t i = 0; i < pts.size(); ++i)
     for (double d : pts[i])
       if (!std::isfinite(d))
         throw InputError(name + ": vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
+
+  if (options.keep_order) {  // the file's vertices and faces as they are
+    SurfaceMesh mesh;
+    mesh.V.resize(static_cast<Eigen::Index>(pts.size()), 3);
+    for (size_t i = 0; i < pts.size(); ++i)
+      mesh.V.row(static_cast<Eigen::Index>(i)) << pts[i][0], pts[i][1], pts[i][2];
+    mesh.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
+    for (size_t i = 0; i < tris.size(); ++i)
+      mesh.F.row(static_cast<Eigen::Index>(i)) << tris[i][0], tris[i][1], tris[i][2];
+    return mesh;
+  }
 
   // Weld identical coordinates (across meshes too), keep first-occurrence order of used vertices.
   std::vector<int> remap(pts.size(), -1);
@@ -146,8 +282,19 @@ void write_off(const fs::path& path, const SurfaceMesh& mesh) {
   if (!out) throw InputError(path.string() + ": write failed");
 }
 
+// Our own OBJ writer: full precision, and every vertex in order (assimp's exporter re-indexes).
+void write_obj(const fs::path& path, const SurfaceMesh& mesh) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path.string() + ": cannot open for writing");
+  out.precision(17);
+  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i)
+    out << "v " << mesh.V(i, 0) << ' ' << mesh.V(i, 1) << ' ' << mesh.V(i, 2) << '\n';
+  for (Eigen::Index i = 0; i < mesh.F.rows(); ++i)
+    out << "f " << mesh.F(i, 0) + 1 << ' ' << mesh.F(i, 1) + 1 << ' ' << mesh.F(i, 2) + 1 << '\n';
+  if (!out) throw InputError(path.string() + ": write failed");
+}
+
 std::string assimp_format_id(const std::string& ext) {
-  if (ext == "obj") return "objnomtl";  // no side file whose name would carry the temporary name
   Assimp::Exporter exporter;
   std::string fallback;
   for (size_t i = 0; i < exporter.GetExportFormatCount(); ++i) {
@@ -165,8 +312,8 @@ std::string assimp_format_id(const std::string& ext) {
 
 void save_surface(const fs::path& path, const SurfaceMesh& mesh) {
   const std::string ext = lower(path.extension().string().empty() ? "" : path.extension().string().substr(1));
-  if (ext == "off") {
-    write_atomically(path, [&](const fs::path& tmp) { write_off(tmp, mesh); });
+  if (ext == "off" || ext == "obj") {
+    write_atomically(path, [&](const fs::path& tmp) { ext == "off" ? write_off(tmp, mesh) : write_obj(tmp, mesh); });
     return;
   }
   const std::string format = assimp_format_id(ext);
@@ -205,6 +352,11 @@ void save_surface(const fs::path& path, const SurfaceMesh& mesh) {
       throw InputError(path.string() + ": cannot write: " + why);
     }
   });
+}
+
+bool is_surface_format(const fs::path& path) {
+  const std::string ext = lower(path.extension().string().empty() ? "" : path.extension().string().substr(1));
+  return ext == "off" || ext == "obj" || !assimp_format_id(ext).empty();
 }
 
 }  // namespace squeeze

@@ -234,6 +234,20 @@ TetLocator::TetLocator(const TetMesh& mesh) : mesh_(mesh) {
   for (int k = 0; k < 3; ++k) n_[k] = std::max(1, static_cast<int>(std::ceil((hi(k) - lo(k)) / cell_)) + 1);
   const size_t cells = static_cast<size_t>(n_[0]) * n_[1] * n_[2];
   std::vector<int> count(cells + 1, 0);
+  box_.resize(static_cast<size_t>(T.rows()) * 6);
+  for (Eigen::Index t = 0; t < T.rows(); ++t) {
+    Vec3 tlo = V.row(T(t, 0)).transpose(), thi = tlo;
+    for (int k = 1; k < 4; ++k) {
+      tlo = tlo.cwiseMin(V.row(T(t, k)).transpose());
+      thi = thi.cwiseMax(V.row(T(t, k)).transpose());
+    }
+    // Padding covers locate()'s tolerance: barycentric >= -1e-10 is within 1e-10 diameters.
+    const double pad = 1e-9 * (thi - tlo).maxCoeff();
+    for (int k = 0; k < 3; ++k) {
+      box_[6 * t + k] = tlo(k) - pad;
+      box_[6 * t + 3 + k] = thi(k) + pad;
+    }
+  }
   auto range = [&](Eigen::Index t, int a[3], int b[3]) {
     Vec3 tlo = V.row(T(t, 0)).transpose(), thi = tlo;
     for (int k = 1; k < 4; ++k) {
@@ -265,6 +279,21 @@ TetLocator::TetLocator(const TetMesh& mesh) : mesh_(mesh) {
   }
 }
 
+bool TetLocator::in_box(int t, const Vec3& p) const {
+  const double* b = &box_[6 * static_cast<size_t>(t)];
+  return p(0) >= b[0] && p(1) >= b[1] && p(2) >= b[2] && p(0) <= b[3] && p(1) <= b[4] && p(2) <= b[5];
+}
+
+double TetLocator::box_distance(int t, const Vec3& p) const {
+  const double* b = &box_[6 * static_cast<size_t>(t)];
+  double s = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double d = std::max({b[k] - p(k), 0.0, p(k) - b[3 + k]});
+    s += d * d;
+  }
+  return std::sqrt(s);
+}
+
 Eigen::Vector4d TetLocator::barycentric(int t, const Eigen::RowVector3d& p) const {
   const auto& V = mesh_.V;
   const auto& T = mesh_.T;
@@ -289,6 +318,7 @@ int TetLocator::locate(const Eigen::RowVector3d& p, Eigen::Vector4d* bary) const
   for (int i = start_[cell]; i < start_[cell + 1]; ++i) {
     const int t = items_[i];
     if (best >= 0 && t > best) continue;
+    if (!in_box(t, p.transpose())) continue;
     const Eigen::Vector4d b = barycentric(t, p);
     if (b.minCoeff() >= -1e-10) {
       best = t;
@@ -332,9 +362,20 @@ int TetLocator::nearest(const Eigen::RowVector3d& p, double* distance) const {
         for (int i = c[0] - r; i <= c[0] + r; ++i) {
           if (std::max({std::abs(i - c[0]), std::abs(j - c[1]), std::abs(k - c[2])}) != r) continue;
           if (i < 0 || j < 0 || k < 0 || i >= n_[0] || j >= n_[1] || k >= n_[2]) continue;
+          if (best >= 0) {  // skip cells entirely farther than the best so far
+            double s = 0;
+            const int cc[3] = {i, j, k};
+            for (int a = 0; a < 3; ++a) {
+              const double lo = origin_(a) + cc[a] * cell_, hi = lo + cell_;
+              const double d = std::max({lo - q(a), 0.0, q(a) - hi});
+              s += d * d;
+            }
+            if (std::sqrt(s) > best_d) continue;
+          }
           const size_t cell = static_cast<size_t>(i) + n_[0] * (static_cast<size_t>(j) + n_[1] * static_cast<size_t>(k));
           for (int s = start_[cell]; s < start_[cell + 1]; ++s) {
             const int t = items_[s];
+            if (best >= 0 && box_distance(t, q) > best_d) continue;
             const double d = distance_to(t, q);
             if (d < best_d || (d == best_d && t < best)) best_d = d, best = t;
           }

@@ -110,41 +110,31 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
       fn, K::Sphere_3(Point(centre(0), centre(1), centre(2)), radius * radius),
       params::relative_error_bound = 1e-7);
 
-  // Initial surface points: from each shell's centre, bisect along 14 directions to the union's
-  // boundary, so that every part of the union is seeded (random rays could miss a part).
-  std::vector<Point> seeds;
+  const auto surface_index = domain.index_from_surface_patch_index(Domain::Surface_patch_index(0, 1));
   const Eigen::Vector3d dirs[14] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1},
                                     {1, 1, 1}, {1, 1, -1}, {1, -1, 1}, {1, -1, -1}, {-1, 1, 1}, {-1, 1, -1},
                                     {-1, -1, 1}, {-1, -1, -1}};
-  for (const auto& s : shells) {
-    const Eigen::Vector3d c = s.hull.V.colwise().mean().transpose();
-    if (f(c(0), c(1), c(2)) >= 0) continue;
-    for (const auto& d0 : dirs) {
-      const Eigen::Vector3d d = d0.normalized();
-      double a = 0.0, b = 2.0 * diag;
-      for (int it = 0; it < 60; ++it) {
-        const double m = 0.5 * (a + b);
-        const Eigen::Vector3d p = c + m * d;
-        (f(p(0), p(1), p(2)) < 0 ? a : b) = m;
-      }
-      const Eigen::Vector3d p = c + b * d;
-      seeds.emplace_back(p(0), p(1), p(2));
-    }
-  }
-  const auto surface_index = domain.index_from_surface_patch_index(Domain::Surface_patch_index(0, 1));
 
-  const double target = opt.target_tets;
-  // First guess: Delaunay refinement with cell_size s gives about volume / (0.07 s³) tetrahedra
-  // (measured on our corpus); corrected from the count of each attempt.
-  double size = std::cbrt(volume / (0.07 * target));
-  TetMesh best;
-  double best_err = INFINITY;
-  int attempts = 0;
-  double previous = INFINITY;
-  TetrahedralizeStats st;
-  for (; attempts < 5; ++attempts) {
-    if (progress) progress->update(attempts);
-    const auto t0 = std::chrono::steady_clock::now();
+  // One Mesh_3 run at the given cell size and facet distance, on the union dilated by f.offset.
+  auto run = [&](double size, double fd) {
+    // Initial surface points: from each shell's centre, bisect along 14 directions to the union's
+    // boundary, so that every part of the union is seeded (random rays could miss a part).
+    std::vector<Point> seeds;
+    for (const auto& s : shells) {
+      const Eigen::Vector3d c = s.hull.V.colwise().mean().transpose();
+      if (!f.inside(c(0), c(1), c(2))) continue;
+      for (const auto& d0 : dirs) {
+        const Eigen::Vector3d d = d0.normalized();
+        double a = 0.0, b = 2.0 * diag;
+        for (int it = 0; it < 60; ++it) {
+          const double m = 0.5 * (a + b);
+          const Eigen::Vector3d p = c + m * d;
+          (f.inside(p(0), p(1), p(2)) ? a : b) = m;
+        }
+        const Eigen::Vector3d p = c + b * d;
+        seeds.emplace_back(p(0), p(1), p(2));
+      }
+    }
     CGAL::get_default_random() = CGAL::Random(opt.seed);
     C3t3 c3t3;
     Tr& tr = c3t3.triangulation();
@@ -154,13 +144,14 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
       c3t3.set_dimension(v, 2);
       c3t3.set_index(v, surface_index);
     }
-    const double fd = std::min(opt.facet_distance * diag, 0.25 * size);
     Criteria criteria(params::facet_angle = 25, params::facet_size = size, params::facet_distance = fd,
                       params::cell_radius_edge_ratio = 3, params::cell_size = size);
+    // Perturbation and exudation run to completion (a time limit would make the result depend on
+    // the machine's load); the perturber only chases angles below min_dihedral + 1 degree.
     CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(),
-                        params::perturb(params::time_limit = opt.optimize_seconds, params::sliver_bound = 10),
+                        params::perturb(params::time_limit = opt.optimize_seconds,
+                                        params::sliver_bound = opt.min_dihedral + 1.0),
                         params::exude(params::time_limit = opt.optimize_seconds, params::sliver_bound = 10));
-
     TetMesh mesh;
     std::map<Tr::Vertex_handle, int> index;
     std::vector<Eigen::Vector3d> pts;
@@ -183,22 +174,99 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
     mesh.T.resize(static_cast<Eigen::Index>(tets.size()), 4);
     for (size_t i = 0; i < tets.size(); ++i) mesh.T.row(static_cast<Eigen::Index>(i)) = tets[i].transpose();
     orient_positively(mesh);
-    spdlog::info("Mesh_3 attempt {}: cell_size {:.4g}, {} tetrahedra, {:.2f} s", attempts + 1, size, mesh.T.rows(),
-                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    return mesh;
+  };
+
+  // The shells' vertices are the input's most extreme points: the mesh must hold them (within
+  // coverage_tolerance). Returns the fraction held and the extra dilation that would hold 99.7%.
+  Eigen::MatrixX3d corners;
+  {
+    Eigen::Index n = 0;
+    for (const auto& s : shells) n += s.hull.V.rows();
+    corners.resize(n, 3);
+    n = 0;
+    for (const auto& s : shells) corners.middleRows(n, s.hull.V.rows()) = s.hull.V, n += s.hull.V.rows();
+  }
+  auto coverage = [&](const TetMesh& mesh, double& needed) {
+    const TetLocator locator(mesh);
+    std::vector<double> out(static_cast<size_t>(corners.rows()), 0.0);
+    for (Eigen::Index i = 0; i < corners.rows(); ++i)
+      if (locator.locate(corners.row(i)) < 0) locator.nearest(corners.row(i), &out[static_cast<size_t>(i)]);
+    std::vector<double> sorted = out;
+    std::sort(sorted.begin(), sorted.end());
+    const double tol = opt.coverage_tolerance * diag;
+    // Dilation that would bring 99.7% of the corners within tol.
+    needed = std::max(0.0, sorted[std::min(sorted.size() - 1, static_cast<size_t>(0.997 * static_cast<double>(sorted.size())))] - tol) +
+             0.1 * tol;
+    return static_cast<double>(std::count_if(out.begin(), out.end(), [&](double d) { return d <= tol; })) /
+           static_cast<double>(out.size());
+  };
+
+  double hull_area = 0.0;
+  for (const auto& s : shells)
+    for (Eigen::Index t = 0; t < s.hull.F.rows(); ++t)
+      hull_area += 0.5 * (s.hull.V.row(s.hull.F(t, 1)) - s.hull.V.row(s.hull.F(t, 0)))
+                             .cross(s.hull.V.row(s.hull.F(t, 2)) - s.hull.V.row(s.hull.F(t, 0)))
+                             .norm();
+  const double thickness = hull_area > 0 ? 3.0 * volume / hull_area : diag;  // 3 V / A
+  const double target = opt.target_tets;
+  // First guess: Delaunay refinement with cell_size s gives about volume / (0.07 s³) tetrahedra
+  // (measured on our corpus); then corrected from the count of each attempt. The boundary
+  // criteria often decide the count instead (a curved, creased union needs its facets).
+  double size = std::cbrt(volume / (0.07 * target));
+  double fd = opt.facet_distance * diag;
+  TetMesh best;
+  double best_score = INFINITY;
+  double previous = INFINITY;
+  TetrahedralizeStats st;
+  const int max_attempts = 10;
+  int offset_raises = 0, fd_refinements = 0;
+  for (int attempt = 0; attempt < max_attempts; ++attempt) {
+    if (progress) progress->update(attempt);
+    const auto t0 = std::chrono::steady_clock::now();
+    TetMesh mesh = run(size, std::min(fd, 0.25 * size));
+    st.attempts = attempt + 1;
     const double n = static_cast<double>(mesh.T.rows());
-    const double err = n > 0 ? std::abs(std::log(n / target)) : INFINITY;
-    if (err < best_err) {
-      best_err = err;
-      best = std::move(mesh);
+    double needed = 0.0;
+    const double held = n > 0 ? coverage(mesh, needed) : 0.0;
+    spdlog::info("Mesh_3 attempt {}: cell_size {:.4g}, facet_distance {:.4g}, offset {:.4g}: {} tetrahedra, "
+                 "{:.2f}% of shell corners held, {:.2f} s",
+                 attempt + 1, size, std::min(fd, 0.25 * size), f.offset, mesh.T.rows(), 100 * held,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    const bool covered = held >= 0.995;
+    const bool small_enough = n <= opt.max_tets;
+    // Score: invalid meshes rank after valid ones; among valid ones, the closest to the target.
+    const double score = (covered ? 0 : 100) + (small_enough ? 0 : 10) + (n > 0 ? std::abs(std::log(n / target)) : 1e9);
+    if (score < best_score) {
+      best_score = score;
+      best = mesh;
       st.cell_size = size;
+      st.offset = f.offset;
     }
-    if (n > 0 && n > 0.75 * target && n < 1.33 * target) break;
+    // Missing corners: dilate when that adds little volume (needed × area / volume, about
+    // 3 × needed / thickness), else refine the boundary while there is room for more tetrahedra.
+    if (!covered && n > 0 && 3.0 * needed / thickness > 0.1 && n < 0.4 * opt.max_tets && fd_refinements < 3) {
+      fd *= 0.5;  // room for more tetrahedra: a finer boundary
+      size = std::min(size, 8 * fd);
+      ++fd_refinements;
+      continue;
+    }
+    if (!covered && offset_raises < 3 && n > 0) {  // dilate by what the missing corners need
+      f.offset += needed;
+      ++offset_raises;
+      continue;
+    }
+    if (!small_enough) {  // coarser boundary and cells
+      fd *= 1.5;
+      size *= 1.25;
+      continue;
+    }
+    if (n > 0.75 * target && n < 1.33 * target) break;
     // The boundary criteria, not cell_size, decide the count: a larger size gains nothing.
-    if (n > target && attempts > 0 && n > 0.9 * previous) break;
+    if (n > target && n > 0.9 * previous) break;
     previous = n;
     size *= n > 0 ? std::clamp(std::cbrt(n / target), 0.5, 2.0) : 0.7;
   }
-  st.attempts = std::min(attempts + 1, 5);
 
   if (best.T.rows() > 0) {
     st.peeled_slivers = peel_boundary_slivers(best, opt.min_dihedral);

@@ -9,6 +9,8 @@ namespace squeeze {
 struct LoadOptions {
   bool merge_coincident = true;  // weld vertices with identical coordinates (across meshes too)
   bool drop_degenerate = true;   // drop faces with a repeated vertex index after welding
+  bool keep_order = false;       // keep the file's vertices (unreferenced ones too) and faces in file
+                                 // order: no welding, no dropping, no assimp post-processing (see below)
 };
 
 /// Loads every triangle (and polygon, triangulated) of every mesh in `path`, in any format assimp
@@ -16,6 +18,14 @@ struct LoadOptions {
 /// transforms applied, so several meshes in one file come out as one SurfaceMesh. Points and lines
 /// are ignored.
 /// Returns the mesh; vertices keep first-occurrence order.
+/// With `keep_order` (used by `squeeze deform`, whose output must match its input vertex for
+/// vertex), V is the file's vertex list as written, unreferenced vertices included, and F its faces
+/// in order, polygons split as fans (v0,v[j-1],v[j]); merge_coincident and drop_degenerate are
+/// ignored. ASCII OFF and OBJ are read by our own parsers, in double precision (assimp reads OFF in
+/// single precision and duplicates OBJ vertices per face corner); PLY comes through assimp, which
+/// keeps its vertex list (single precision); STL has no shared vertices at all, so
+/// its "vertices" are the three corners of every facet, in facet order. Several meshes in one file
+/// are concatenated in node order.
 /// Throws InputError ("PATH: problem") if the file is missing or unreadable, the format unknown, it
 /// holds no triangle, a coordinate is NaN or infinite, or every face is degenerate.
 SurfaceMesh load_surface(const std::filesystem::path& path, const LoadOptions& options = {});
@@ -23,6 +33,11 @@ SurfaceMesh load_surface(const std::filesystem::path& path, const LoadOptions& o
 /// Writes `mesh` in the format given by the extension of `path` (.off, .obj, .ply, .stl, .glb,
 /// .gltf, ... — any format assimp exports), through a temporary file renamed at the end.
 /// Throws InputError if the extension is unknown or the file cannot be written.
+/// .off and .obj are written by our own writers (17 significant digits, every vertex of V in order,
+/// unreferenced ones too); the other formats by assimp, in single precision (ai_real is float).
 void save_surface(const std::filesystem::path& path, const SurfaceMesh& mesh);
+
+/// Whether save_surface can write a file with this extension (checked before long work).
+bool is_surface_format(const std::filesystem::path& path);
 
 }  // namespace squeeze

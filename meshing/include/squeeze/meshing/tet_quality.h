@@ -53,7 +53,9 @@ struct TetQuality {
 TetQuality tet_quality(const TetMesh& mesh);
 
 /// Point location in a tetrahedral mesh with a uniform grid over the tetrahedra's bounding boxes
-/// (cell about the mean edge length). Build O(#T), queries O(1) expected for points near the mesh.
+/// (cell about the mean edge length). Build O(#T), queries O(1) expected for points near the mesh;
+/// candidates are culled by their (padded) bounding boxes before any exact test. Const queries are
+/// thread-safe.
 class TetLocator {
  public:
   explicit TetLocator(const TetMesh& mesh);
@@ -72,6 +74,9 @@ class TetLocator {
   double cell_ = 1;
   int n_[3] = {1, 1, 1};
   std::vector<int> start_, items_;  // CSR: tets per cell
+  std::vector<double> box_;         // 6 per tet: min xyz, max xyz, padded by 1e-9 of its extent
+  bool in_box(int t, const Eigen::Vector3d& p) const;
+  double box_distance(int t, const Eigen::Vector3d& p) const;  // lower bound of distance_to
   double distance_to(int t, const Eigen::Vector3d& p) const;
 };
 

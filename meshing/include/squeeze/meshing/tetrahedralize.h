@@ -17,8 +17,13 @@ struct TetrahedralizeOptions {
   double offset = 0.003;          // fraction of the diagonal: the shells are dilated by this much
                                   // before meshing, so that boundary facets (chords of the
                                   // shells' surface) still enclose the shells' corners
+  int max_tets = 5000;            // never more: the boundary is coarsened until the count fits
+  double coverage_tolerance = 0.0025;  // fraction of the diagonal: shell corners (the input's most
+                                  // extreme vertices) must lie inside the mesh or this close to it,
+                                  // 99.5% of them; the dilation grows until they do
   double min_dihedral = 5.0;      // degrees; boundary slivers below it are peeled off afterwards
-  double optimize_seconds = 1.0;  // time limit of each of Mesh_3's sliver perturber and exuder
+  double optimize_seconds = 0.0;  // time limit of each of Mesh_3's sliver perturber and exuder; 0: none
+                                  // (a limit makes results depend on machine load)
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
 };
 
@@ -26,6 +31,7 @@ struct TetrahedralizeOptions {
 struct TetrahedralizeStats {
   int attempts = 0;            // Mesh_3 runs needed to land near target_tets
   double cell_size = 0.0;      // Mesh_3 cell_size used (model units)
+  double offset = 0.0;         // dilation of the shells used (model units)
   int peeled_slivers = 0;      // boundary tetrahedra removed for a dihedral angle < min_dihedral
 };
 
