@@ -70,7 +70,11 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
     if (!is_tet_format(a.output))
       throw InputError(a.output + ": unknown tetrahedral mesh format (use .mesh, .msh, .vtk, .vtu or .node/.ele)");
     check_output_dir(a.output);
-    if (!a.shells.empty()) check_output_dir(a.shells);
+    if (!a.shells.empty()) {
+      if (!is_surface_format(a.shells))
+        throw InputError(a.shells + ": unknown surface format (use .off, .obj, .ply, .stl, .gltf, .glb, ...)");
+      check_output_dir(a.shells);
+    }
     if (!a.report.empty()) check_output_dir(a.report);
     if (!(a.options.decomposition.concavity > 0)) throw InputError("--concavity must be > 0");
     if (a.options.decomposition.max_hulls < 1) throw InputError("--max-hulls must be at least 1");

@@ -31,8 +31,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? kExitOk : kExitUsage;
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::fprintf(stderr, "squeeze: error: %s (see squeeze --help)\n", e.what());
+    return kExitUsage;
   }
   squeeze::set_verbosity(global.quiet          ? squeeze::Verbosity::quiet
                          : global.verbose >= 2 ? squeeze::Verbosity::debug

@@ -2,6 +2,8 @@
 #include "squeeze/meshing/convex_hull.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Delaunay_triangulation_3.h>
+#include <CGAL/Random.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/convex_hull_3.h>
@@ -18,6 +20,7 @@ namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
 using Mesh = CGAL::Surface_mesh<Point>;
+using Delaunay = CGAL::Delaunay_triangulation_3<K>;
 }  // namespace
 
 double ConvexHull::signed_value(const Eigen::RowVector3d& p) const {
@@ -29,13 +32,33 @@ double ConvexHull::signed_value(const Eigen::RowVector3d& p) const {
 
 double ConvexHull::depth(const Eigen::RowVector3d& p) const { return std::max(0.0, -signed_value(p)); }
 
+Eigen::MatrixX3d extreme_points(const ConvexHull& hull) {
+  std::vector<std::vector<Eigen::Vector3d>> normals(static_cast<size_t>(hull.V.rows()));
+  for (Eigen::Index f = 0; f < hull.F.rows(); ++f) {
+    const Eigen::Vector3d p0 = hull.V.row(hull.F(f, 0)).transpose();
+    Eigen::Vector3d n = (hull.V.row(hull.F(f, 1)).transpose() - p0).cross(hull.V.row(hull.F(f, 2)).transpose() - p0);
+    if (n.norm() == 0) continue;
+    n.normalize();
+    for (int k = 0; k < 3; ++k) {
+      auto& list = normals[static_cast<size_t>(hull.F(f, k))];
+      if (list.size() < 3 && std::none_of(list.begin(), list.end(), [&](const Eigen::Vector3d& m) { return (m - n).norm() < 1e-9; }))
+        list.push_back(n);
+    }
+  }
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index v = 0; v < hull.V.rows(); ++v)
+    if (normals[static_cast<size_t>(v)].size() >= 3) keep.push_back(v);
+  Eigen::MatrixX3d out(static_cast<Eigen::Index>(keep.size()), 3);
+  for (size_t i = 0; i < keep.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = hull.V.row(keep[i]);
+  return out;
+}
+
 ConvexHull convex_hull(const Eigen::MatrixX3d& P) {
   ConvexHull hull;
   if (P.rows() < 4) return hull;
   std::vector<Point> pts;
   pts.reserve(static_cast<size_t>(P.rows()));
   for (Eigen::Index i = 0; i < P.rows(); ++i) pts.emplace_back(P(i, 0), P(i, 1), P(i, 2));
-  Mesh sm;
   // Dimension check: all points coplanar?
   const Point& a = pts[0];
   size_t ib = 1;
@@ -48,22 +71,54 @@ ConvexHull convex_hull(const Eigen::MatrixX3d& P) {
   while (id < pts.size() && CGAL::coplanar(a, pts[ib], pts[ic], pts[id])) ++id;
   if (id == pts.size()) return hull;
 
-  CGAL::convex_hull_3(pts.begin(), pts.end(), sm);
-  std::map<Mesh::Vertex_index, int> index;
-  hull.V.resize(static_cast<Eigen::Index>(sm.number_of_vertices()), 3);
-  int n = 0;
-  for (auto v : sm.vertices()) {
-    const Point& q = sm.point(v);
-    hull.V.row(n) << q.x(), q.y(), q.z();
-    index[v] = n++;
+  // The boundary of a Delaunay triangulation (CGAL, exact predicates) is the convex hull.
+  // CGAL 5.5's convex_hull_3 (quickhull) erased the same list node twice on our inputs (valgrind:
+  // use after free in ch_quickhull_face_graph, as in CGAL issues #6543 and #8761), which made the
+  // hulls depend on the heap's state; the triangulation is slower but robust.
+  CGAL::get_default_random() = CGAL::Random(0);  // spatial sort shuffles: keep it reproducible
+  Delaunay dt(pts.begin(), pts.end());
+  if (dt.dimension() < 3) return hull;
+  std::map<Delaunay::Vertex_handle, int> index;
+  std::vector<Eigen::RowVector3d> verts;
+  std::vector<Eigen::Vector3i> faces;
+  // Deterministic order: infinite cells in the triangulation's order, their finite vertices in
+  // the order met.
+  std::vector<Delaunay::Cell_handle> cells;
+  dt.incident_cells(dt.infinite_vertex(), std::back_inserter(cells));
+  std::sort(cells.begin(), cells.end(), [&](Delaunay::Cell_handle x, Delaunay::Cell_handle y) {
+    // order by the smallest point of the finite facet, lexicographically (independent of memory)
+    auto key = [&](Delaunay::Cell_handle c) {
+      const int inf = c->index(dt.infinite_vertex());
+      std::array<Point, 3> q;
+      for (int k = 0, j = 0; k < 4; ++k)
+        if (k != inf) q[j++] = c->vertex(k)->point();
+      std::sort(q.begin(), q.end());
+      return q;
+    };
+    return key(x) < key(y);
+  });
+  for (auto c : cells) {
+    const int inf = c->index(dt.infinite_vertex());
+    // The finite facet, seen from the infinite vertex (outside): CGAL's vertex_triple_index gives
+    // the positively oriented order, i.e. an outward normal.
+    const int idx[3] = {Delaunay::vertex_triple_index(inf, 0), Delaunay::vertex_triple_index(inf, 1),
+                        Delaunay::vertex_triple_index(inf, 2)};
+    Eigen::Vector3i f;
+    for (int k = 0; k < 3; ++k) {
+      auto v = c->vertex(idx[k]);
+      auto [it, fresh] = index.emplace(v, static_cast<int>(verts.size()));
+      if (fresh) verts.emplace_back(v->point().x(), v->point().y(), v->point().z());
+      f(k) = it->second;
+    }
+    faces.push_back(f);
   }
-  hull.F.resize(static_cast<Eigen::Index>(sm.number_of_faces()), 3);
-  int f = 0;
+  hull.V.resize(static_cast<Eigen::Index>(verts.size()), 3);
+  for (size_t i = 0; i < verts.size(); ++i) hull.V.row(static_cast<Eigen::Index>(i)) = verts[i];
+  hull.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t i = 0; i < faces.size(); ++i) hull.F.row(static_cast<Eigen::Index>(i)) = faces[i].transpose();
   std::vector<Eigen::Vector4d> planes;
-  Eigen::RowVector3d c = hull.V.colwise().mean();
-  for (auto face : sm.faces()) {
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(sm.halfedge(face), sm)) hull.F(f, k++) = index[v];
+  const Eigen::RowVector3d c = hull.V.row(0);
+  for (Eigen::Index f = 0; f < hull.F.rows(); ++f) {
     const Eigen::Vector3d p0 = hull.V.row(hull.F(f, 0)).transpose(), p1 = hull.V.row(hull.F(f, 1)).transpose(),
                           p2 = hull.V.row(hull.F(f, 2)).transpose();
     Eigen::Vector3d nrm = (p1 - p0).cross(p2 - p0);
@@ -73,7 +128,13 @@ ConvexHull convex_hull(const Eigen::MatrixX3d& P) {
       nrm /= len;
       planes.emplace_back(nrm(0), nrm(1), nrm(2), nrm.dot(p0));
     }
-    ++f;
+  }
+  // Safety net: the orientation above is CGAL's convention; a negative volume would mean all
+  // facets came out inward.
+  if (hull.volume < 0) {
+    hull.volume = -hull.volume;
+    for (Eigen::Index f = 0; f < hull.F.rows(); ++f) std::swap(hull.F(f, 1), hull.F(f, 2));
+    for (auto& p : planes) p = -p;
   }
   // Merge (nearly) coplanar facets: fewer planes make signed_value() cheaper.
   std::sort(planes.begin(), planes.end(), [](const Eigen::Vector4d& x, const Eigen::Vector4d& y) {

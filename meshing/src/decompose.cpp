@@ -17,6 +17,7 @@
 
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
+#include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/winding_number.h"
 
 namespace squeeze {
@@ -176,8 +177,40 @@ struct Piece {
   ConvexHull hull;
   double concavity = 0.0;
   double voxel_volume = 0.0;  // interior voxels + half the surface voxels, times h³
+  double volume = 0.0;        // exact piece volume for closed input (see piece_volume), else voxel_volume
+  std::vector<Eigen::Vector4d> planes;  // the cell: n·x <= d for each (n, d)
   Vec3 deepest = Vec3::Zero();
 };
+
+// Volume of a piece of a closed, outward-oriented surface clipped to a convex cell, by the
+// divergence theorem: the clipped polygons' fan terms about an origin O, plus one term per cut
+// plane c for its cap, (d_c - n_c·O) A_c / 3. The cap's area comes from its boundary, which is the
+// clipped polygons' edges lying on plane c traversed backwards: A_c n_c = -1/2 Σ (a × b).
+double piece_volume(const std::vector<Polygon>& polys, const std::vector<Eigen::Vector4d>& planes, double eps) {
+  if (polys.empty()) return 0.0;
+  const Vec3 o = polys.front().p.front();
+  double six_v = 0.0;
+  std::vector<Vec3> cap(planes.size(), Vec3::Zero());
+  for (const Polygon& poly : polys) {
+    const size_t m = poly.p.size();
+    for (size_t i = 1; i + 1 < m; ++i) six_v += (poly.p[0] - o).dot((poly.p[i] - o).cross(poly.p[i + 1] - o));
+    for (size_t c = 0; c < planes.size(); ++c) {
+      const Vec3 n = planes[c].head<3>();
+      const double d = planes[c](3);
+      for (size_t i = 0; i < m; ++i) {
+        const Vec3& a = poly.p[i];
+        const Vec3& b = poly.p[(i + 1) % m];
+        if (std::abs(n.dot(a) - d) <= eps && std::abs(n.dot(b) - d) <= eps) cap[c] -= 0.5 * (a - o).cross(b - o);
+      }
+    }
+  }
+  double v = six_v / 6.0;
+  for (size_t c = 0; c < planes.size(); ++c) {
+    const Vec3 n = planes[c].head<3>();
+    v += (planes[c](3) - n.dot(o)) * cap[c].dot(n) / 3.0;
+  }
+  return v;
+}
 
 // Keeps the part of `poly` with side * (n·x - d) <= 0 (Sutherland–Hodgman). Points on the plane
 // are kept by both sides, and both sides compute edge intersections with the same arithmetic, so
@@ -215,14 +248,25 @@ void thicken_if_flat(Eigen::MatrixX3d& pts, ConvexHull& hull, double thickness) 
   hull = convex_hull(pts);
 }
 
-void evaluate_piece(Piece& piece, double flat_thickness) {
+void evaluate_piece(Piece& piece, double flat_thickness, double sample_spacing) {
   // Polygon corners, each once (neighbouring polygons share them); outer wins over inner.
-  struct Corner { double x, y, z; char outer; };
+  struct Corner { double x, y, z; char outer; char sample; };
   std::vector<Corner> corners;
-  for (const auto& poly : piece.polys)
-    for (const Vec3& p : poly.p) corners.push_back({p(0), p(1), p(2), static_cast<char>(poly.outer)});
+  for (const auto& poly : piece.polys) {
+    for (const Vec3& p : poly.p) corners.push_back({p(0), p(1), p(2), static_cast<char>(poly.outer), 0});
+    // Large polygons are sampled too (spacing about a voxel): a concave edge of a prism has its
+    // end points on hull faces, the depth is along it.
+    for (size_t i = 2; i < poly.p.size(); ++i) {
+      const Vec3 &a = poly.p[0], &b = poly.p[i - 1], &c = poly.p[i];
+      if (std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}) <= sample_spacing * sample_spacing)
+        continue;
+      sample_triangle(a, b, c, 2.0 * sample_spacing, [&](const Vec3& q) {
+        corners.push_back({q(0), q(1), q(2), static_cast<char>(poly.outer), 1});
+      });
+    }
+  }
   std::sort(corners.begin(), corners.end(), [](const Corner& a, const Corner& b) {
-    return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z != b.z ? a.z < b.z : a.outer > b.outer;
+    return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z != b.z ? a.z < b.z : a.outer != b.outer ? a.outer > b.outer : a.sample < b.sample;
   });
   corners.erase(std::unique(corners.begin(), corners.end(),
                             [](const Corner& a, const Corner& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }),
@@ -230,12 +274,19 @@ void evaluate_piece(Piece& piece, double flat_thickness) {
   const size_t n = corners.size();
   Eigen::MatrixX3d pts(static_cast<Eigen::Index>(n), 3);
   std::vector<char> outer(n);
+  size_t n_vertices = 0;
   for (size_t r = 0; r < n; ++r) {
     outer[r] = corners[r].outer;
+    n_vertices += !corners[r].sample;
     pts.row(static_cast<Eigen::Index>(r)) << corners[r].x, corners[r].y, corners[r].z;
   }
-  piece.hull = convex_hull(pts);
-  thicken_if_flat(pts, piece.hull, flat_thickness);
+  // The hull of the polygon vertices (samples lie on the polygons: they add nothing but
+  // near-coplanar facets); the depth is measured at vertices and samples alike.
+  Eigen::MatrixX3d hull_pts(static_cast<Eigen::Index>(n_vertices), 3);
+  for (size_t r = 0, k = 0; r < n; ++r)
+    if (!corners[r].sample) hull_pts.row(static_cast<Eigen::Index>(k++)) = pts.row(static_cast<Eigen::Index>(r));
+  piece.hull = convex_hull(hull_pts);
+  thicken_if_flat(hull_pts, piece.hull, flat_thickness);
   // Deepest outer point: parallel max with ties to the lowest index (deterministic).
   struct Best { double depth = -1; size_t at = 0; };
   const size_t chunks = std::max<size_t>(1, std::min<size_t>(64, n / 2048));
@@ -328,12 +379,18 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     if (part[v] >= 0) pieces[part[v]].voxels.push_back(v);
 
   if (progress) progress->stage("decomposing", opt.max_hulls);
+  const bool closed = is_closed(mesh.F);
   auto measure_voxels = [&](Piece& q) {
     double n = 0;
     for (int v : q.voxels) n += g.state[v] == kInterior ? 1.0 : 0.5;
     q.voxel_volume = n * g.h * g.h * g.h;
+    q.volume = q.voxel_volume;
+    if (closed) {
+      const double exact = piece_volume(q.polys, q.planes, 1e-9 * diag);
+      if (exact > 0) q.volume = exact;
+    }
   };
-  for (auto& piece : pieces) evaluate_piece(piece, thickness), measure_voxels(piece);
+  for (auto& piece : pieces) evaluate_piece(piece, thickness, g.h), measure_voxels(piece);
 
   // owner[v]: index into `pieces` of the piece holding voxel v (for the boundary-voxel test).
   std::vector<int> owner(g.size(), -1);
@@ -350,8 +407,8 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     // is above the threshold, or when its hull is far larger than the piece (thin curved parts,
     // whose concavity can stay below a threshold measured against the whole diagonal).
     auto badness = [&](const Piece& q) {
-      const double voxel_volume = q.voxel_volume > 0 ? q.voxel_volume : INFINITY;
-      return std::max(q.concavity / result.threshold, q.hull.volume / (opt.max_hull_volume_ratio * voxel_volume));
+      const double volume = q.volume > 0 ? q.volume : INFINITY;
+      return std::max(q.concavity / result.threshold, q.hull.volume / (opt.max_hull_volume_ratio * volume));
     };
     int pick = -1;
     double pick_bad = 1.0;
@@ -407,13 +464,26 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     // Score: summed hull volumes of the two sides. A side's hull is spanned by the piece's own
     // hull vertices on that side plus the voxels in a one-voxel slab along the plane (its cross
     // section), which is all that can be extreme after the cut.
+    // Voxel centres, jittered by a millionth of a voxel (a fixed hash of the voxel index): lattice
+    // points are maximally degenerate (coplanar, cospherical) and would send every hull to exact
+    // arithmetic; the scores do not notice the jitter.
     std::vector<Vec3> centres(P.voxels.size());
-    for (size_t i = 0; i < P.voxels.size(); ++i) centres[i] = g.centre(P.voxels[i]);
+    for (size_t i = 0; i < P.voxels.size(); ++i) {
+      uint64_t x = static_cast<uint64_t>(P.voxels[i]) * 0x9E3779B97F4A7C15ULL;
+      Vec3 j;
+      for (int k = 0; k < 3; ++k) {
+        x ^= x >> 29;
+        x *= 0xBF58476D1CE4E5B9ULL;
+        x ^= x >> 32;
+        j(k) = static_cast<double>(x & 0xFFFFF) / static_cast<double>(0xFFFFF) - 0.5;
+      }
+      centres[i] = g.centre(P.voxels[i]) + 2e-6 * g.h * j;
+    }
     Eigen::MatrixX3d piece_hull_pts;
     {
       Eigen::MatrixX3d all(static_cast<Eigen::Index>(centres.size()), 3);
       for (size_t i = 0; i < centres.size(); ++i) all.row(static_cast<Eigen::Index>(i)) = centres[i].transpose();
-      piece_hull_pts = convex_hull(all).V;
+      piece_hull_pts = extreme_points(convex_hull(all));
       if (piece_hull_pts.rows() == 0) piece_hull_pts = all;
     }
     std::vector<double> cost(cand.size(), INFINITY);
@@ -461,10 +531,18 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     for (int s = 0; s < 2; ++s) {
       children[s].part = P.part;
       children[s].order = next_order++;
+      children[s].planes = P.planes;
+      children[s].planes.push_back(s == 0 ? Eigen::Vector4d(k.n(0), k.n(1), k.n(2), k.d)
+                                          : Eigen::Vector4d(-k.n(0), -k.n(1), -k.n(2), -k.d));
       for (const Polygon& poly : P.polys) {
         clip(poly.p, k.n, k.d, s == 0 ? 1.0 : -1.0, clipped);
         if (clipped.size() >= 3) children[s].polys.push_back({clipped, poly.outer});
       }
+    }
+    if (children[0].polys.empty() || children[1].polys.empty()) {
+      // The plane misses the piece's surface (it only cuts voxels): no progress, keep the piece.
+      splittable[pick] = 0;
+      continue;
     }
     for (int v : P.voxels) children[k.n.dot(g.centre(v)) < k.d ? 0 : 1].voxels.push_back(v);
     alive[pick] = 0;
@@ -478,7 +556,7 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     }
     for (int s = 0; s < 2; ++s) {
       if (children[s].polys.empty()) continue;
-      evaluate_piece(children[s], thickness);
+      evaluate_piece(children[s], thickness, g.h);
       measure_voxels(children[s]);
       const int id = static_cast<int>(pieces.size());
       for (int v : children[s].voxels) owner[v] = id;
@@ -496,7 +574,7 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     if (!alive[i]) continue;
     if (at_budget && splittable[i] &&
         (pieces[i].concavity > result.threshold ||
-         pieces[i].hull.volume > opt.max_hull_volume_ratio * pieces[i].voxel_volume))
+         pieces[i].hull.volume > opt.max_hull_volume_ratio * pieces[i].volume))
       result.hit_max_hulls = true;
     result.max_concavity = std::max(result.max_concavity, pieces[i].concavity);
     result.shells.push_back({std::move(pieces[i].hull), pieces[i].concavity, pieces[i].part});

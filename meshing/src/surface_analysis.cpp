@@ -120,6 +120,13 @@ Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
   return out;
 }
 
+bool is_closed(const Eigen::MatrixX3i& F) {
+  const auto e = edge_incidences(F);
+  bool closed = true;
+  for_each_edge(e, [&](size_t i, size_t j) { closed = closed && j - i == 2; });
+  return closed;
+}
+
 SurfaceInfo analyse_surface(const SurfaceMesh& mesh) {
   SurfaceInfo info;
   info.vertices = static_cast<int>(mesh.V.rows());

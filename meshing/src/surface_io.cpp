@@ -192,7 +192,7 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
   const std::string ext = lower(path.extension().string());
   if (options.keep_order && ext == ".obj") {
     read_obj_in_order(path, pts, tris);
-  } else if (options.keep_order && ext == ".off") {
+  } else if (ext == ".off") {  // ours in all modes: double precision, and NaN is reported
     read_off_in_order(path, pts, tris);
   } else {
     Assimp::Importer importer;
@@ -344,14 +344,36 @@ void save_surface(const fs::path& path, const SurfaceMesh& mesh) {
                                             static_cast<unsigned>(mesh.F(f, 1)),
                                             static_cast<unsigned>(mesh.F(f, 2))};
   }
-  write_atomically(path, [&](const fs::path& tmp) {
+  // Export into a temporary folder beside the target under the final name (so that side files such
+  // as a .gltf's .bin are named right), then move side files, and the main file last.
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw InputError(path.string() + ": output directory " + dir.string() + " does not exist");
+  const fs::path tmpdir = temporary_sibling(fs::path(path).replace_extension(".dir"));
+  if (!fs::create_directory(tmpdir, ec) || ec)
+    throw InputError(path.string() + ": cannot write in " + dir.string() + ": " + ec.message());
+  try {
     Assimp::Exporter exporter;
-    if (exporter.Export(&scene, format, tmp.string()) != aiReturn_SUCCESS) {
+    if (exporter.Export(&scene, format, (tmpdir / path.filename()).string()) != aiReturn_SUCCESS) {
       std::string why = exporter.GetErrorString();
       std::replace(why.begin(), why.end(), '\n', ' ');
       throw InputError(path.string() + ": cannot write: " + why);
     }
-  });
+    std::vector<fs::path> side;
+    for (const auto& entry : fs::directory_iterator(tmpdir))
+      if (entry.path().filename() != path.filename()) side.push_back(entry.path());
+    std::sort(side.begin(), side.end());
+    for (const auto& f : side) fs::rename(f, dir / f.filename());
+    fs::rename(tmpdir / path.filename(), path);
+  } catch (const fs::filesystem_error& e) {
+    fs::remove_all(tmpdir, ec);
+    throw InputError(path.string() + ": cannot write: " + e.code().message());
+  } catch (...) {
+    fs::remove_all(tmpdir, ec);
+    throw;
+  }
+  fs::remove_all(tmpdir, ec);
 }
 
 bool is_surface_format(const fs::path& path) {

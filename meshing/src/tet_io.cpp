@@ -348,12 +348,15 @@ TetMesh read_vtu(const fs::path& p) {
   auto array = [&](const std::string& name_attr, bool points) -> std::string {
     size_t pos = points ? xml.find("<Points>") : xml.find("Name=\"" + name_attr + "\"");
     if (pos == std::string::npos) r.fail("no " + (points ? std::string("Points") : name_attr) + " array");
-    pos = xml.find("<DataArray", pos);
+    // The array whose tag holds the name (search back to its start), or the first one in <Points>.
+    pos = points ? xml.find("<DataArray", pos) : xml.rfind("<DataArray", pos);
+    if (pos == std::string::npos) r.fail("malformed .vtu (no DataArray)");
     const size_t tag_end = xml.find('>', pos);
     const std::string tag = xml.substr(pos, tag_end - pos);
     if (tag.find("format=\"ascii\"") == std::string::npos)
       r.fail("only ASCII .vtu data arrays are supported");
     const size_t end = xml.find("</DataArray>", tag_end);
+    if (tag_end == std::string::npos || end == std::string::npos) r.fail("malformed .vtu (unterminated DataArray)");
     return xml.substr(tag_end + 1, end - tag_end - 1);
   };
   {

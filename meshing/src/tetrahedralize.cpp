@@ -151,7 +151,10 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
     CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(),
                         params::perturb(params::time_limit = opt.optimize_seconds,
                                         params::sliver_bound = opt.min_dihedral + 1.0),
-                        params::exude(params::time_limit = opt.optimize_seconds, params::sliver_bound = 10));
+                        params::exude(params::time_limit = opt.optimize_seconds, params::sliver_bound = 10),
+                        // A safety net against runaway refinement (memory): far above max_tets.
+                        params::mesh_3_options(params::maximal_number_of_vertices =
+                                                   static_cast<std::size_t>(2 * opt.max_tets)));
     TetMesh mesh;
     std::map<Tr::Vertex_handle, int> index;
     std::vector<Eigen::Vector3d> pts;
@@ -178,7 +181,7 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
   };
 
   // The shells' vertices are the input's most extreme points: the mesh must hold them (within
-  // coverage_tolerance). Returns the fraction held and the extra dilation that would hold 99.7%.
+  // coverage_tolerance). Returns the fraction held and the extra dilation that would hold 99.5%.
   Eigen::MatrixX3d corners;
   {
     Eigen::Index n = 0;
@@ -195,8 +198,8 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
     std::vector<double> sorted = out;
     std::sort(sorted.begin(), sorted.end());
     const double tol = opt.coverage_tolerance * diag;
-    // Dilation that would bring 99.7% of the corners within tol.
-    needed = std::max(0.0, sorted[std::min(sorted.size() - 1, static_cast<size_t>(0.997 * static_cast<double>(sorted.size())))] - tol) +
+    // Dilation that would bring 99.5% of the corners within tol.
+    needed = std::max(0.0, sorted[std::min(sorted.size() - 1, static_cast<size_t>(0.995 * static_cast<double>(sorted.size())))] - tol) +
              0.1 * tol;
     return static_cast<double>(std::count_if(out.begin(), out.end(), [&](double d) { return d <= tol; })) /
            static_cast<double>(out.size());
@@ -209,6 +212,8 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
                              .cross(s.hull.V.row(s.hull.F(t, 2)) - s.hull.V.row(s.hull.F(t, 0)))
                              .norm();
   const double thickness = hull_area > 0 ? 3.0 * volume / hull_area : diag;  // 3 V / A
+  // The initial dilation must stay small against thin parts too (5% of the thickness).
+  f.offset = std::min(f.offset, 0.05 * thickness);
   const double target = opt.target_tets;
   // First guess: Delaunay refinement with cell_size s gives about volume / (0.07 s³) tetrahedra
   // (measured on our corpus); then corrected from the count of each attempt. The boundary
@@ -245,9 +250,8 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
     }
     // Missing corners: dilate when that adds little volume (needed × area / volume, about
     // 3 × needed / thickness), else refine the boundary while there is room for more tetrahedra.
-    if (!covered && n > 0 && 3.0 * needed / thickness > 0.1 && n < 0.4 * opt.max_tets && fd_refinements < 3) {
+    if (!covered && n > 0 && 3.0 * needed / thickness > 0.1 && n < 0.6 * opt.max_tets && fd_refinements < 3) {
       fd *= 0.5;  // room for more tetrahedra: a finer boundary
-      size = std::min(size, 8 * fd);
       ++fd_refinements;
       continue;
     }
@@ -262,6 +266,9 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
       continue;
     }
     if (n > 0.75 * target && n < 1.33 * target) break;
+    // Far above the target, the boundary criteria decide the count: a larger cell size would
+    // cost another run and gain little.
+    if (n > 2.0 * target) break;
     // The boundary criteria, not cell_size, decide the count: a larger size gains nothing.
     if (n > target && n > 0.9 * previous) break;
     previous = n;

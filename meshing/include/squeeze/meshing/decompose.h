@@ -26,8 +26,10 @@
 //
 // A second, volumetric criterion catches thin curved parts (a spinal cord, a tube) whose
 // concavity stays below a threshold measured against the whole diagonal: a piece is also split when
-// vol(conv(P)) > max_hull_volume_ratio × vol(P), with vol(P) estimated on the voxel grid
-// (interior voxels plus half the surface voxels).
+// vol(conv(P)) > max_hull_volume_ratio × vol(P). For a closed input vol(P) is exact (divergence
+// theorem over the clipped polygons and the caps on the cut planes, whose areas come from the
+// polygons' edges on those planes); otherwise it is estimated on the voxel grid (interior voxels
+// plus half the surface voxels).
 //
 // Choosing a cut (in the family of V-HACD, K. Mamou 2009/2016, and CoACD, X. Wei et al. 2022,
 // doi:10.1145/3528223.3530103): the piece that exceeds its bounds the most (concavity over
@@ -49,8 +51,8 @@ class Progress;
 struct DecompositionOptions {
   double concavity = 0.02;       // threshold, as a fraction of the input's bounding-box diagonal
   int max_hulls = 32;            // at most this many shells (splitting stops there)
-  double max_hull_volume_ratio = 2.0;  // also split a piece whose hull volume exceeds this multiple
-                                 // of its volume (voxel estimate): thin curved parts
+  double max_hull_volume_ratio = 1.3;  // also split a piece whose hull volume exceeds this multiple
+                                 // of its volume: thin curved parts, knots
   int voxel_resolution = 64;     // voxels along the longest bounding-box side
   int cut_samples = 10;          // candidate positions per principal axis per split
   double flat_thickness = 0.004; // fraction of the diagonal given to flat (zero-volume) pieces

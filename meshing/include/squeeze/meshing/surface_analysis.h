@@ -31,6 +31,9 @@ int face_components(const Eigen::MatrixX3i& F, Eigen::VectorXi& C);
 /// (winding numbers need consistent orientation); the propagation is the standard BFS.
 Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F);
 
+/// True when every edge of F has exactly two incident faces.
+bool is_closed(const Eigen::MatrixX3i& F);
+
 /// Edge counts, components, closedness and (for closed meshes) volume of `mesh`. The
 /// self_intersecting flag is left false here; see does_self_intersect().
 SurfaceInfo analyse_surface(const SurfaceMesh& mesh);

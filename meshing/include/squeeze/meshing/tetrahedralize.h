@@ -12,13 +12,13 @@ class Progress;
 struct TetrahedralizeOptions {
   int target_tets = 1000;         // desired tetrahedron count; met within about ±35% (the mesh
                                   // size is re-estimated up to 4 times)
-  double facet_distance = 0.006;  // fraction of the shells' bounding-box diagonal: how far boundary
+  double facet_distance = 0.007;  // fraction of the shells' bounding-box diagonal: how far boundary
                                   // facets may stray from the shells' surface
   double offset = 0.003;          // fraction of the diagonal: the shells are dilated by this much
                                   // before meshing, so that boundary facets (chords of the
                                   // shells' surface) still enclose the shells' corners
   int max_tets = 5000;            // never more: the boundary is coarsened until the count fits
-  double coverage_tolerance = 0.0025;  // fraction of the diagonal: shell corners (the input's most
+  double coverage_tolerance = 0.004;  // fraction of the diagonal: shell corners (the input's most
                                   // extreme vertices) must lie inside the mesh or this close to it,
                                   // 99.5% of them; the dilation grows until they do
   double min_dihedral = 5.0;      // degrees; boundary slivers below it are peeled off afterwards

@@ -1,0 +1,130 @@
+// Benchmarks of `squeeze mesh` (issue 3); see bench/README.md for what each figure means.
+//
+//  BM_Mesh/<model>            the whole pipeline on a corpus model (load, analyse, decompose,
+//                             tetrahedralize, measure), per-stage seconds as counters
+//  BM_TetrahedralizeVsTetgen  squeeze's tetrahedralization of the bunny's convex shells (their union,
+//                             one conforming mesh) against the Debian `tetgen` binary meshing each
+//                             shell on its own (`tetgen -pq1.414 -Q shell.off`), and their ratio
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <string>
+#include <unistd.h>
+
+#include "squeeze/meshing/mesh_pipeline.h"
+#include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/tetrahedralize.h"
+
+namespace {
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+fs::path data(const std::string& name) { return fs::path(SQUEEZE_TEST_DATA) / name; }
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// The whole pipeline, as `squeeze mesh MODEL -o out.mesh` runs it (without writing the file).
+void BM_Mesh(benchmark::State& state, const std::string& model) {
+  const squeeze::MeshOptions options;  // the command line's defaults
+  std::map<std::string, double> stage_sum;
+  double tets = 0, hulls = 0, volume_ratio = 0;
+  for (auto _ : state) {
+    const squeeze::MeshResult r = squeeze::mesh_file(data(model), options);
+    for (const auto& [name, s] : r.seconds) stage_sum[name] += s;
+    tets = r.quality.tets;
+    hulls = static_cast<double>(r.decomposition.shells.size());
+    volume_ratio = r.input_volume > 0 ? r.quality.volume / r.input_volume : 0;
+    benchmark::DoNotOptimize(r.tets.T.data());
+  }
+  for (const auto& [name, s] : stage_sum) {
+    std::string key = "s_" + name;  // e.g. s_decomposing
+    for (char& c : key)
+      if (c == ' ') c = '_';
+    state.counters[key] = benchmark::Counter(s, benchmark::Counter::kAvgIterations);
+  }
+  state.counters["tets"] = tets;
+  state.counters["hulls"] = hulls;
+  state.counters["volume_ratio"] = volume_ratio;
+}
+BENCHMARK_CAPTURE(BM_Mesh, bunny, std::string("bunny00.off"))->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Mesh, dragon, std::string("ChineseDragon-10kv.off"))
+    ->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Mesh, elephant, std::string("elephant.off"))
+    ->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// One convex shell as an OFF file (TetGen 1.5 reads .off with -p).
+void write_shell_off(const fs::path& p, const squeeze::ConvexHull& h) {
+  std::ofstream out(p);
+  out.precision(17);
+  out << "OFF\n" << h.V.rows() << ' ' << h.F.rows() << " 0\n";
+  for (Eigen::Index i = 0; i < h.V.rows(); ++i) out << h.V(i, 0) << ' ' << h.V(i, 1) << ' ' << h.V(i, 2) << '\n';
+  for (Eigen::Index f = 0; f < h.F.rows(); ++f) out << "3 " << h.F(f, 0) << ' ' << h.F(f, 1) << ' ' << h.F(f, 2) << '\n';
+}
+
+long tets_in_ele(const fs::path& ele) {
+  std::ifstream in(ele);
+  long n = -1;
+  in >> n;
+  return n;
+}
+
+// squeeze's tetrahedralization of the bunny's shells vs tetgen on each shell.
+void BM_TetrahedralizeVsTetgen(benchmark::State& state) {
+  const char* tetgen = "/usr/bin/tetgen";
+  if (::access(tetgen, X_OK) != 0) {
+    state.SkipWithError("/usr/bin/tetgen not found (apt-get install tetgen)");
+    return;
+  }
+  // Decompose once, outside the timing.
+  squeeze::MeshOptions options;
+  const squeeze::SurfaceMesh bunny = squeeze::load_surface(data("bunny00.off"));
+  squeeze::SurfaceMesh oriented{bunny.V, squeeze::orient_outward(bunny.V, bunny.F)};
+  const squeeze::Decomposition d = squeeze::decompose(oriented, options.decomposition);
+  const fs::path dir = fs::temp_directory_path() / ("squeeze-bench-tetgen-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::vector<fs::path> files;
+  for (size_t i = 0; i < d.shells.size(); ++i) {
+    files.push_back(dir / ("shell" + std::to_string(i) + ".off"));
+    write_shell_off(files.back(), d.shells[i].hull);
+  }
+
+  double squeeze_s = 0, tetgen_s = 0, squeeze_tets = 0, tetgen_tets = 0;
+  int failures = 0;
+  for (auto _ : state) {
+    auto t0 = Clock::now();
+    squeeze::TetrahedralizeStats stats;
+    const squeeze::TetMesh m = squeeze::tetrahedralize(d.shells, options.tetrahedralize, &stats);
+    squeeze_s += seconds_since(t0);
+    squeeze_tets = static_cast<double>(m.T.rows());
+
+    t0 = Clock::now();
+    long total = 0;
+    for (const fs::path& f : files) {
+      const std::string cmd = std::string(tetgen) + " -pq1.414 -Q '" + f.string() + "' > /dev/null 2>&1";
+      if (std::system(cmd.c_str()) != 0) ++failures;
+    }
+    tetgen_s += seconds_since(t0);
+    for (const fs::path& f : files) total += std::max(0L, tets_in_ele(fs::path(f).replace_extension(".1.ele")));
+    tetgen_tets = static_cast<double>(total);
+  }
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  if (failures) state.SkipWithError(("tetgen failed on " + std::to_string(failures) + " shell runs").c_str());
+  const double n = static_cast<double>(state.iterations());
+  state.counters["shells"] = static_cast<double>(d.shells.size());
+  state.counters["squeeze_s"] = squeeze_s / n;
+  state.counters["tetgen_s"] = tetgen_s / n;
+  state.counters["squeeze_over_tetgen"] = tetgen_s > 0 ? squeeze_s / tetgen_s : 0;
+  state.counters["squeeze_tets"] = squeeze_tets;
+  state.counters["tetgen_tets"] = tetgen_tets;
+}
+BENCHMARK(BM_TetrahedralizeVsTetgen)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,130 @@
+// squeeze::fem — collision detection and penetration depth between tetrahedral meshes.
+//
+// Detection: M. Teschner, B. Heidelberger, M. Müller, D. Pomeranets, M. Gross, "Optimized spatial
+// hashing for collision detection of deformable objects", VMV 2003. Vertices are hashed into a
+// table by their grid cell (hash of the integer cell coordinates with the primes 73856093,
+// 19349663, 83492791, modulo the table size); each tetrahedron looks up the cells its AABB
+// overlaps and tests the vertices found there by barycentric coordinates. A time stamp per table
+// entry avoids clearing the table between queries.
+//
+// Response: B. Heidelberger, M. Teschner, R. Keiser, M. Müller, M. Gross, "Consistent penetration
+// depth estimation for deformable collision response", VMV 2004. Colliding vertices → intersecting
+// edges (one colliding, one free end point) → intersection points x_i with the penetrated object's
+// surface and its normals n_i → depth and direction of border vertices (weights 1/|x_i − p|²) →
+// breadth-first propagation into the colliding region (weights 1/|p_j − p|²).
+#pragma once
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "squeeze/fem/body.h"
+
+namespace squeeze::fem {
+
+/// A tetrahedron prepared for point-in-tetrahedron tests: bary(p) = (1 − Σλ, λ) with
+/// λ = M⁻¹ (p − a), M = [b−a, c−a, d−a]. The same arithmetic serves the spatial hash and any
+/// brute-force check, so both agree bit for bit.
+struct TetFrame {
+  Eigen::Vector3d a;
+  Eigen::Matrix3d inverse;
+  bool valid = false;  // false for a degenerate (zero-volume) tetrahedron: contains nothing
+  TetFrame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const Eigen::Vector3d& d);
+  Eigen::Vector4d barycentric(const Eigen::Vector3d& p) const;
+  /// All four barycentric coordinates >= 0 (boundary included).
+  bool contains(const Eigen::Vector3d& p, Eigen::Vector4d* bary = nullptr) const;
+};
+
+/// A vertex found inside a tetrahedron (indices into the query's X and T).
+struct Contact {
+  int vertex = -1, tet = -1;
+  Eigen::Vector4d bary;  // barycentric coordinates of the vertex in the tet
+};
+
+/// Which (vertex, tet) pairs are tested: pairs where the vertex is a corner of the tet are always
+/// skipped; vertex and tet of one group (object) only if self_collision and the vertex is on the
+/// object's surface (an interior vertex inside a tet of its own object means an inverted element,
+/// which the volume constraint restores, not a self-collision; skipping them keeps the test
+/// cheap); vertex and tet of two rigid groups never.
+struct CollisionFilter {
+  std::vector<int> vertex_group;          // #X group (object) of every vertex
+  std::vector<int> tet_group;             // #T group of every tet
+  std::vector<char> group_rigid;          // per group: 1 if rigid
+  std::vector<char> vertex_on_surface;    // #X, or empty: every vertex counts as on the surface
+  bool self_collision = true;
+};
+
+/// Optimized spatial hashing. Not thread-safe itself (owns the table); find() runs its
+/// tetrahedron pass in parallel with TBB and its result does not depend on the number of threads.
+class SpatialHash {
+ public:
+  /// cell  grid cell edge (m) > 0, about the mean edge length (Teschner 2003, Sec. 5)
+  /// table_size  number of hash entries >= 1 (larger = fewer hash collisions)
+  /// Throws InputError otherwise.
+  SpatialHash(double cell, int table_size);
+
+  /// Every allowed (vertex, tet) pair with the vertex inside the tet (TetFrame::contains),
+  /// sorted by tet then vertex.
+  ///   X  #X by 3 positions (m), T  #T by 4 indices into X
+  std::vector<Contact> find(const Eigen::Ref<const RowMatrixX3d>& X, const Eigen::MatrixX4i& T,
+                            const CollisionFilter& filter);
+
+  /// hash(i,j,k) = ((i'·73856093) xor (j'·19349663) xor (k'·83492791)) mod table_size, in 32-bit
+  /// arithmetic, with i' = i + 2^20 (likewise j', k'): the shift keeps the xor of the products of
+  /// small signed coordinates from colliding.
+  std::uint32_t hash(std::int64_t i, std::int64_t j, std::int64_t k) const;
+  double cell() const { return cell_; }
+  int table_size() const { return static_cast<int>(head_.size()); }
+
+ private:
+  struct VertexEntry {     // one hashed vertex, packed for the lookup loop
+    double x, y, z;
+    std::int64_t key;      // its cell (i, j, k), 21 bits each
+    int vertex;
+    int group;             // object; −1 − object for interior vertices (never tested against their own object)
+  };
+  double cell_;
+  std::uint64_t fastmod_ = 0;  // Lemire's constant for the modulo by the table size
+  std::uint32_t now_ = 0;
+  // Per hash entry (valid when stamp_ == now_): its vertices are entry_[head_ .. head_ + count_),
+  // surface vertices first (scount_ of them): a tet far from every other object's interior
+  // vertices scans only those.
+  std::vector<std::uint32_t> stamp_;
+  std::vector<int> head_, count_, scount_, ifill_;
+  std::vector<std::uint32_t> vhash_, touched_;
+  std::vector<VertexEntry> entry_;  // vertices grouped by hash entry (counting sort)
+};
+
+/// The same pairs as SpatialHash::find by testing every vertex against every tet, O(#X·#T):
+/// the reference for tests.
+std::vector<Contact> find_contacts_brute_force(const Eigen::Ref<const RowMatrixX3d>& X, const Eigen::MatrixX4i& T,
+                                               const CollisionFilter& filter);
+
+/// The objects of a collision query laid out in one global numbering: object b owns vertices
+/// [first_vertex[b], first_vertex[b] + bodies[b]->vertices()) and tets [first_tet[b], ...).
+struct CollisionScene {
+  std::vector<const Body*> bodies;
+  std::vector<int> first_vertex, first_tet;
+};
+
+/// Penetration of one colliding vertex (Heidelberger 2004).
+struct Penetration {
+  int vertex = -1;             // global vertex index
+  int tet = -1;                // global index of the penetrated tetrahedron (the first one found)
+  int body = -1;               // penetrated object
+  double depth = 0;            // m, >= 0 when consistent
+  Eigen::Vector3d direction;   // unit direction out of the penetrated object
+  Eigen::Vector4d bary;        // barycentric coordinates of the vertex in `tet`
+  int layer = 0;               // 0: border vertex (has an intersecting edge); k: propagation step
+};
+
+/// Depth and direction of every colliding vertex that the propagation reaches (vertices of a
+/// colliding region with no intersecting edge that reaches the penetrated surface get none).
+/// A vertex in several tets keeps its first contact (contacts sorted by tet). The intersection of
+/// edge (p,q) with the penetrated surface is found by walking the penetrated mesh's face adjacency
+/// from p's tet towards q; the surface normal is that of the boundary triangle crossed.
+///   X  all positions (m) in the scene's numbering; contacts from SpatialHash::find
+std::vector<Penetration> penetration_depths(const CollisionScene& scene, const Eigen::Ref<const RowMatrixX3d>& X,
+                                            const std::vector<Contact>& contacts);
+
+}  // namespace squeeze::fem

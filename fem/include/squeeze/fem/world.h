@@ -1,0 +1,129 @@
+// squeeze::fem — a world of deformable and rigid objects and its time step.
+//
+// Model: Rodriguez, Lien, Amato, ICRA 2006, Section IV (constraint forces of Teschner et al.
+// 2004, Verlet integration, spatial-hash collision detection, consistent penetration depth
+// response); see constraints.h and collision.h for the sources.
+//
+// Integration (Verlet with a fixed step h; Teschner 2004, Sec. 4):
+//   x_{n+1} = 2 x_n − x_{n−1} + h² a_n,  carried as  v_{n+1} = v_n + h a_n,  x_{n+1} = x_n + h v_{n+1}
+// so the state holds x_n and v_n = (x_n − x_{n−1}) / h. a_n = F(x_n, v_n) / m with
+//   F = Σ distance and volume constraint forces (elastic + damping) + m g + external forces
+//       + contact penalty forces k_c d r − c_c (v·r) r of every colliding vertex (Heidelberger 2004)
+//       + floor penalty forces when the floor is enabled.
+// Pinned vertices never move. Rigid objects never move; a rigid vertex inside a deformable
+// tetrahedron pushes back on that tetrahedron's vertices (−k_c d r spread by barycentric weights).
+//
+// Determinism: every force is gathered per vertex from per-element results in a fixed order, the
+// collision lists are concatenated in tetrahedron order, and the contact forces are summed in a
+// fixed order: the same state and forces give bit-identical results whatever the number of TBB
+// threads.
+#pragma once
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
+
+#include "squeeze/fem/body.h"
+#include "squeeze/fem/collision.h"
+
+namespace squeeze::fem {
+
+struct WorldOptions {
+  double h = 1e-3;                                 // s, fixed time step
+  Eigen::Vector3d gravity{0.0, -9.81, 0.0};        // m/s²
+  bool floor = false;                              // enables the half-space y >= floor_height
+  double floor_height = 0.0;                       // m
+  bool collisions = true;                          // detect and answer collisions between objects
+  bool self_collision = true;                      // ... and within a deformable object
+  double contact_stiffness = 1e5;                  // N/m, k_c of the penalty force k_c·d·r (also the floor)
+  double contact_damping = 0.0;                    // N·s/m, along r, only while penetrating (also the floor)
+  double cell_size = 0.0;                          // m, spatial hash cell; 0: mean edge length of the deformable objects
+  int table_size = 0;                              // spatial hash entries; 0: a prime >= 4 × vertex count
+};
+
+/// Positions and velocities of every vertex of every deformable object, object after object in
+/// the order they were added (World::first_state_row). A plain value: copy it to save, assign to
+/// restore. Rigid objects are not part of it.
+struct State {
+  RowMatrixX3d x;     // #N by 3 positions (m)
+  RowMatrixX3d v;     // #N by 3 velocities (m/s), (x_n − x_{n−1}) / h
+  double time = 0.0;  // s
+};
+
+/// What the last step() found.
+struct StepStats {
+  int contacts = 0;            // (vertex, tet) pairs found by the spatial hash
+  int colliding_vertices = 0;  // vertices given a penetration depth
+  double max_depth = 0.0;      // m
+};
+
+class World {
+ public:
+  /// Throws InputError if h <= 0, or a contact coefficient is negative.
+  explicit World(const WorldOptions& options = {});
+  ~World();
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
+
+  /// Adds an object; returns its index. States made before no longer fit (step() throws on them).
+  int add_body(Body body);
+  /// Pins every vertex of every deformable object whose rest position lies in box (m). Returns
+  /// how many vertices are pinned now in total.
+  int pin(const Eigen::AlignedBox3d& box);
+  /// Pins one vertex (row of the state). Throws InputError if out of range.
+  void pin_vertex(int row);
+
+  const WorldOptions& options() const { return options_; }
+  int bodies() const { return static_cast<int>(bodies_.size()); }
+  const Body& body(int b) const { return bodies_[b]; }
+  /// First state row of object b, or -1 for a rigid object.
+  int first_state_row(int b) const { return state_row_[b]; }
+  int state_rows() const { return rows_; }
+  int tets() const;  // all objects
+  bool pinned(int row) const { return pinned_[row] != 0; }
+  const Eigen::VectorXd& masses() const { return mass_; }  // #N kg per state row
+
+  /// Rest positions, zero velocities, time 0.
+  State initial_state() const;
+
+  /// Advances s by one step h. external: #N by 3 forces (N) per state row, or null.
+  /// Throws InputError if s or external has the wrong number of rows.
+  void step(State& s, const RowMatrixX3d* external = nullptr);
+
+  /// Internal constraint forces only (elastic + damping), #N by 3 (N); no gravity, contact, floor.
+  void internal_forces(const State& s, RowMatrixX3d& F) const;
+  /// Every force of the next step (internal, gravity, external, floor, contacts), #N by 3 (N).
+  void total_forces(const State& s, const RowMatrixX3d* external, RowMatrixX3d& F);
+
+  double elastic_energy(const State& s) const;   // J, Σ ½ k C² over all constraints
+  double kinetic_energy(const State& s) const;   // J, ½ Σ m v²
+  double gravity_energy(const State& s) const;   // J, −Σ m g·x
+  /// Volume (m³) of deformable object b in state s.
+  double body_volume(const State& s, int b) const;
+  const StepStats& last_stats() const { return stats_; }
+
+ private:
+  void prepare();  // global numbering, hash
+  void add_contact_forces(const State& s, RowMatrixX3d& F);
+
+  WorldOptions options_;
+  std::vector<Body> bodies_;
+  std::vector<int> state_row_;   // per body, -1 if rigid
+  int rows_ = 0;
+  Eigen::VectorXd mass_;         // per state row
+  Eigen::VectorXd inv_mass_;     // per state row, 0 for pinned or massless vertices
+  RowMatrixX3d force_;           // step scratch
+  std::vector<char> pinned_;     // per state row
+  // Collision numbering: all vertices (deformables in state order, then rigid), all tets.
+  bool prepared_ = false;
+  CollisionScene scene_;
+  CollisionFilter filter_;
+  Eigen::MatrixX4i T_all_;
+  RowMatrixX3d X_all_;
+  std::unique_ptr<SpatialHash> hash_;
+  mutable RowMatrixX3d edge_f_, tet_f_;  // per-element force scratch: 2 rows per edge, 4 per tet
+  std::vector<int> edge_row0_, tet_row0_;  // per body: first scratch row
+  StepStats stats_;
+};
+
+}  // namespace squeeze::fem

@@ -1,0 +1,203 @@
+#include "squeeze/fem/body.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "squeeze/common/error.h"
+#include "squeeze/meshing/tet_quality.h"
+
+namespace squeeze::fem {
+namespace {
+
+// Faces of tet (v0,v1,v2,v3), face k opposite vertex k, oriented outward for a positive tet.
+constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
+void build_csr(int n, const std::vector<std::pair<int, int>>& pairs, std::vector<int>& start, std::vector<int>& code) {
+  start.assign(static_cast<size_t>(n) + 1, 0);
+  for (const auto& p : pairs) ++start[static_cast<size_t>(p.first) + 1];
+  for (int i = 0; i < n; ++i) start[i + 1] += start[i];
+  code.assign(pairs.size(), 0);
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (const auto& p : pairs) code[fill[p.first]++] = p.second;  // pairs are in element order
+}
+
+}  // namespace
+
+Body::Body(const TetMesh& mesh, const Material& mat, bool is_rigid, const Eigen::Affine3d& transform)
+    : rigid(is_rigid), material(mat) {
+  const int nv = static_cast<int>(mesh.V.rows()), nt = static_cast<int>(mesh.T.rows());
+  if (nt == 0) throw InputError("fem body: the mesh has no tetrahedron");
+  if (!mesh.V.allFinite()) throw InputError("fem body: the mesh has a NaN or infinite coordinate");
+  if (mesh.T.minCoeff() < 0 || mesh.T.maxCoeff() >= nv)
+    throw InputError("fem body: a tetrahedron has a vertex index out of range");
+  if (!is_rigid && !(mat.density > 0))
+    throw InputError("fem body: material density must be > 0, got " + std::to_string(mat.density));
+  if (mat.k_distance < 0 || mat.k_volume < 0 || mat.damping_distance < 0 || mat.damping_volume < 0)
+    throw InputError("fem body: material stiffness and damping must be >= 0");
+
+  rest.resize(nv, 3);
+  for (int i = 0; i < nv; ++i) rest.row(i) = (transform * Eigen::Vector3d(mesh.V.row(i).transpose())).transpose();
+  T = mesh.T;
+
+  V0.resize(nt);
+  mass = Eigen::VectorXd::Zero(nv);
+  for (int t = 0; t < nt; ++t) {
+    const Eigen::Vector3d a = rest.row(T(t, 0)), b = rest.row(T(t, 1)), c = rest.row(T(t, 2)), d = rest.row(T(t, 3));
+    V0(t) = (b - a).dot((c - a).cross(d - a)) / 6.0;
+    if (!(V0(t) > 0))
+      throw InputError("fem body: tetrahedron " + std::to_string(t) + " has a non-positive volume " +
+                       std::to_string(V0(t)));
+    for (int k = 0; k < 4; ++k) mass(T(t, k)) += 0.25 * mat.density * V0(t);
+  }
+
+  // Edges.
+  std::vector<std::pair<int, int>> e;
+  e.reserve(static_cast<size_t>(nt) * 6);
+  for (int t = 0; t < nt; ++t)
+    for (const auto& ke : kEdge) {
+      int i = T(t, ke[0]), j = T(t, ke[1]);
+      if (i > j) std::swap(i, j);
+      e.emplace_back(i, j);
+    }
+  std::sort(e.begin(), e.end());
+  e.erase(std::unique(e.begin(), e.end()), e.end());
+  E.resize(static_cast<Eigen::Index>(e.size()), 2);
+  D0.resize(static_cast<Eigen::Index>(e.size()));
+  for (size_t k = 0; k < e.size(); ++k) {
+    E(k, 0) = e[k].first;
+    E(k, 1) = e[k].second;
+    D0(k) = (rest.row(e[k].second) - rest.row(e[k].first)).norm();
+  }
+
+  // Incidence lists.
+  std::vector<std::pair<int, int>> inc;
+  inc.reserve(e.size() * 2);
+  for (int k = 0; k < E.rows(); ++k) {
+    inc.emplace_back(E(k, 0), 2 * k);
+    inc.emplace_back(E(k, 1), 2 * k + 1);
+  }
+  std::stable_sort(inc.begin(), inc.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  build_csr(nv, inc, edge_start, edge_code);
+  inc.clear();
+  for (int t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) inc.emplace_back(T(t, k), 4 * t + k);
+  std::stable_sort(inc.begin(), inc.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  build_csr(nv, inc, tet_start, tet_code);
+
+  // Face adjacency and boundary.
+  struct FaceRef {
+    std::array<int, 3> key;
+    int code;
+  };
+  std::vector<FaceRef> f;
+  f.reserve(static_cast<size_t>(nt) * 4);
+  for (int t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) {
+      std::array<int, 3> key{T(t, kFace[k][0]), T(t, kFace[k][1]), T(t, kFace[k][2])};
+      std::sort(key.begin(), key.end());
+      f.push_back({key, 4 * t + k});
+    }
+  std::sort(f.begin(), f.end(), [](const FaceRef& a, const FaceRef& b) {
+    return a.key != b.key ? a.key < b.key : a.code < b.code;
+  });
+  neighbor = Eigen::MatrixX4i::Constant(nt, 4, -1);
+  boundary_face = Eigen::MatrixX4i::Constant(nt, 4, -1);
+  std::vector<std::array<int, 3>> faces;
+  for (size_t i = 0; i < f.size();) {
+    size_t j = i + 1;
+    while (j < f.size() && f[j].key == f[i].key) ++j;
+    if (j - i == 1) {
+      const int t = f[i].code / 4, k = f[i].code % 4;
+      boundary_face(t, k) = static_cast<int>(faces.size());
+      faces.push_back({T(t, kFace[k][0]), T(t, kFace[k][1]), T(t, kFace[k][2])});
+    } else if (j - i == 2) {
+      neighbor(f[i].code / 4, f[i].code % 4) = f[i + 1].code / 4;
+      neighbor(f[i + 1].code / 4, f[i + 1].code % 4) = f[i].code / 4;
+    }  // faces shared by three or more tets (non-manifold) are left unconnected
+    i = j;
+  }
+  F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  on_boundary.assign(static_cast<size_t>(nv), 0);
+  for (size_t k = 0; k < faces.size(); ++k)
+    for (int c = 0; c < 3; ++c) {
+      F(k, c) = faces[k][c];
+      on_boundary[faces[k][c]] = 1;
+    }
+}
+
+double Body::mean_edge_length() const { return D0.size() ? D0.mean() : 0.0; }
+
+double Body::total_volume() const { return V0.sum(); }
+
+double volume(const Body& body, const Eigen::Ref<const RowMatrixX3d>& X) {
+  double v = 0;
+  for (int t = 0; t < body.tets(); ++t) {
+    const Eigen::Vector3d a = X.row(body.T(t, 0)), b = X.row(body.T(t, 1)), c = X.row(body.T(t, 2)),
+                          d = X.row(body.T(t, 3));
+    v += (b - a).dot((c - a).cross(d - a)) / 6.0;
+  }
+  return v;
+}
+
+TetMesh box_tet_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3i& n) {
+  if (n.minCoeff() < 1) throw InputError("box_tet_mesh: cell counts must be >= 1");
+  if (!((hi - lo).minCoeff() > 0)) throw InputError("box_tet_mesh: lo must be below hi on every axis");
+  TetMesh m;
+  const int nx = n[0] + 1, ny = n[1] + 1, nz = n[2] + 1;
+  m.V.resize(nx * ny * nz, 3);
+  auto id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        m.V.row(id(i, j, k)) = (lo.array() + (hi - lo).array() * Eigen::Array3d(double(i) / n[0], double(j) / n[1],
+                                                                                 double(k) / n[2]))
+                                   .transpose();
+  static constexpr int kPerm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  m.T.resize(6 * n[0] * n[1] * n[2], 4);
+  int t = 0;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
+        for (const auto& p : kPerm) {
+          int c[3] = {i, j, k};
+          int v[4];
+          v[0] = id(c[0], c[1], c[2]);
+          for (int s = 0; s < 3; ++s) {
+            ++c[p[s]];
+            v[s + 1] = id(c[0], c[1], c[2]);
+          }
+          m.T.row(t++) << v[0], v[1], v[2], v[3];
+        }
+  for (int r = 0; r < m.T.rows(); ++r) {
+    const Eigen::Vector3d a = m.V.row(m.T(r, 0)), b = m.V.row(m.T(r, 1)), c = m.V.row(m.T(r, 2)),
+                          d = m.V.row(m.T(r, 3));
+    if ((b - a).dot((c - a).cross(d - a)) < 0) std::swap(m.T(r, 2), m.T(r, 3));
+  }
+  return m;
+}
+
+TetMesh ball_tet_mesh(double radius, int n) {
+  if (!(radius > 0)) throw InputError("ball_tet_mesh: radius must be > 0");
+  TetMesh box = box_tet_mesh(Eigen::Vector3d::Constant(-radius), Eigen::Vector3d::Constant(radius),
+                             Eigen::Vector3i::Constant(n));
+  TetMesh m;
+  m.V = box.V;
+  std::vector<int> keep;
+  for (int c = 0; c < box.T.rows() / 6; ++c) {  // 6 consecutive tets per cell
+    const int ci = c % n, cj = (c / n) % n, ck = c / (n * n);  // box_tet_mesh's cell order
+    const Eigen::Vector3d center = Eigen::Vector3d(ci + 0.5, cj + 0.5, ck + 0.5) * (2 * radius / n) -
+                                   Eigen::Vector3d::Constant(radius);
+    if (center.norm() <= radius)
+      for (int k = 0; k < 6; ++k) keep.push_back(6 * c + k);
+  }
+  if (keep.empty()) throw InputError("ball_tet_mesh: n must be >= 1");
+  m.T.resize(static_cast<Eigen::Index>(keep.size()), 4);
+  for (size_t r = 0; r < keep.size(); ++r) m.T.row(r) = box.T.row(keep[r]);
+  remove_unused_vertices(m);
+  return m;
+}
+
+}  // namespace squeeze::fem

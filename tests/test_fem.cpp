@@ -1,0 +1,505 @@
+// Tests of squeeze::fem: constraint kernels, the world's step, spatial hashing, penetration depth.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "squeeze/common/error.h"
+#include "squeeze/fem/collision.h"
+#include "squeeze/fem/constraints.h"
+#include "squeeze/fem/world.h"
+
+using namespace squeeze;
+using namespace squeeze::fem;
+using Eigen::Vector3d;
+
+namespace {
+
+Vector3d rand_vec(std::mt19937& g, double s = 1.0) {
+  std::uniform_real_distribution<double> u(-s, s);
+  return {u(g), u(g), u(g)};
+}
+
+TetMesh cube(double side, int n, const Vector3d& lo = Vector3d::Zero()) {
+  return box_tet_mesh(lo, lo + Vector3d::Constant(side), Eigen::Vector3i::Constant(n));
+}
+
+WorldOptions no_gravity() {
+  WorldOptions o;
+  o.gravity.setZero();
+  o.collisions = false;
+  return o;
+}
+
+// Total energy with the central velocity (x_{n+1} − x_{n−1}) / 2h = (v_n + v_{n+1}) / 2 at x_n.
+double central_energy(const World& w, const State& s, const State& next) {
+  State c = s;
+  c.v = 0.5 * (s.v + next.v);
+  return w.kinetic_energy(c) + w.elastic_energy(s) + w.gravity_energy(s);
+}
+
+}  // namespace
+
+TEST(FemKernels, ForcesAreMinusEnergyGradient) {
+  std::mt19937 g(1);
+  for (int trial = 0; trial < 20; ++trial) {
+    Vec3 p[4];
+    for (auto& q : p) q = rand_vec(g);
+    const double D0 = 0.7, V0 = 0.05, k = 3.0, eps = 1e-6;
+    Vec3 fi, fj;
+    distance_forces(p[0], p[1], Vec3::Zero(), Vec3::Zero(), D0, k, 0.0, fi, fj);
+    Vec3 fv[4], zero[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+    volume_forces(p, zero, V0, k, 0.0, fv);
+    for (int v = 0; v < 4; ++v)
+      for (int c = 0; c < 3; ++c) {
+        Vec3 a[4], b[4];
+        std::copy(p, p + 4, a);
+        std::copy(p, p + 4, b);
+        a[v][c] += eps;
+        b[v][c] -= eps;
+        const double dV = (volume_energy(a[0], a[1], a[2], a[3], V0, k) - volume_energy(b[0], b[1], b[2], b[3], V0, k)) /
+                          (2 * eps);
+        EXPECT_NEAR(fv[v][c], -dV, 1e-5 * (1 + std::abs(dV)));
+        if (v < 2) {
+          const double dD = (distance_energy(a[0], a[1], D0, k) - distance_energy(b[0], b[1], D0, k)) / (2 * eps);
+          EXPECT_NEAR((v == 0 ? fi : fj)[c], -dD, 1e-6 * (1 + std::abs(dD)));
+        }
+      }
+  }
+}
+
+TEST(FemKernels, DampingOpposesRelativeMotionOnly) {
+  const Vec3 pi(0, 0, 0), pj(1, 0, 0);
+  Vec3 fi, fj;
+  distance_forces(pi, pj, Vec3(1, 2, 3), Vec3(1, 2, 3), 1.0, 1.0, 5.0, fi, fj);  // rigid translation
+  EXPECT_NEAR(fi.norm(), 0.0, 1e-12);
+  distance_forces(pi, pj, Vec3::Zero(), Vec3(1, 0, 0), 1.0, 0.0, 5.0, fi, fj);  // separating
+  EXPECT_LT(fj.x(), 0.0);
+  EXPECT_DOUBLE_EQ(fi.x(), -fj.x());
+}
+
+TEST(FemBody, MassesAndRestData) {
+  Material m;
+  m.density = 500;
+  const Body b(cube(2.0, 2), m);
+  EXPECT_NEAR(b.mass.sum(), 500 * 8.0, 1e-9);
+  EXPECT_NEAR(b.total_volume(), 8.0, 1e-12);
+  EXPECT_EQ(b.tets(), 48);
+  EXPECT_GT(b.F.rows(), 0);
+  EXPECT_THROW(Body(TetMesh{}, m), InputError);
+  TetMesh bad = cube(1.0, 1);
+  std::swap(bad.T(0, 0), bad.T(0, 1));
+  EXPECT_THROW(Body(bad, m), InputError);
+  const TetMesh ball = ball_tet_mesh(1.0, 4);
+  EXPECT_NO_THROW(Body(ball, m));
+}
+
+TEST(FemWorld, RestIsEquilibrium) {
+  World w(no_gravity());
+  w.add_body(Body(cube(1.0, 2), Material{}));
+  State s = w.initial_state();
+  RowMatrixX3d F;
+  w.total_forces(s, nullptr, F);
+  EXPECT_EQ(F.cwiseAbs().maxCoeff(), 0.0);
+  const State s0 = s;
+  w.step(s);
+  EXPECT_EQ((s.x - s0.x).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(s.v.cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(FemWorld, InternalForcesHaveNoNetForceOrTorque) {
+  Material m;
+  m.damping_distance = 0.3;
+  m.damping_volume = 0.2;
+  World w(no_gravity());
+  w.add_body(Body(cube(1.0, 3), m));
+  State s = w.initial_state();
+  std::mt19937 g(7);
+  for (int i = 0; i < s.x.rows(); ++i) {
+    s.x.row(i) += rand_vec(g, 0.15).transpose();
+    s.v.row(i) = rand_vec(g, 2.0).transpose();
+  }
+  RowMatrixX3d F;
+  w.internal_forces(s, F);
+  Vector3d net = Vector3d::Zero(), torque = Vector3d::Zero();
+  double scale = 0;
+  for (int i = 0; i < F.rows(); ++i) {
+    net += F.row(i).transpose();
+    torque += Vector3d(s.x.row(i)).cross(Vector3d(F.row(i)));
+    scale += F.row(i).norm();
+  }
+  EXPECT_GT(scale, 1.0);
+  EXPECT_LT(net.norm(), 1e-12 * scale);
+  EXPECT_LT(torque.norm(), 1e-12 * scale);
+}
+
+TEST(FemWorld, ForcesAreMinusFiniteDifferenceGradient) {
+  Material m;
+  m.k_distance = 20;
+  m.k_volume = 50;
+  World w(no_gravity());
+  w.add_body(Body(cube(1.0, 2), m));
+  State s = w.initial_state();
+  std::mt19937 g(3);
+  for (int i = 0; i < s.x.rows(); ++i) s.x.row(i) += rand_vec(g, 0.2).transpose();
+  RowMatrixX3d F;
+  w.internal_forces(s, F);
+  const double eps = 1e-6;
+  for (int i = 0; i < s.x.rows(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      State a = s, b = s;
+      a.x(i, c) += eps;
+      b.x(i, c) -= eps;
+      const double d = (w.elastic_energy(a) - w.elastic_energy(b)) / (2 * eps);
+      EXPECT_NEAR(F(i, c), -d, 1e-5 * (1 + std::abs(d)));
+    }
+}
+
+TEST(FemWorld, InvertedTetrahedronRecoversItsVolume) {
+  TetMesh t;
+  t.V.resize(4, 3);
+  t.V << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  t.T.resize(1, 4);
+  t.T << 0, 1, 2, 3;
+  Material m;
+  m.k_distance = 10;
+  m.k_volume = 10;
+  m.damping_distance = 5;
+  m.damping_volume = 5;
+  m.density = 100;
+  WorldOptions o = no_gravity();
+  o.h = 1e-3;
+  World w(o);
+  w.add_body(Body(t, m));
+  State s = w.initial_state();
+  s.x(3, 2) = -0.5;  // through the opposite face: inverted
+  ASSERT_LT(w.body_volume(s, 0), 0.0);
+  for (int n = 0; n < 20000; ++n) w.step(s);
+  EXPECT_NEAR(w.body_volume(s, 0), 1.0 / 6.0, 0.02 / 6.0);
+}
+
+TEST(FemWorld, DampedMotionNeverGainsEnergy) {
+  Material m;
+  m.k_distance = 100;
+  m.k_volume = 100;
+  m.damping_distance = 0.02;
+  m.damping_volume = 0.02;
+  WorldOptions o = no_gravity();
+  o.h = 1e-4;
+  World w(o);
+  w.add_body(Body(cube(0.1, 2), m));
+  State s = w.initial_state();
+  std::mt19937 g(5);
+  for (int i = 0; i < s.x.rows(); ++i) s.x.row(i) += rand_vec(g, 0.01).transpose();
+  State next = s;
+  w.step(next);
+  const double e0 = central_energy(w, s, next);
+  double e = e0;
+  for (int n = 0; n < 20000; ++n) {
+    s = next;
+    w.step(next);
+    const double en = central_energy(w, s, next);
+    ASSERT_LE(en, e * (1 + 1e-9) + 1e-15) << "step " << n;
+    e = en;
+  }
+  EXPECT_LT(e, 0.5 * e0);
+}
+
+TEST(FemWorld, UndampedMotionConservesEnergy) {
+  Material m;
+  m.k_distance = 100;
+  m.k_volume = 100;
+  WorldOptions o = no_gravity();
+  o.h = 1e-4;
+  World w(o);
+  w.add_body(Body(cube(0.1, 1), m));
+  State s = w.initial_state();
+  std::mt19937 g(11);
+  for (int i = 0; i < s.x.rows(); ++i) s.x.row(i) += rand_vec(g, 0.01).transpose();
+  State next = s;
+  w.step(next);
+  const double e0 = central_energy(w, s, next);
+  ASSERT_GT(e0, 0);
+  double worst = 0;
+  for (int n = 0; n < 100000; ++n) {
+    s = next;
+    w.step(next);
+    worst = std::max(worst, std::abs(central_energy(w, s, next) - e0));
+  }
+  EXPECT_LT(worst, 0.01 * e0);
+}
+
+namespace {
+
+struct HashScene {
+  RowMatrixX3d X;
+  Eigen::MatrixX4i T;
+  CollisionFilter filter;
+};
+
+// Two overlapping balls, a rigid box, random jitter (self-intersections included).
+HashScene hash_scene(unsigned seed) {
+  std::mt19937 g(seed);
+  const TetMesh a = ball_tet_mesh(0.5, 3), b = ball_tet_mesh(0.4, 3), c = cube(1.0, 2, Vector3d(-0.2, -1.0, -0.5));
+  HashScene s;
+  const TetMesh* ms[3] = {&a, &b, &c};
+  const Vector3d shift[3] = {Vector3d::Zero(), Vector3d(0.6, 0.1, 0), Vector3d::Zero()};
+  int nv = 0, nt = 0;
+  for (auto* m : ms) nv += m->V.rows(), nt += m->T.rows();
+  s.X.resize(nv, 3);
+  s.T.resize(nt, 4);
+  int fv = 0, ft = 0;
+  for (int k = 0; k < 3; ++k) {
+    for (int i = 0; i < ms[k]->V.rows(); ++i) {
+      s.X.row(fv + i) = ms[k]->V.row(i) + shift[k].transpose() + rand_vec(g, 0.08).transpose();
+      s.filter.vertex_group.push_back(k);
+    }
+    for (int t = 0; t < ms[k]->T.rows(); ++t) {
+      s.T.row(ft + t) = ms[k]->T.row(t).array() + fv;
+      s.filter.tet_group.push_back(k);
+    }
+    fv += ms[k]->V.rows();
+    ft += ms[k]->T.rows();
+  }
+  s.filter.group_rigid = {0, 0, 1};
+  std::mt19937 g2(seed + 100);  // some vertices interior (tested only against other objects)
+  for (int v = 0; v < nv; ++v) s.filter.vertex_on_surface.push_back(g2() % 3 != 0);
+  return s;
+}
+
+std::vector<std::pair<int, int>> pairs(const std::vector<Contact>& c) {
+  std::vector<std::pair<int, int>> p;
+  for (const auto& x : c) p.emplace_back(x.tet, x.vertex);
+  std::sort(p.begin(), p.end());
+  return p;
+}
+
+}  // namespace
+
+TEST(FemCollision, SpatialHashMatchesBruteForce) {
+  for (unsigned seed : {1u, 2u}) {
+    HashScene s = hash_scene(seed);
+    for (int variant = 0; variant < 3; ++variant) {
+      s.filter.self_collision = variant != 1;
+      if (variant == 2) s.filter.vertex_on_surface.clear();
+      const auto ref = pairs(find_contacts_brute_force(s.X, s.T, s.filter));
+      ASSERT_FALSE(ref.empty());
+      for (double cell : {0.05, 0.2, 2.0})
+        for (int table : {1, 7, 1009, 100003}) {
+          SpatialHash h(cell, table);
+          EXPECT_EQ(pairs(h.find(s.X, s.T, s.filter)), ref) << "cell " << cell << " table " << table;
+          EXPECT_EQ(pairs(h.find(s.X, s.T, s.filter)), ref) << "second query, cell " << cell;  // time stamps
+        }
+    }
+  }
+  EXPECT_THROW(SpatialHash(0.0, 10), InputError);
+  EXPECT_THROW(SpatialHash(1.0, 0), InputError);
+}
+
+TEST(FemCollision, DeepPenetrationPointsOutOfTheEnteredSide) {
+  // A ball (r = 0.05) sunk into a rigid plate y in [-0.1, 0] down to y = -0.08: its lowest
+  // vertices are nearer the plate's bottom face, but the ball entered from the top.
+  Body plate(box_tet_mesh(Vector3d(-0.3, -0.1, -0.3), Vector3d(0.3, 0.0, 0.3), Eigen::Vector3i(6, 2, 6)), Material{},
+             true);
+  Eigen::Affine3d at = Eigen::Affine3d::Identity();
+  at.translation() = Vector3d(0.013, -0.03, 0.007);
+  Body ball(ball_tet_mesh(0.05, 4), Material{}, false, at);
+  CollisionScene scene;
+  scene.bodies = {&ball, &plate};
+  scene.first_vertex = {0, ball.vertices()};
+  scene.first_tet = {0, ball.tets()};
+  RowMatrixX3d X(ball.vertices() + plate.vertices(), 3);
+  X << ball.rest, plate.rest;
+  Eigen::MatrixX4i T(ball.tets() + plate.tets(), 4);
+  T << ball.T, (plate.T.array() + ball.vertices()).matrix();
+  CollisionFilter f;
+  f.vertex_group.assign(ball.vertices(), 0);
+  f.vertex_group.resize(X.rows(), 1);
+  f.tet_group.assign(ball.tets(), 0);
+  f.tet_group.resize(T.rows(), 1);
+  f.group_rigid = {0, 1};
+  SpatialHash h(ball.mean_edge_length(), 1009);
+  const auto contacts = h.find(X, T, f);
+  const auto pens = penetration_depths(scene, X, contacts);
+  int inside = 0;
+  for (int i = 0; i < ball.vertices(); ++i) inside += ball.rest(i, 1) < -1e-9;
+  ASSERT_GT(inside, 20);
+  int found = 0;
+  double deepest = 0;
+  for (const auto& p : pens) {
+    if (p.vertex >= ball.vertices()) continue;  // plate vertices inside the ball: the ball's side
+    ++found;
+    EXPECT_GT(p.direction.y(), 0.95) << "vertex " << p.vertex << " layer " << p.layer;
+    EXPECT_NEAR(p.depth, -X(p.vertex, 1), 0.006) << "vertex " << p.vertex << " layer " << p.layer;
+    deepest = std::max(deepest, p.depth);
+  }
+  EXPECT_GE(found, inside - 2);
+  EXPECT_GT(deepest, 0.07);
+}
+
+namespace {
+
+Vector3d centroid(const World& w, const State& s, int b) {
+  return s.x.middleRows(w.first_state_row(b), w.body(b).vertices()).colwise().mean().transpose();
+}
+
+double centroid_gap(const World& w, const State& s) { return (centroid(w, s, 1) - centroid(w, s, 0)).norm(); }
+
+// Two balls driven into each other over a rigid slab with gravity and a floor: a busy scene.
+World busy_world() {
+  WorldOptions o;
+  o.h = 1e-4;
+  o.floor = true;
+  o.floor_height = -0.3;
+  o.contact_stiffness = 2e3;
+  o.contact_damping = 0.5;
+  World w(o);
+  Material m;
+  m.k_distance = 5;
+  m.k_volume = 5;
+  m.damping_distance = 0.002;
+  m.damping_volume = 0.002;
+  Eigen::Affine3d a = Eigen::Affine3d::Identity(), b = a;
+  a.translation() = Vector3d(-0.12, 0, 0);
+  b.translation() = Vector3d(0.12, 0.02, 0.01);
+  w.add_body(Body(ball_tet_mesh(0.1, 4), m, false, a));
+  w.add_body(Body(ball_tet_mesh(0.1, 4), m, false, b));
+  w.add_body(Body(box_tet_mesh(Vector3d(-0.5, -0.2, -0.5), Vector3d(0.5, -0.1, 0.5), Eigen::Vector3i(5, 1, 5)),
+                  Material{}, true));
+  return w;
+}
+
+State run_busy(int threads, int steps, int* ball_contact_steps) {
+  tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
+  World w = busy_world();
+  State s = w.initial_state();
+  RowMatrixX3d ext = RowMatrixX3d::Zero(s.x.rows(), 3);
+  for (int i = 0; i < w.body(0).vertices(); ++i) ext(i, 0) = 5.0 * w.masses()(i);
+  for (int i = 0; i < w.body(1).vertices(); ++i) {
+    const int r = w.first_state_row(1) + i;
+    ext(r, 0) = -5.0 * w.masses()(r);
+  }
+  *ball_contact_steps = 0;
+  for (int n = 0; n < steps; ++n) {
+    w.step(s, &ext);
+    *ball_contact_steps += w.last_stats().colliding_vertices > 0 &&
+                           centroid_gap(w, s) < 0.2;  // balls (radius 0.1) overlap
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(FemWorld, BitIdenticalWhateverTheThreadCount) {
+  int touch1 = 0, touch2 = 0;
+  const State a = run_busy(1, 1500, &touch1), b = run_busy(2, 1500, &touch2);
+  EXPECT_GT(touch1, 50);  // the balls did collide
+  EXPECT_EQ(touch1, touch2);
+  ASSERT_EQ(a.x.size(), b.x.size());
+  EXPECT_EQ(std::memcmp(a.x.data(), b.x.data(), sizeof(double) * a.x.size()), 0);
+  EXPECT_EQ(std::memcmp(a.v.data(), b.v.data(), sizeof(double) * a.v.size()), 0);
+  EXPECT_TRUE(a.x.allFinite());
+}
+
+TEST(FemPhysics, CubeDroppedOnRigidFloorComesToRest) {
+  WorldOptions o;
+  o.h = 1e-4;
+  o.contact_stiffness = 1e5;
+  o.contact_damping = 20;
+  World w(o);
+  Material m;
+  m.k_distance = 50;
+  m.k_volume = 50;
+  m.damping_distance = 0.05;
+  m.damping_volume = 0.05;
+  const double L = 0.2;
+  w.add_body(Body(cube(L, 3, Vector3d(-0.1, 0.1, -0.1)), m));
+  w.add_body(Body(box_tet_mesh(Vector3d(-1, -0.2, -1), Vector3d(1, 0, 1), Eigen::Vector3i(4, 1, 4)), Material{}, true));
+  State s = w.initial_state();
+  const double v0 = w.body_volume(s, 0);
+  double peak = 0, lowest = 1;
+  for (int n = 0; n < 20000; ++n) {
+    w.step(s);
+    peak = std::max(peak, w.kinetic_energy(s));
+    if (n > 10000) lowest = std::min(lowest, s.x.col(1).minCoeff());
+  }
+  EXPECT_GT(peak, 0.5 * 8.0 * 9.81 * 0.09);  // it did fall
+  EXPECT_LT(w.kinetic_energy(s), 0.01 * peak);
+  EXPECT_GT(lowest, -0.01 * L);              // penetration below 1% of its size
+  EXPECT_LT(s.x.col(1).minCoeff(), 0.01 * L);  // resting on the floor, not floating
+  EXPECT_NEAR(w.body_volume(s, 0), v0, 0.03 * v0);
+}
+
+TEST(FemPhysics, SpheresDrivenHeadOnDoNotPassThrough) {
+  WorldOptions o;
+  o.h = 1e-4;
+  o.gravity.setZero();
+  o.contact_stiffness = 2e4;
+  o.contact_damping = 2;
+  World w(o);
+  Material m;
+  m.k_distance = 5;
+  m.k_volume = 5;
+  m.damping_distance = 0.002;
+  m.damping_volume = 0.002;
+  Eigen::Affine3d a = Eigen::Affine3d::Identity(), b = a;
+  a.translation() = Vector3d(-0.15, 0, 0);
+  b.translation() = Vector3d(0.15, 0.01, 0);
+  w.add_body(Body(ball_tet_mesh(0.1, 4), m, false, a));
+  w.add_body(Body(ball_tet_mesh(0.1, 4), m, false, b));
+  State s = w.initial_state();
+  RowMatrixX3d ext = RowMatrixX3d::Zero(s.x.rows(), 3);
+  int touching = 0;
+  double closest = 1;
+  for (int n = 0; n < 10000; ++n) {
+    // 10 m/s² driving each ball towards the other's centroid.
+    const Vector3d c0 = centroid(w, s, 0), c1 = centroid(w, s, 1);
+    const Vector3d dir = (c1 - c0).normalized();
+    closest = std::min(closest, (c1 - c0).norm());
+    for (int i = 0; i < s.x.rows(); ++i)
+      ext.row(i) = ((i < w.body(0).vertices() ? 10.0 : -10.0) * w.masses()(i) * dir).transpose();
+    w.step(s, &ext);
+    touching += w.last_stats().colliding_vertices > 0;
+  }
+  EXPECT_GT(touching, 100);
+  EXPECT_GT(closest, 0.15);  // centroids stay 3/4 of a diameter apart: no pass-through
+  EXPECT_TRUE(s.x.allFinite());
+}
+
+TEST(FemPhysics, PinnedPlateSagsAndStaysAttached) {
+  WorldOptions o;
+  o.h = 5e-5;
+  o.collisions = false;
+  World w(o);
+  Material m;
+  m.k_distance = 50;
+  m.k_volume = 50;
+  m.damping_distance = 0.05;
+  m.damping_volume = 0.05;
+  w.add_body(Body(box_tet_mesh(Vector3d(0, 0, 0), Vector3d(0.5, 0.04, 0.2), Eigen::Vector3i(10, 1, 4)), m));
+  const int pinned = w.pin(Eigen::AlignedBox3d(Vector3d(-1, -1, -1), Vector3d(1e-9, 1, 1)));
+  EXPECT_EQ(pinned, 2 * 5);
+  State s = w.initial_state();
+  const State s0 = s;
+  const Body& B = w.body(0);
+  double mean_tip = 0;  // mean tip displacement over the last 10000 steps (it still oscillates)
+  for (int n = 0; n < 20000; ++n) {
+    w.step(s);
+    if (n >= 10000)
+      for (int i = 0; i < B.vertices(); ++i)
+        if (B.rest(i, 0) > 0.499) mean_tip += (s.x(i, 1) - s0.x(i, 1)) / 10000 / 10;  // 10 tip vertices
+  }
+  double max_strain = 0;
+  for (int i = 0; i < B.vertices(); ++i)
+    if (w.pinned(i)) {
+      EXPECT_EQ((s.x.row(i) - s0.x.row(i)).norm(), 0.0);
+    }
+  for (int e = 0; e < B.E.rows(); ++e)
+    max_strain = std::max(max_strain, std::abs((s.x.row(B.E(e, 1)) - s.x.row(B.E(e, 0))).norm() / B.D0(e) - 1));
+  EXPECT_LT(mean_tip, -0.005);  // sags
+  EXPECT_LT(max_strain, 0.3);   // attached: no edge torn
+  EXPECT_TRUE(s.x.allFinite());
+}

@@ -1,0 +1,581 @@
+// Unit and property tests of squeeze::meshing (issue 3): convex decomposition, tetrahedralization,
+// winding numbers, orientation, surface and tetrahedral I/O. Geometry is built in the tests.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "meshing_test_util.h"
+#include "squeeze/common/error.h"
+#include "squeeze/meshing/convex_hull.h"
+#include "squeeze/meshing/decompose.h"
+#include "squeeze/meshing/mesh_pipeline.h"
+#include "squeeze/meshing/surface_analysis.h"
+#include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/tet_io.h"
+#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/winding_number.h"
+
+namespace {
+using namespace sqt;
+using squeeze::InputError;
+
+// ---------------------------------------------------------------------------------------------
+// Geometry built here.
+
+/// Closed, outward-oriented surface of a union of unit cubes (cells (i,j,k) of the integer grid):
+/// every cube face not shared with another cube, as two triangles on grid vertices (no
+/// T-junctions), scaled by `scale` and shifted by `shift`.
+SurfaceMesh cubes_surface(const std::vector<std::array<int, 3>>& cells, double scale = 1.0,
+                          Eigen::RowVector3d shift = Eigen::RowVector3d::Zero()) {
+  std::set<std::array<int, 3>> in(cells.begin(), cells.end());
+  std::map<std::array<int, 3>, int> vid;
+  std::vector<Eigen::RowVector3d> pts;
+  std::vector<std::array<int, 3>> tris;
+  auto vertex = [&](std::array<int, 3> g) {
+    auto [it, fresh] = vid.emplace(g, static_cast<int>(pts.size()));
+    if (fresh) pts.push_back(Eigen::RowVector3d(g[0], g[1], g[2]) * scale + shift);
+    return it->second;
+  };
+  for (const auto& c : cells)
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side) {
+        std::array<int, 3> n = c;
+        n[axis] += side ? 1 : -1;
+        if (in.count(n)) continue;
+        // The face at c[axis] + side, spanned by the two other axes (u, v) with u × v = +axis.
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        std::array<int, 3> q[4];
+        for (int k = 0; k < 4; ++k) {
+          q[k] = c;
+          q[k][axis] += side;
+        }
+        q[1][u] += 1;
+        q[2][u] += 1, q[2][v] += 1;
+        q[3][v] += 1;
+        int i[4];
+        for (int k = 0; k < 4; ++k) i[k] = vertex(q[k]);
+        if (side) {  // normal +axis: counter-clockwise seen from outside
+          tris.push_back({i[0], i[1], i[2]});
+          tris.push_back({i[0], i[2], i[3]});
+        } else {
+          tris.push_back({i[0], i[2], i[1]});
+          tris.push_back({i[0], i[3], i[2]});
+        }
+      }
+  SurfaceMesh m;
+  m.V.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = pts[i];
+  m.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
+  for (size_t i = 0; i < tris.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << tris[i][0], tris[i][1], tris[i][2];
+  return m;
+}
+
+SurfaceMesh box(Eigen::RowVector3d lo, Eigen::RowVector3d hi) {
+  SurfaceMesh m = cubes_surface({{0, 0, 0}});
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) m.V.row(i) = lo + m.V.row(i).cwiseProduct(hi - lo);
+  return m;
+}
+
+SurfaceMesh concat(const SurfaceMesh& a, const SurfaceMesh& b) {
+  SurfaceMesh m;
+  m.V.resize(a.V.rows() + b.V.rows(), 3);
+  m.V << a.V, b.V;
+  m.F.resize(a.F.rows() + b.F.rows(), 3);
+  m.F << a.F, (b.F.array() + static_cast<int>(a.V.rows())).matrix();
+  return m;
+}
+
+// The same shapes two cells thick, so the notch walls carry vertices halfway up (a minimal prism
+// has every vertex on its top and bottom faces, which are facets of its convex hull).
+std::vector<std::array<int, 3>> thicken(std::vector<std::array<int, 3>> cells) {
+  const size_t n = cells.size();
+  for (size_t i = 0; i < n; ++i) cells.push_back({cells[i][0], cells[i][1], 1});
+  return cells;
+}
+// L: three cells along x and two more up y from the first; the concave corner is the edge x=y=1.
+SurfaceMesh l_shape() { return cubes_surface({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 2, 0}}); }
+// U: base of three cells along x, arms two cells high at x=0 and x=2; the notch is [1,2]×[1,3].
+SurfaceMesh u_shape() {
+  return cubes_surface({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 2, 0}, {2, 1, 0}, {2, 2, 0}});
+}
+
+/// Signed volume sum (about the origin) and edge-orientation consistency.
+double signed_volume(const SurfaceMesh& m) {
+  double v = 0;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    v += m.V.row(m.F(f, 0)).dot(m.V.row(m.F(f, 1)).cross(m.V.row(m.F(f, 2)))) / 6.0;
+  return v;
+}
+/// Directed edges used twice (0 for a consistently oriented closed manifold).
+int inconsistent_edges(const Eigen::MatrixX3i& F) {
+  std::map<std::pair<int, int>, int> directed;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++directed[{F(f, k), F(f, (k + 1) % 3)}];
+  int bad = 0;
+  for (const auto& [e, n] : directed) bad += n > 1;
+  return bad;
+}
+
+squeeze::MeshOptions fast_options() {
+  squeeze::MeshOptions o;
+  o.check_self_intersection = false;
+  return o;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Test geometry sanity (so the tests below test squeeze, not the fixtures).
+
+TEST(MeshingFixtures, CubeSurfacesAreClosedAndOutward) {
+  for (const SurfaceMesh& m : {box({0, 0, 0}, {1, 2, 3}), l_shape(), u_shape()}) {
+    EXPECT_EQ(inconsistent_edges(m.F), 0);
+    std::map<std::pair<int, int>, int> undirected;
+    for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
+        ++undirected[{std::min(a, b), std::max(a, b)}];
+      }
+    for (const auto& [e, n] : undirected) EXPECT_EQ(n, 2);
+    EXPECT_GT(signed_volume(m), 0);
+  }
+  EXPECT_NEAR(signed_volume(box({0, 0, 0}, {1, 2, 3})), 6.0, 1e-12);
+  EXPECT_NEAR(signed_volume(l_shape()), 5.0, 1e-12);
+  EXPECT_NEAR(signed_volume(u_shape()), 7.0, 1e-12);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Convex decomposition.
+
+TEST(MeshingDecompose, ConvexBoxGivesOneHull) {
+  const auto d = squeeze::decompose(box({-1, 0, 2}, {2, 1, 2.5}));
+  ASSERT_EQ(d.shells.size(), 1u);
+  EXPECT_NEAR(d.shells[0].hull.volume, 3 * 1 * 0.5, 1e-9);
+  EXPECT_EQ(d.parts, 1);
+}
+
+TEST(MeshingDecompose, SphereGivesOneHull) {
+  const SurfaceMesh s = read_off(data("sphere.off"));
+  SurfaceMesh m{s.V, squeeze::orient_outward(s.V, s.F)};
+  const auto d = squeeze::decompose(m);
+  EXPECT_EQ(d.shells.size(), 1u);
+  EXPECT_LE(d.max_concavity, d.threshold);
+}
+
+TEST(MeshingDecompose, TwoDisjointBoxesGiveTwoPartsAndTwoTetComponents) {
+  const SurfaceMesh m = concat(box({0, 0, 0}, {1, 1, 1}), box({3, 0.2, 0}, {4, 1.2, 1.5}));
+  const auto r = squeeze::mesh_surface(m, fast_options());
+  EXPECT_EQ(r.decomposition.parts, 2);
+  EXPECT_EQ(r.decomposition.shells.size(), 2u);
+  InputTruth truth = truth_of(m, true);
+  ASSERT_EQ(truth.components, 2);
+  const TetFacts f = expect_mesh_contract(r.tets, truth, "two boxes");
+  EXPECT_EQ(f.components, 2);
+}
+
+/// Every shell contains none of `outside` (points of the notch), and together they hold every
+/// input vertex.
+void expect_split_at_notch(const SurfaceMesh& m, const std::vector<Eigen::RowVector3d>& outside,
+                           const std::string& what) {
+  SCOPED_TRACE(what);
+  const auto d = squeeze::decompose(m);
+  EXPECT_GT(d.shells.size(), 1u) << what << " was not split";
+  for (size_t s = 0; s < d.shells.size(); ++s)
+    for (const auto& p : outside)
+      EXPECT_GT(d.shells[s].hull.signed_value(p), 1e-9)
+          << what << ": shell " << s << " contains the notch point " << p << " (the cut misses the concave corner)";
+  const double diag = diagonal(m.V);
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
+    double best = INFINITY;
+    for (const auto& s : d.shells) best = std::min(best, s.hull.signed_value(m.V.row(i)));
+    EXPECT_LE(best, 1e-9 * diag) << what << ": input vertex " << i << " is in no shell";
+  }
+  // Pieces of a union of boxes cut at the notch are boxes: concavity must reach the threshold.
+  EXPECT_LE(d.max_concavity, d.threshold + 1e-12);
+  EXPECT_FALSE(d.hit_max_hulls);
+}
+
+TEST(MeshingDecompose, LShapeIsSplitAtTheConcaveCorner) {
+  expect_split_at_notch(l_shape(), {{1.05, 1.05, 0.5}, {1.5, 1.5, 0.5}, {1.01, 2.9, 0.1}, {2.9, 1.01, 0.9}}, "L");
+}
+
+TEST(MeshingDecompose, UShapeIsSplitAtBothConcaveCorners) {
+  expect_split_at_notch(u_shape(), {{1.05, 1.05, 0.5}, {1.95, 1.05, 0.5}, {1.5, 2.0, 0.5}, {1.5, 2.95, 0.5}}, "U");
+}
+
+TEST(MeshingDecompose, ThickLShapeIsSplitAtTheConcaveCorner) {
+  const SurfaceMesh l = cubes_surface(thicken({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 2, 0}}));
+  expect_split_at_notch(l, {{1.05, 1.05, 0.7}, {1.5, 1.5, 0.5}, {1.01, 2.9, 0.1}, {2.9, 1.01, 1.9}}, "thick L");
+}
+
+TEST(MeshingDecompose, ThickUShapeIsSplitAtBothConcaveCorners) {
+  const SurfaceMesh u =
+      cubes_surface(thicken({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 2, 0}, {2, 1, 0}, {2, 2, 0}}));
+  expect_split_at_notch(u, {{1.05, 1.05, 0.7}, {1.95, 1.05, 1.3}, {1.5, 2.0, 0.5}, {1.5, 2.95, 1.5}}, "thick U");
+}
+
+TEST(MeshingDecompose, ShellsAreInteriorDisjoint) {
+  // Plane cuts: the shells of the L meet only on cutting planes, so their volumes add up to the L's.
+  const auto d = squeeze::decompose(l_shape());
+  double sum = 0;
+  for (const auto& s : d.shells) sum += s.hull.volume;
+  EXPECT_NEAR(sum, 5.0, 1e-6);
+}
+
+TEST(MeshingDecompose, ImpossibleOptionsThrow) {
+  const SurfaceMesh m = box({0, 0, 0}, {1, 1, 1});
+  squeeze::DecompositionOptions o;
+  o.concavity = 0;
+  EXPECT_THROW(squeeze::decompose(m, o), InputError);
+  o.concavity = -1;
+  EXPECT_THROW(squeeze::decompose(m, o), InputError);
+  o = {};
+  o.max_hulls = 0;
+  EXPECT_THROW(squeeze::decompose(m, o), InputError);
+  o = {};
+  o.voxel_resolution = 2;
+  EXPECT_THROW(squeeze::decompose(m, o), InputError);
+  squeeze::TetrahedralizeOptions t;
+  t.target_tets = 0;
+  const auto d = squeeze::decompose(m);
+  EXPECT_THROW(squeeze::tetrahedralize(d.shells, t), InputError);
+  EXPECT_THROW(squeeze::tetrahedralize({}, {}), InputError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The whole pipeline on built shapes.
+
+TEST(MeshingPipeline, BoxMeetsTheContract) {
+  const SurfaceMesh m = box({0, 0, 0}, {2, 1, 1});
+  const auto r = squeeze::mesh_surface(m, fast_options());
+  const TetFacts f = expect_mesh_contract(r.tets, truth_of(m, true), "box");
+  EXPECT_EQ(f.components, 1);
+  EXPECT_EQ(r.decomposition.shells.size(), 1u);
+}
+
+TEST(MeshingPipeline, LShapeMeetsTheContractAndIsConforming) {
+  const SurfaceMesh m = l_shape();
+  const auto r = squeeze::mesh_surface(m, fast_options());
+  const TetFacts f = expect_mesh_contract(r.tets, truth_of(m, true), "L");
+  EXPECT_EQ(f.components, 1);  // the shells meet on the cut and the mesh conforms across it
+  // Labels name shells (1-based).
+  ASSERT_EQ(r.tets.label.size(), r.tets.T.rows());
+  EXPECT_GE(r.tets.label.minCoeff(), 1);
+  EXPECT_LE(r.tets.label.maxCoeff(), static_cast<int>(r.decomposition.shells.size()));
+}
+
+TEST(MeshingPipeline, SameInputSameOutput) {
+  const SurfaceMesh m = u_shape();
+  const auto a = squeeze::mesh_surface(m, fast_options());
+  const auto b = squeeze::mesh_surface(m, fast_options());
+  ASSERT_EQ(a.tets.T.rows(), b.tets.T.rows());
+  ASSERT_EQ(a.tets.V.rows(), b.tets.V.rows());
+  EXPECT_TRUE(a.tets.T == b.tets.T);
+  EXPECT_TRUE(a.tets.V == b.tets.V);  // bitwise
+  EXPECT_TRUE(a.tets.label == b.tets.label);
+}
+
+TEST(MeshingPipeline, DegenerateInputIsAnInputError) {
+  SurfaceMesh m;
+  m.V.resize(3, 3);
+  m.V << 1, 1, 1, 1, 1, 1, 1, 1, 1;
+  m.F.resize(1, 3);
+  m.F << 0, 1, 2;
+  EXPECT_THROW(squeeze::mesh_surface(m, fast_options()), InputError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tetrahedral formats.
+
+TetMesh kuhn_cube() {
+  // A cube with awkward coordinates split into 6 positively oriented tetrahedra (Kuhn).
+  TetMesh m;
+  m.V.resize(8, 3);
+  for (int i = 0; i < 8; ++i)
+    m.V.row(i) << -1234.567890123456 + (i & 1) * (1.0 / 3.0), 1e-7 + ((i >> 1) & 1) * 0.1, 98765.4321 + ((i >> 2) & 1) * 2.5;
+  const int tets[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
+  m.T.resize(6, 4);
+  for (int t = 0; t < 6; ++t) m.T.row(t) << tets[t][0], tets[t][1], tets[t][2], tets[t][3];
+  squeeze::orient_positively(m);
+  m.label.resize(6);
+  m.label << 1, 2, 3, 3, 7, 12;
+  return m;
+}
+
+TEST(MeshingTetIO, RoundTripsEveryFormat) {
+  TempDir dir("tetio");
+  const TetMesh m = kuhn_cube();
+  ASSERT_EQ(tet_facts(m).nonpositive, 0);
+  for (const std::string name : {"a.mesh", "a.msh", "a.vtk", "a.vtu", "a.node", "b.ele"}) {
+    SCOPED_TRACE(name);
+    const fs::path p = dir / name;
+    EXPECT_TRUE(squeeze::is_tet_format(p));
+    try {
+      squeeze::save_tet_mesh(p, m);
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << name << ": save_tet_mesh threw " << e.what();
+      continue;
+    }
+    std::vector<fs::path> reads{p};
+    if (p.extension() == ".node" || p.extension() == ".ele") {
+      const fs::path node = fs::path(p).replace_extension(".node"), ele = fs::path(p).replace_extension(".ele");
+      EXPECT_TRUE(fs::exists(node));
+      EXPECT_TRUE(fs::exists(ele));
+      reads = {node, ele};  // either name may be given
+    }
+    for (const fs::path& r : reads) {
+      TetMesh back;
+      try {
+        back = squeeze::load_tet_mesh(r);
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << r << ": load_tet_mesh threw " << e.what();
+        continue;
+      }
+      ASSERT_EQ(back.V.rows(), m.V.rows()) << r;
+      ASSERT_EQ(back.T.rows(), m.T.rows()) << r;
+      EXPECT_TRUE(back.V == m.V) << r << ": coordinates changed\n" << back.V - m.V;
+      EXPECT_TRUE(back.T == m.T) << r;
+      ASSERT_EQ(back.label.size(), m.label.size()) << r;
+      EXPECT_TRUE(back.label == m.label) << r;
+    }
+  }
+  EXPECT_TRUE(temporaries_in(dir.path()).empty());
+}
+
+TEST(MeshingTetIO, RoundTripsAPipelineMesh) {
+  TempDir dir("tetio2");
+  const auto r = squeeze::mesh_surface(l_shape(), fast_options());
+  for (const std::string name : {"l.mesh", "l.msh", "l.vtk", "l.vtu", "l.node"}) {
+    squeeze::save_tet_mesh(dir / name, r.tets);
+    TetMesh back;
+    try {
+      back = squeeze::load_tet_mesh(dir / name);
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << name << ": load_tet_mesh threw " << e.what();
+      continue;
+    }
+    EXPECT_TRUE(back.V == r.tets.V) << name;
+    EXPECT_TRUE(back.T == r.tets.T) << name;
+  }
+}
+
+TEST(MeshingTetIO, Errors) {
+  TempDir dir("tetioerr");
+  const TetMesh m = kuhn_cube();
+  EXPECT_FALSE(squeeze::is_tet_format("x.xyz"));
+  EXPECT_FALSE(squeeze::is_tet_format("x.off"));
+  EXPECT_THROW(squeeze::save_tet_mesh(dir / "x.xyz", m), InputError);
+  EXPECT_THROW(squeeze::save_tet_mesh(dir / "missing" / "x.mesh", m), InputError);
+  EXPECT_THROW(squeeze::load_tet_mesh(dir / "none.mesh"), InputError);
+  {
+    std::ofstream(dir / "bad.mesh") << "MeshVersionFormatted 1\nDimension 3\nVertices\n2\n0 0 0 0\n1 1 1 0\n"
+                                       "Tetrahedra\n1\n1 2 3 4 1\nEnd\n";
+  }
+  EXPECT_THROW(squeeze::load_tet_mesh(dir / "bad.mesh"), InputError);  // index out of range
+  {
+    std::ofstream(dir / "nan.mesh") << "MeshVersionFormatted 1\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n"
+                                       "0 nan 0 0\n0 0 1 0\nTetrahedra\n1\n1 2 3 4 1\nEnd\n";
+  }
+  EXPECT_THROW(squeeze::load_tet_mesh(dir / "nan.mesh"), InputError);
+  {
+    std::ofstream(dir / "notets.msh") << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n"
+                                         "$Elements\n0\n$EndElements\n";
+  }
+  EXPECT_THROW(squeeze::load_tet_mesh(dir / "notets.msh"), InputError);
+  EXPECT_TRUE(temporaries_in(dir.path()).empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Winding numbers.
+
+/// Upper half of a UV sphere of radius 1 centred at the origin; the rim lies in z = 0 exactly.
+SurfaceMesh hemisphere(int rings = 12, int sectors = 32) {
+  std::vector<Eigen::RowVector3d> pts{{0, 0, 1}};  // pole
+  for (int r = 1; r <= rings; ++r) {
+    const double th = M_PI / 2 * r / rings;
+    for (int s = 0; s < sectors; ++s) {
+      const double ph = 2 * M_PI * s / sectors;
+      pts.emplace_back(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), r == rings ? 0.0 : std::cos(th));
+    }
+  }
+  auto id = [&](int r, int s) { return 1 + (r - 1) * sectors + (s % sectors); };
+  std::vector<std::array<int, 3>> tris;
+  for (int s = 0; s < sectors; ++s) tris.push_back({0, id(1, s), id(1, s + 1)});
+  for (int r = 1; r < rings; ++r)
+    for (int s = 0; s < sectors; ++s) {
+      tris.push_back({id(r, s), id(r + 1, s), id(r + 1, s + 1)});
+      tris.push_back({id(r, s), id(r + 1, s + 1), id(r, s + 1)});
+    }
+  SurfaceMesh m;
+  m.V.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = pts[i];
+  m.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
+  for (size_t i = 0; i < tris.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << tris[i][0], tris[i][1], tris[i][2];
+  return m;
+}
+
+TEST(MeshingWindingNumber, OneInsideZeroOutsideClosedMesh) {
+  const SurfaceMesh s = read_off(data("sphere.off"));
+  const SurfaceMesh m{s.V, squeeze::orient_outward(s.V, s.F)};
+  // The fast (dipole) evaluation: "error below 1e-2 for beta = 2 on our corpus" (winding_number.h).
+  const squeeze::FastWindingNumber fast(m.V, m.F);
+  for (const Eigen::RowVector3d& p : {Eigen::RowVector3d(0, 0, 0), Eigen::RowVector3d(0.2, -0.1, 0.3),
+                                     Eigen::RowVector3d(-0.4, 0, 0)}) {
+    EXPECT_NEAR(squeeze::winding_number(m.V, m.F, p), 1.0, 1e-9) << p;
+    EXPECT_NEAR(fast(p), 1.0, 1e-2) << p;
+  }
+  for (const Eigen::RowVector3d& p : {Eigen::RowVector3d(2, 0, 0), Eigen::RowVector3d(0.6, 0.6, 0),
+                                     Eigen::RowVector3d(0, 0, -50), Eigen::RowVector3d(1e4, 1e4, 1e4)}) {
+    EXPECT_NEAR(squeeze::winding_number(m.V, m.F, p), 0.0, 1e-9) << p;
+    EXPECT_NEAR(fast(p), 0.0, 1e-2) << p;
+  }
+  // Inverted orientation: -1 inside.
+  Eigen::MatrixX3i flipped = m.F;
+  flipped.col(1).swap(flipped.col(2));
+  EXPECT_NEAR(squeeze::winding_number(m.V, flipped, Eigen::RowVector3d(0, 0, 0)), -1.0, 1e-9);
+}
+
+TEST(MeshingWindingNumber, BoxWithManyQueries) {
+  const SurfaceMesh m = l_shape();
+  const squeeze::FastWindingNumber fast(m.V, m.F);
+  EXPECT_NEAR(fast(Eigen::RowVector3d(0.5, 2.5, 0.5)), 1.0, 1e-2);
+  EXPECT_NEAR(fast(Eigen::RowVector3d(2.5, 0.5, 0.5)), 1.0, 1e-2);
+  EXPECT_NEAR(fast(Eigen::RowVector3d(1.5, 1.5, 0.5)), 0.0, 1e-2);  // in the notch
+  EXPECT_NEAR(squeeze::winding_number(m.V, m.F, Eigen::RowVector3d(1.5, 1.5, 0.5)), 0.0, 1e-9);
+}
+
+TEST(MeshingWindingNumber, HalfOnTheRimOfAnOpenHemisphere) {
+  const SurfaceMesh h = hemisphere();
+  const squeeze::FastWindingNumber fast(h.V, h.F);
+  // Centre of the opening (in the plane of the rim): the cap subtends exactly half the sphere.
+  const double sign = squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 0.5)) > 0 ? 1 : -1;
+  EXPECT_NEAR(sign * squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 0)), 0.5, 1e-9);
+  EXPECT_NEAR(sign * fast(Eigen::RowVector3d(0, 0, 0)), 0.5, 1e-2);
+  // Points of the rim's disc away from the centre are ~0.5 too.
+  for (const Eigen::RowVector3d& p : {Eigen::RowVector3d(0.5, 0, 0), Eigen::RowVector3d(0, -0.7, 0)}) {
+    EXPECT_NEAR(sign * squeeze::winding_number(h.V, h.F, p), 0.5, 1e-9) << p;
+    EXPECT_NEAR(sign * fast(p), 0.5, 1e-2) << p;
+  }
+  // Inside the dome it is more, below the opening less, far away 0.
+  EXPECT_GT(sign * squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 0.5)), 0.6);
+  EXPECT_LT(sign * squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, -0.5)), 0.4);
+  EXPECT_NEAR(squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 10)), 0.0, 2e-2);
+  // The orientation our construction chose (normals outward, away from the centre) gives +.
+  EXPECT_EQ(sign, 1.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Orientation and analysis.
+
+TEST(MeshingOrientation, FixesFlippedFaces) {
+  const SurfaceMesh s = read_off(data("sphere.off"));
+  const SurfaceMesh good{s.V, squeeze::orient_outward(s.V, s.F)};
+  const double volume = signed_volume(good);
+  ASSERT_GT(volume, 0.4);  // icosphere of radius 0.5: a bit under 4/3 pi / 8 = 0.5236
+  Eigen::MatrixX3i bad = good.F;
+  for (Eigen::Index f = 0; f < bad.rows(); f += 2) std::swap(bad(f, 1), bad(f, 2));
+  ASSERT_GT(inconsistent_edges(bad), 0);
+  const SurfaceMesh fixed{s.V, squeeze::orient_outward(s.V, bad)};
+  EXPECT_EQ(inconsistent_edges(fixed.F), 0);
+  EXPECT_NEAR(signed_volume(fixed), volume, 1e-12);
+  // Every face entirely flipped: turned outward.
+  Eigen::MatrixX3i inverted = good.F;
+  inverted.col(1).swap(inverted.col(2));
+  EXPECT_NEAR(signed_volume({s.V, squeeze::orient_outward(s.V, inverted)}), volume, 1e-12);
+}
+
+TEST(MeshingOrientation, EachComponentOnItsOwn) {
+  SurfaceMesh a = box({0, 0, 0}, {1, 1, 1}), b = l_shape();
+  b.V.col(0).array() += 5;
+  b.F.col(1).swap(b.F.col(2));  // b inside out
+  for (Eigen::Index f = 1; f < a.F.rows(); f += 3) std::swap(a.F(f, 0), a.F(f, 1));  // a partly flipped
+  const SurfaceMesh m = concat(a, b);
+  const SurfaceMesh fixed{m.V, squeeze::orient_outward(m.V, m.F)};
+  EXPECT_EQ(inconsistent_edges(fixed.F), 0);
+  EXPECT_NEAR(signed_volume(fixed), 1.0 + 5.0, 1e-9);
+  EXPECT_NEAR(squeeze::winding_number(fixed.V, fixed.F, Eigen::RowVector3d(0.5, 0.5, 0.5)), 1.0, 1e-9);
+  EXPECT_NEAR(squeeze::winding_number(fixed.V, fixed.F, Eigen::RowVector3d(5.5, 2.5, 0.5)), 1.0, 1e-9);
+}
+
+TEST(MeshingAnalysis, ClosedOpenComponents) {
+  SurfaceMesh l = l_shape();
+  l.V.col(2).array() += 3;
+  const SurfaceMesh two = concat(box({0, 0, 0}, {1, 1, 1}), l);
+  auto info = squeeze::analyse_surface(two);
+  EXPECT_EQ(info.components, 2);
+  EXPECT_TRUE(info.closed);
+  EXPECT_EQ(info.boundary_edges, 0);
+  EXPECT_NEAR(info.volume, 6.0, 1e-9);
+  EXPECT_FALSE(squeeze::does_self_intersect(two));
+  const SurfaceMesh h = hemisphere();
+  info = squeeze::analyse_surface(h);
+  EXPECT_FALSE(info.closed);
+  EXPECT_EQ(info.boundary_edges, 32);
+  // Two overlapping boxes intersect each other.
+  EXPECT_TRUE(squeeze::does_self_intersect(concat(box({0, 0, 0}, {1, 1, 1}), box({0.5, 0.5, 0.5}, {2, 2, 2}))));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Surface I/O.
+
+TEST(MeshingSurfaceIO, RoundTripsThroughAssimpFormats) {
+  TempDir dir("surfio");
+  const SurfaceMesh s = read_off(data("elephant.off"));
+  for (const std::string name : {"e.off", "e.obj", "e.ply", "e.stl", "e.glb", "e.gltf"}) {
+    SCOPED_TRACE(name);
+    squeeze::save_surface(dir / name, s);
+    const SurfaceMesh back = squeeze::load_surface(dir / name);
+    EXPECT_EQ(back.F.rows(), s.F.rows()) << name;
+    EXPECT_EQ(back.V.rows(), s.V.rows()) << name;  // welded back to the shared vertices
+    if (back.V.rows() == s.V.rows()) {
+      // The same points (the loader orders them by first use; float32 formats round).
+      auto sorted = [](const Eigen::MatrixX3d& V) {
+        std::vector<std::array<double, 3>> v;
+        for (Eigen::Index i = 0; i < V.rows(); ++i) v.push_back({V(i, 0), V(i, 1), V(i, 2)});
+        std::sort(v.begin(), v.end());
+        return v;
+      };
+      const auto a = sorted(back.V), b = sorted(s.V);
+      double worst = 0;
+      for (size_t i = 0; i < a.size(); ++i)
+        for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(a[i][k] - b[i][k]));
+      EXPECT_LE(worst, 1e-6 * diagonal(s.V)) << name;
+    }
+    EXPECT_NEAR(enclosed_volume(back), enclosed_volume(s), 1e-5 * enclosed_volume(s)) << name;
+  }
+  // Only the files asked for (and no temporary, no side file with a temporary name).
+  const auto tmp = temporaries_in(dir.path());
+  EXPECT_TRUE(tmp.empty()) << "left behind: " << (tmp.empty() ? "" : tmp.front());
+  EXPECT_THROW(squeeze::save_surface(dir / "e.nosuchformat", s), InputError);
+}
+
+TEST(MeshingSurfaceIO, BadFilesAreInputErrors) {
+  TempDir dir("surfbad");
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name, std::ios::binary) << text;
+    return dir / name;
+  };
+  auto expect_error = [&](const fs::path& p, const std::string& what) {
+    try {
+      squeeze::load_surface(p);
+      ADD_FAILURE() << what << ": no error for " << p;
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(p.filename().string()), std::string::npos) << what << ": " << msg;
+      EXPECT_EQ(msg.find('\n'), std::string::npos) << what << ": " << msg;
+    }
+  };
+  expect_error(dir / "missing.off", "missing");
+  expect_error(write("empty.off", ""), "empty");
+  expect_error(write("text.xyz", "1 2 3\n4 5 6\n"), "xyz");
+  std::string noise(4096, '\0');
+  for (size_t i = 0; i < noise.size(); ++i) noise[i] = static_cast<char>((i * 2654435761u) >> 13);
+  expect_error(write("noise.ply", noise), "random bytes");
+  expect_error(write("nofaces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"), "no faces");
+  expect_error(write("nan.off", "OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n"), "nan");
+  expect_error(write("inf.off", "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n"), "inf");
+  expect_error(write("degenerate.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 0 1\n3 2 2 2\n"), "degenerate");
+  expect_error(write("coincident.off", "OFF\n3 1 0\n1 1 1\n1 1 1\n1 1 1\n3 0 1 2\n"), "coincident");
+  fs::create_directories(dir / "adir.off");
+  expect_error(dir / "adir.off", "directory");
+}
+
+}  // namespace
