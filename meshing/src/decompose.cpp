@@ -315,6 +315,7 @@ void evaluate_piece(Piece& piece, double flat_thickness, double sample_spacing) 
 struct Candidate {
   Vec3 n;
   double d;
+  bool notch = false;  // passes through the piece's deepest point
 };
 
 }  // namespace
@@ -452,9 +453,9 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
       }
       if (hi - lo < 2 * g.h) continue;
       for (int i = 1; i <= opt.cut_samples; ++i)
-        cand.push_back({n, lo + (hi - lo) * i / (opt.cut_samples + 1)});
+        cand.push_back({n, lo + (hi - lo) * i / (opt.cut_samples + 1), false});
       const double s = n.dot(P.deepest);
-      if (s > lo + g.h && s < hi - g.h) cand.push_back({n, s});
+      if (s > lo + g.h && s < hi - g.h) cand.push_back({n, s, true});
     }
     if (cand.empty()) {
       splittable[pick] = 0;

@@ -36,8 +36,9 @@
 // threshold, or hull volume over ratio × volume) is split next. Candidate
 // planes are normal to the piece's three principal axes, at cut_samples even positions and
 // through the deepest point; each candidate is scored by the summed volume of the convex hulls of
-// the two sides' boundary voxels (the excess volume the shells would add), the lowest wins, ties
-// by candidate order. Everything is deterministic and independent of the number of threads.
+// the two sides (the piece's hull corners on that side plus the voxels along the plane: the
+// excess volume the shells would add), the lowest wins, ties by candidate order.
+// Everything is deterministic and independent of the number of threads.
 #pragma once
 #include <vector>
 
