@@ -287,18 +287,31 @@ void evaluate_piece(Piece& piece, double flat_thickness, double sample_spacing) 
     if (!corners[r].sample) hull_pts.row(static_cast<Eigen::Index>(k++)) = pts.row(static_cast<Eigen::Index>(r));
   piece.hull = convex_hull(hull_pts);
   thicken_if_flat(hull_pts, piece.hull, flat_thickness);
+  // Depth is measured below the hull's *bridges*: facets that lie on a cutting plane are caps of
+  // the piece itself, not lids over a pocket. (Otherwise slicing a piece thin would make any
+  // notch look shallow: every point is near a slab's two cut faces.)
+  Eigen::MatrixX4d bridges(piece.hull.planes.rows(), 4);
+  Eigen::Index nb = 0;
+  for (Eigen::Index k = 0; k < piece.hull.planes.rows(); ++k) {
+    const Eigen::Vector4d h = piece.hull.planes.row(k).transpose();
+    bool cap = false;
+    for (const Eigen::Vector4d& c : piece.planes)
+      cap = cap || ((h.head<3>() - c.head<3>()).norm() < 1e-9 && std::abs(h(3) - c(3)) <= 1e-9 * (1.0 + std::abs(c(3))));
+    if (!cap) bridges.row(nb++) = h.transpose();
+  }
+  bridges.conservativeResize(nb, 4);
   // Deepest outer point: parallel max with ties to the lowest index (deterministic).
   struct Best { double depth = -1; size_t at = 0; };
   const size_t chunks = std::max<size_t>(1, std::min<size_t>(64, n / 2048));
   std::vector<Best> best(chunks);
   tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
     const size_t b = n * c / chunks, e = n * (c + 1) / chunks;
-    const Eigen::MatrixX4d& pl = piece.hull.planes;
+    const Eigen::MatrixX4d& pl = bridges;
     for (size_t i = b; i < e; ++i) {
       if (!outer[i]) continue;
       // depth = min over planes of (d - n·p); stop as soon as it cannot beat the best so far.
       const Eigen::Index r = static_cast<Eigen::Index>(i);
-      double d = INFINITY;
+      double d = pl.rows() ? INFINITY : 0.0;
       for (Eigen::Index k = 0; k < pl.rows() && d >= best[c].depth; ++k)
         d = std::min(d, pl(k, 3) - (pl(k, 0) * pts(r, 0) + pl(k, 1) * pts(r, 1) + pl(k, 2) * pts(r, 2)));
       d = std::max(d, 0.0);

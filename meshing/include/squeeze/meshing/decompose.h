@@ -7,9 +7,10 @@
 //
 // Concavity (exactly what is measured): for a piece P = S ∩ C, where S is the solid and C the
 // convex cell bounded by the cutting planes so far,
-//     concavity(P) = max over points x of ∂S ∩ C of  dist(x, ∂conv(P))
-// i.e. the depth, below the hull boundary, of the deepest point of the piece's outer surface — the
-// concavity of Lien & Amato's ACD (the paper's [15]: J.-M. Lien, N. M. Amato, "Approximate convex
+//     concavity(P) = max over points x of ∂S ∩ C of  min over bridges f of dist(x, plane(f))
+// i.e. the depth, below the hull's lids, of the deepest point of the piece's outer surface, where
+// the bridges are the hull facets that do not lie on a cutting plane (those are the piece's own
+// caps) — the concavity of Lien & Amato's ACD (the paper's [15]: J.-M. Lien, N. M. Amato, "Approximate convex
 // decomposition of polyhedra", SPM 2007, doi:10.1145/1236246.1236265). dist to the boundary of a
 // convex polytope from inside is the minimum over its facet planes, so it is exact. Points of the
 // cutting planes lie on ∂conv(P) and do not count. The points x are the vertices of the input
