@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include "commands.h"
+#include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/ffd/ffd.h"
@@ -55,13 +56,7 @@ Runner add_deform_command(CLI::App& app, const Global& global) {
     // Fail fast, before any work, on outputs that cannot be written.
     if (!is_surface_format(a.output))
       throw InputError(a.output + ": unknown surface format (use .off, .obj, .ply, .stl, .glb, ...)");
-    {
-      const fs::path p(a.output);
-      const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
-      std::error_code ec;
-      if (!fs::is_directory(dir, ec))
-        throw InputError(a.output + ": output directory " + dir.string() + " does not exist");
-    }
+    check_output_directory(a.output);
 
     LoadOptions load;
     load.keep_order = true;  // the output matches the input vertex for vertex, face for face

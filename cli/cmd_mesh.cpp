@@ -24,12 +24,6 @@ struct MeshArgs {
   MeshOptions options;
 };
 
-void check_output_dir(const fs::path& p) {
-  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw InputError(p.string() + ": output directory " + dir.string() + " does not exist");
-}
 
 }  // namespace
 
@@ -69,13 +63,13 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
     // Fail fast, before any work, on outputs that cannot be written.
     if (!is_tet_format(a.output))
       throw InputError(a.output + ": unknown tetrahedral mesh format (use .mesh, .msh, .vtk, .vtu or .node/.ele)");
-    check_output_dir(a.output);
+    check_output_directory(a.output);
     if (!a.shells.empty()) {
       if (!is_surface_format(a.shells))
         throw InputError(a.shells + ": unknown surface format (use .off, .obj, .ply, .stl, .gltf, .glb, ...)");
-      check_output_dir(a.shells);
+      check_output_directory(a.shells);
     }
-    if (!a.report.empty()) check_output_dir(a.report);
+    if (!a.report.empty()) check_output_directory(a.report);
     if (!(a.options.decomposition.concavity > 0)) throw InputError("--concavity must be > 0");
     if (a.options.decomposition.max_hulls < 1) throw InputError("--max-hulls must be at least 1");
     if (a.options.tetrahedralize.target_tets < 1) throw InputError("--target-tets must be at least 1");

@@ -18,13 +18,18 @@ fs::path temporary_sibling(const fs::path& target) {
   return tmp;
 }
 
-void write_atomically(const fs::path& target, const std::function<void(const fs::path&)>& write) {
+void check_output_directory(const fs::path& target) {
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
     throw InputError(target.string() + ": output directory " + dir.string() + " does not exist");
   if (::access(dir.c_str(), W_OK) != 0)
     throw InputError(target.string() + ": output directory " + dir.string() + " is not writable");
+}
+
+void write_atomically(const fs::path& target, const std::function<void(const fs::path&)>& write) {
+  check_output_directory(target);
+  std::error_code ec;
   const fs::path tmp = temporary_sibling(target);
   try {
     write(tmp);

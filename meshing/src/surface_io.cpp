@@ -346,10 +346,9 @@ void save_surface(const fs::path& path, const SurfaceMesh& mesh) {
   }
   // Export into a temporary folder beside the target under the final name (so that side files such
   // as a .gltf's .bin are named right), then move side files, and the main file last.
+  check_output_directory(path);
   const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
   std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw InputError(path.string() + ": output directory " + dir.string() + " does not exist");
   const fs::path tmpdir = temporary_sibling(fs::path(path).replace_extension(".dir"));
   if (!fs::create_directory(tmpdir, ec) || ec)
     throw InputError(path.string() + ": cannot write in " + dir.string() + ": " + ec.message());

@@ -13,6 +13,11 @@ namespace squeeze {
 void write_atomically(const std::filesystem::path& target,
                       const std::function<void(const std::filesystem::path& tmp)>& write);
 
+/// Throws InputError ("TARGET: output directory DIR does not exist" / "is not writable") unless
+/// the directory `target` would be written in exists and is writable. Commands call it before any
+/// work, so that a bad output path fails fast.
+void check_output_directory(const std::filesystem::path& target);
+
 /// A temporary path next to `target` that keeps its extension (writers choose the format by it),
 /// e.g. out.mesh -> out.tmp-1234-1.mesh.
 std::filesystem::path temporary_sibling(const std::filesystem::path& target);
