@@ -524,10 +524,11 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
       }
       cost[c] = total;
     };
-    // Sequential on purpose: CGAL's convex_hull_3 run concurrently gave volumes differing in the
-    // last bits between runs, and near-ties between candidates are common on a voxel lattice, so
-    // the chosen cut (and the shells) changed from run to run. Determinism comes first.
-    for (size_t c = 0; c < cand.size(); ++c) eval_candidate(c);
+    // Each candidate writes only its own score, and every hull is a pure function of its points
+    // (the Delaunay-based hull reseeds CGAL's thread-local generator), so the choice below does
+    // not depend on the thread count. (The quickhull used before corrupted memory and made scores
+    // differ from run to run.)
+    tbb::parallel_for(size_t(0), cand.size(), [&](size_t c) { eval_candidate(c); });
     size_t best = 0;
     for (size_t c = 1; c < cand.size(); ++c)
       if (cost[c] < cost[best]) best = c;
