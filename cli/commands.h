@@ -17,6 +17,7 @@ using Runner = std::function<int()>;
 
 Runner add_mesh_command(CLI::App& app, const Global& global);
 Runner add_deform_command(CLI::App& app, const Global& global);
+Runner add_simulate_command(CLI::App& app, const Global& global);
 
 /// Exit codes.
 constexpr int kExitOk = 0;

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
 
   const Runner mesh = add_mesh_command(app, global);
   const Runner deform = add_deform_command(app, global);
+  const Runner simulate = add_simulate_command(app, global);
 
   try {
     app.parse(argc, argv);
@@ -47,6 +48,7 @@ int main(int argc, char** argv) {
     for (CLI::App* sub : app.get_subcommands()) {
       if (sub->get_name() == "mesh") return mesh();
       if (sub->get_name() == "deform") return deform();
+      if (sub->get_name() == "simulate") return simulate();
     }
   } catch (const squeeze::InputError& e) {
     std::fprintf(stderr, "squeeze: error: %s\n", e.what());

@@ -1,17 +1,20 @@
 #include "squeeze/fem/collision.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "squeeze/common/error.h"
 
 namespace squeeze::fem {
 namespace {
 
+constexpr int kSerialTets = 1024;  // fewer tets: detection pass on the calling thread
 constexpr int kBlock = 64;   // tets per task of the detection pass (fixed: results are concatenated in order)
 
 bool allowed(const CollisionFilter& f, int v, int t) {
@@ -20,12 +23,14 @@ bool allowed(const CollisionFilter& f, int v, int t) {
   return !(f.group_rigid[gv] && f.group_rigid[gt]);
 }
 
-// Cell coordinate, clamped so that far-flung (or non-finite) positions cannot overflow.
+// Cell coordinate floor(x / cell), clamped so that far-flung (or non-finite) positions cannot
+// overflow. The floor by truncation (exact below 2^52) avoids a libm call without SSE4.1.
 std::int64_t cell_of(double x, double inv) {
-  const double c = std::floor(x * inv);
-  if (!(c > -1e15)) return -1000000000000000LL;
-  if (!(c < 1e15)) return 1000000000000000LL;
-  return static_cast<std::int64_t>(c);
+  const double y = x * inv;
+  if (!(y > -1e15)) return -1000000000000000LL;
+  if (!(y < 1e15)) return 1000000000000000LL;
+  const std::int64_t c = static_cast<std::int64_t>(y);  // toward zero
+  return static_cast<double>(c) > y ? c - 1 : c;
 }
 
 }  // namespace
@@ -33,13 +38,20 @@ std::int64_t cell_of(double x, double inv) {
 TetFrame::TetFrame(const Eigen::Vector3d& a_, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                    const Eigen::Vector3d& d)
     : a(a_) {
-  Eigen::Matrix3d M;
-  M.col(0) = b - a;
-  M.col(1) = c - a;
-  M.col(2) = d - a;
-  const double det = M.determinant();
+  // M = [b−a, c−a, d−a]; inverse = adj(M) / det(M) with the determinant expanded along the
+  // first column of the same cofactors (Eigen's 3×3 formula, computed once).
+  const Eigen::Vector3d u = b - a, v = c - a, w = d - a;  // columns of M
+  // cof(r, k): cofactor of M(r, k).
+  const double c00 = v[1] * w[2] - w[1] * v[2], c10 = v[2] * w[0] - w[2] * v[0], c20 = v[0] * w[1] - w[0] * v[1];
+  const double det = c00 * u[0] + c10 * u[1] + c20 * u[2];
   valid = std::isfinite(det) && det != 0.0;
-  if (valid) inverse = M.inverse();
+  if (!valid) return;
+  const double id = 1.0 / det;
+  const double c01 = w[1] * u[2] - u[1] * w[2], c11 = w[2] * u[0] - u[2] * w[0], c21 = w[0] * u[1] - u[0] * w[1];
+  const double c02 = u[1] * v[2] - v[1] * u[2], c12 = u[2] * v[0] - v[2] * u[0], c22 = u[0] * v[1] - v[0] * u[1];
+  inverse << c00 * id, c10 * id, c20 * id,  //
+      c01 * id, c11 * id, c21 * id,         //
+      c02 * id, c12 * id, c22 * id;
 }
 
 Eigen::Vector4d TetFrame::barycentric(const Eigen::Vector3d& p) const {
@@ -57,11 +69,8 @@ bool TetFrame::contains(const Eigen::Vector3d& p, Eigen::Vector4d* bary) const {
 SpatialHash::SpatialHash(double cell, int table_size) : cell_(cell) {
   if (!(cell > 0) || !std::isfinite(cell)) throw InputError("spatial hash: cell size must be > 0");
   if (table_size < 1) throw InputError("spatial hash: table size must be >= 1");
-  stamp_.assign(static_cast<size_t>(table_size), 0);
   fastmod_ = ~std::uint64_t{0} / static_cast<std::uint32_t>(table_size) + 1;
-  head_.assign(static_cast<size_t>(table_size), -1);
-  count_.assign(static_cast<size_t>(table_size), 0);
-  scount_.assign(static_cast<size_t>(table_size), 0);
+  bucket_.assign(static_cast<size_t>(table_size), Bucket{0, -1, 0, 0});
   ifill_.assign(static_cast<size_t>(table_size), 0);
 }
 
@@ -74,15 +83,14 @@ std::uint32_t SpatialHash::hash(std::int64_t i, std::int64_t j, std::int64_t k) 
   const std::uint32_t h = ((static_cast<std::uint32_t>(i) + shift) * 73856093u) ^
                           ((static_cast<std::uint32_t>(j) + shift) * 19349663u) ^
                           ((static_cast<std::uint32_t>(k) + shift) * 83492791u);
-  const std::uint64_t low = fastmod_ * h;
-  return static_cast<std::uint32_t>((static_cast<unsigned __int128>(low) * head_.size()) >> 64);
+  return reduce(h);
 }
 
 std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, const Eigen::MatrixX4i& T,
                                        const CollisionFilter& filter) {
   const int nv = static_cast<int>(X.rows()), nt = static_cast<int>(T.rows());
   if (++now_ == 0) {  // wrapped around: clear once every 2^32 queries
-    std::fill(stamp_.begin(), stamp_.end(), 0u);
+    for (Bucket& bk : bucket_) bk.stamp = 0;
     now_ = 1;
   }
   const double inv = 1.0 / cell_;
@@ -91,68 +99,92 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
     constexpr std::int64_t m = (1 << 21) - 1;
     return ((i & m) << 42) | ((j & m) << 21) | (k & m);
   };
-  // Pass 1: vertices grouped by hash entry (counting sort over the entries touched this time).
+  // Pass 1: vertices grouped by hash entry (counting sort over the entries touched this time),
+  // and the bounding boxes used to clip the tets' lookups (same loop).
   vhash_.resize(static_cast<size_t>(nv));
+  vkey_.resize(static_cast<size_t>(nv));
   touched_.clear();
-  std::vector<std::int64_t> vkey(static_cast<size_t>(nv));
   const int ngroups = static_cast<int>(filter.group_rigid.size());
-  auto interior_vertex = [&](int v) { return !filter.vertex_on_surface.empty() && !filter.vertex_on_surface[v]; };
-  for (int v = 0; v < nv; ++v) {
-    const std::int64_t i = cell_of(X(v, 0), inv), j = cell_of(X(v, 1), inv), k = cell_of(X(v, 2), inv);
-    const std::uint32_t h = hash(i, j, k);
-    vhash_[v] = h;
-    vkey[v] = key_of(i, j, k);
-    if (stamp_[h] != now_) {
-      stamp_[h] = now_;
-      count_[h] = 0;
-      scount_[h] = 0;
-      touched_.push_back(h);
-    }
-    ++count_[h];
-    if (!interior_vertex(v)) ++scount_[h];
-  }
-  int offset = 0;
-  for (std::uint32_t h : touched_) {
-    head_[h] = offset;
-    offset += count_[h];
-    ifill_[h] = scount_[h];  // interior vertices go after the surface ones
-    count_[h] = 0;           // refilled below: surface cursor
-  }
+  const bool all_surface = filter.vertex_on_surface.empty();
+  const double infd = std::numeric_limits<double>::infinity();
   // Per object: bounding box of its interior vertices.
-  std::vector<Eigen::Vector3d> ilo(static_cast<size_t>(ngroups), Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()));
-  std::vector<Eigen::Vector3d> ihi(static_cast<size_t>(ngroups), Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity()));
-  for (int v = 0; v < nv; ++v) {
-    const std::uint32_t h = vhash_[v];
-    const int g = filter.vertex_group[v];
-    const bool interior = interior_vertex(v);
-    const int slot = interior ? ifill_[h]++ : count_[h]++;
-    entry_[head_[h] + slot] = {X(v, 0), X(v, 1), X(v, 2), vkey[v], v, interior ? -1 - g : g};
-    if (interior && X.row(v).allFinite()) {
-      ilo[g] = ilo[g].cwiseMin(X.row(v).transpose());
-      ihi[g] = ihi[g].cwiseMax(X.row(v).transpose());
-    }
-  }
-  for (std::uint32_t h : touched_) count_[h] = ifill_[h];
+  std::vector<Eigen::Vector3d> ilo(static_cast<size_t>(ngroups), Eigen::Vector3d::Constant(infd));
+  std::vector<Eigen::Vector3d> ihi(static_cast<size_t>(ngroups), Eigen::Vector3d::Constant(-infd));
   // Bounding boxes of all vertices and of the deformable ones: a tet's AABB is clipped to the
   // box of the vertices it may contain (rigid tets only meet deformable vertices), which keeps
   // large rigid tets from scanning cells where no vertex can be.
-  Eigen::Vector3d all_lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), all_hi = -all_lo;
+  Eigen::Vector3d all_lo = Eigen::Vector3d::Constant(infd), all_hi = -all_lo;
   Eigen::Vector3d def_lo = all_lo, def_hi = all_hi;
+  Bucket* const bk = bucket_.data();
+  vcell_.resize(static_cast<size_t>(nv));
+  tbb::parallel_for(tbb::blocked_range<int>(0, nv, 2048), [&](const tbb::blocked_range<int>& r) {
+    for (int v = r.begin(); v != r.end(); ++v) {
+      const std::int64_t i = cell_of(X(v, 0), inv), j = cell_of(X(v, 1), inv), k = cell_of(X(v, 2), inv);
+      vcell_[v] = {i, j, k};
+      vhash_[v] = hash(i, j, k);
+      vkey_[v] = key_of(i, j, k);
+    }
+  });
   for (int v = 0; v < nv; ++v) {
     const Eigen::Vector3d p = X.row(v).transpose();
+    const std::uint32_t h = vhash_[v];
+    Bucket& b = bk[h];
+    if (b.stamp != now_) {
+      b.stamp = now_;
+      b.count = 0;
+      b.scount = 0;
+      touched_.push_back(h);
+    }
+    ++b.count;
+    const bool interior = !all_surface && !filter.vertex_on_surface[v];
+    if (!interior) ++b.scount;
     if (!p.allFinite()) continue;
+    const int g = filter.vertex_group[v];
+    if (interior) {
+      ilo[g] = ilo[g].cwiseMin(p);
+      ihi[g] = ihi[g].cwiseMax(p);
+    }
     all_lo = all_lo.cwiseMin(p);
     all_hi = all_hi.cwiseMax(p);
-    if (!filter.group_rigid[filter.vertex_group[v]]) {
+    if (!filter.group_rigid[g]) {
       def_lo = def_lo.cwiseMin(p);
       def_hi = def_hi.cwiseMax(p);
     }
   }
+  int offset = 0;
+  for (std::uint32_t h : touched_) {
+    Bucket& b = bk[h];
+    b.head = offset;
+    offset += b.count;
+    ifill_[h] = b.scount;  // interior vertices go after the surface ones
+    b.count = 0;           // refilled below: surface cursor
+  }
+  for (int v = 0; v < nv; ++v) {
+    const std::uint32_t h = vhash_[v];
+    const int g = filter.vertex_group[v];
+    const bool interior = !all_surface && !filter.vertex_on_surface[v];
+    Bucket& b = bk[h];
+    const int slot = interior ? ifill_[h]++ : b.count++;
+    entry_[b.head + slot] = {X(v, 0), X(v, 1), X(v, 2), vkey_[v], v, interior ? -1 - g : g};
+  }
+  for (std::uint32_t h : touched_) bk[h].count = ifill_[h];
+  const std::array<std::int64_t, 3> all_lo_cell{cell_of(all_lo[0], inv), cell_of(all_lo[1], inv), cell_of(all_lo[2], inv)},
+      all_hi_cell{cell_of(all_hi[0], inv), cell_of(all_hi[1], inv), cell_of(all_hi[2], inv)},
+      def_lo_cell{cell_of(def_lo[0], inv), cell_of(def_lo[1], inv), cell_of(def_lo[2], inv)},
+      def_hi_cell{cell_of(def_hi[0], inv), cell_of(def_hi[1], inv), cell_of(def_hi[2], inv)};
   // Pass 2: tets look up the cells of their AABB.
   const int nblocks = (nt + kBlock - 1) / kBlock;
-  std::vector<std::vector<Contact>> out(static_cast<size_t>(nblocks));
-  tbb::parallel_for(0, nblocks, [&](int blk) {
-    auto& res = out[blk];
+  if (blocks_.size() < static_cast<size_t>(nblocks)) blocks_.resize(static_cast<size_t>(nblocks));
+  const std::uint32_t now = now_;
+  const VertexEntry* const entries = entry_.data();
+  auto block = [&](int blk) {
+    auto& res = blocks_[blk];
+    res.clear();
+    // Cell-mates found for the last scanned cell range: consecutive tets of a mesh often share
+    // their range (the 6 tets of a Kuhn cube share their AABB), so the lookups are reused.
+    std::vector<const VertexEntry*> cand;
+    std::array<std::int64_t, 7> cached{};
+    bool have_cached = false;
     const int t1 = std::min(nt, (blk + 1) * kBlock);
     for (int t = blk * kBlock; t < t1; ++t) {
       const int c[4] = {T(t, 0), T(t, 1), T(t, 2), T(t, 3)};
@@ -162,66 +194,94 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
         hi = hi.cwiseMax(X.row(c[q]).transpose());
       }
       if (!lo.allFinite() || !hi.allFinite()) continue;
-      const bool rigid_tet = filter.group_rigid[filter.tet_group[t]] != 0;
-      const Eigen::Vector3d clo = lo.cwiseMax(rigid_tet ? def_lo : all_lo), chi = hi.cwiseMin(rigid_tet ? def_hi : all_hi);
+      const int tg = filter.tet_group[t];
+      const bool tet_rigid = filter.group_rigid[tg] != 0;
+      const Eigen::Vector3d clo = lo.cwiseMax(tet_rigid ? def_lo : all_lo), chi = hi.cwiseMin(tet_rigid ? def_hi : all_hi);
       if ((clo.array() > chi.array()).any()) continue;
       // Interior vertices only meet tets of other objects: scan them only near such vertices.
       bool need_interior = false;
       for (int g = 0; g < ngroups && !need_interior; ++g)
-        need_interior = g != filter.tet_group[t] && (ilo[g].array() <= hi.array()).all() &&
-                        (ihi[g].array() >= lo.array()).all();
+        need_interior = g != tg && (ilo[g].array() <= hi.array()).all() && (ihi[g].array() >= lo.array()).all();
       const size_t first = res.size();
-      bool have_frame = false;
-      TetFrame frame(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
-                     Eigen::Vector3d::UnitZ());
-      const int tg = filter.tet_group[t];
-      const bool tet_rigid = filter.group_rigid[tg] != 0;
-      auto test = [&](const VertexEntry& en) {
+      std::optional<TetFrame> frame;  // built at the first candidate
+      const bool self = filter.self_collision;
+      // The AABB test inline in the scan loops; the rest (rarely reached) in accept().
+      const double lx = lo[0], ly = lo[1], lz = lo[2], hx = hi[0], hy = hi[1], hz = hi[2];
+      auto in_box = [&](const VertexEntry& en) {
+        return !(en.x < lx || en.x > hx || en.y < ly || en.y > hy || en.z < lz || en.z > hz);
+      };
+      auto accept = [&](const VertexEntry& en) {
         const int v = en.vertex;
-        if (en.x < lo[0] || en.x > hi[0] || en.y < lo[1] || en.y > hi[1] || en.z < lo[2] || en.z > hi[2]) return;
         if (v == c[0] || v == c[1] || v == c[2] || v == c[3]) return;
         const int vg = en.group >= 0 ? en.group : -1 - en.group;
-        if (vg == tg ? (!filter.self_collision || en.group < 0) : (tet_rigid && filter.group_rigid[vg])) return;
-        const Eigen::Vector3d p(en.x, en.y, en.z);
-        if (!have_frame) {
-          frame = TetFrame(X.row(c[0]).transpose(), X.row(c[1]).transpose(), X.row(c[2]).transpose(),
-                           X.row(c[3]).transpose());
-          have_frame = true;
-        }
+        if (vg == tg ? (!self || en.group < 0) : (tet_rigid && filter.group_rigid[vg])) return;
+        if (!frame)
+          frame.emplace(X.row(c[0]).transpose(), X.row(c[1]).transpose(), X.row(c[2]).transpose(),
+                        X.row(c[3]).transpose());
         Contact ct;
-        if (frame.contains(p, &ct.bary)) {
+        if (frame->contains(Eigen::Vector3d(en.x, en.y, en.z), &ct.bary)) {
           ct.vertex = v;
           ct.tet = t;
           res.push_back(ct);
         }
       };
-      const std::int64_t i0 = cell_of(clo[0], inv), i1 = cell_of(chi[0], inv), j0 = cell_of(clo[1], inv),
-                         j1 = cell_of(chi[1], inv), k0 = cell_of(clo[2], inv), k1 = cell_of(chi[2], inv);
+      // Cells of the clipped AABB: floor is monotone, so the cell of a min / max of coordinates is
+      // the min / max of the cells (the corners' cells come from pass 1).
+      const auto &C0 = vcell_[c[0]], &C1 = vcell_[c[1]], &C2 = vcell_[c[2]], &C3 = vcell_[c[3]];
+      const auto& clip_lo = tet_rigid ? def_lo_cell : all_lo_cell;
+      const auto& clip_hi = tet_rigid ? def_hi_cell : all_hi_cell;
+      auto cmin = [&](int a) { return std::max(std::min(std::min(C0[a], C1[a]), std::min(C2[a], C3[a])), clip_lo[a]); };
+      auto cmax = [&](int a) { return std::min(std::max(std::max(C0[a], C1[a]), std::max(C2[a], C3[a])), clip_hi[a]); };
+      const std::int64_t i0 = cmin(0), i1 = cmax(0), j0 = cmin(1), j1 = cmax(1), k0 = cmin(2), k1 = cmax(2);
       const double cells = double(i1 - i0 + 1) * double(j1 - j0 + 1) * double(k1 - k0 + 1);
       const std::int64_t span = std::max({i1 - i0, j1 - j0, k1 - k0});
       if (cells > nv || span >= (1 << 20)) {  // a huge tet (far larger than a cell): test every vertex
-        for (int e = 0; e < nv; ++e) test(entry_[e]);
+        for (int e = 0; e < nv; ++e)
+          if (in_box(entries[e])) accept(entries[e]);
       } else {
-        for (std::int64_t k = k0; k <= k1; ++k)
-          for (std::int64_t j = j0; j <= j1; ++j)
-            for (std::int64_t i = i0; i <= i1; ++i) {
-              const std::uint32_t h = hash(i, j, k);
-              if (stamp_[h] != now_) continue;
-              const std::int64_t key = key_of(i, j, k);
-              const VertexEntry* en = entry_.data() + head_[h];
-              for (const VertexEntry* end = en + (need_interior ? count_[h] : scount_[h]); en != end; ++en)
-                if (en->key == key) test(*en);  // else another cell with the same hash
+        const std::array<std::int64_t, 7> range{i0, i1, j0, j1, k0, k1, need_interior ? 1 : 0};
+        if (!have_cached || range != cached) {
+          cached = range;
+          have_cached = true;
+          cand.clear();
+          // hash() and key_of() with their per-axis terms hoisted out of the inner loops.
+          constexpr std::uint32_t shift = 1u << 20;
+          constexpr std::int64_t m21 = (1 << 21) - 1;
+          for (std::int64_t k = k0; k <= k1; ++k) {
+            const std::uint32_t hk = (static_cast<std::uint32_t>(k) + shift) * 83492791u;
+            for (std::int64_t j = j0; j <= j1; ++j) {
+              const std::uint32_t hjk = ((static_cast<std::uint32_t>(j) + shift) * 19349663u) ^ hk;
+              const std::int64_t kjk = ((j & m21) << 21) | (k & m21);
+              for (std::int64_t i = i0; i <= i1; ++i) {
+                const Bucket& b = bk[reduce(((static_cast<std::uint32_t>(i) + shift) * 73856093u) ^ hjk)];
+                if (b.stamp != now) continue;
+                const std::int64_t key = ((i & m21) << 42) | kjk;
+                const VertexEntry* en = entries + b.head;
+                for (const VertexEntry* end = en + (need_interior ? b.count : b.scount); en != end; ++en)
+                  if (en->key == key) cand.push_back(en);  // else another cell with the same hash
+              }
             }
+          }
+        }
+        for (const VertexEntry* en : cand)
+          if (in_box(*en)) accept(*en);
       }
-      std::sort(res.begin() + static_cast<std::ptrdiff_t>(first), res.end(),
-                [](const Contact& a, const Contact& b) { return a.vertex < b.vertex; });
+      if (res.size() - first > 1)
+        std::sort(res.begin() + static_cast<std::ptrdiff_t>(first), res.end(),
+                  [](const Contact& a, const Contact& b) { return a.vertex < b.vertex; });
     }
-  });
+  };
+  // Small scenes: waking TBB workers costs more than the pass (results do not depend on it).
+  if (nt < kSerialTets) {
+    for (int blk = 0; blk < nblocks; ++blk) block(blk);
+  } else {
+    tbb::parallel_for(0, nblocks, block);
+  }
   std::vector<Contact> all;
   size_t total = 0;
-  for (const auto& r : out) total += r.size();
+  for (int blk = 0; blk < nblocks; ++blk) total += blocks_[blk].size();
   all.reserve(total);
-  for (const auto& r : out) all.insert(all.end(), r.begin(), r.end());
+  for (int blk = 0; blk < nblocks; ++blk) all.insert(all.end(), blocks_[blk].begin(), blocks_[blk].end());
   return all;
 }
 

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -25,7 +26,7 @@ int next_prime(int n) {
 
 template <class Fn>
 void parallel_rows(int n, Fn fn) {
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& r) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 512), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i != r.end(); ++i) fn(i);
   });
 }
@@ -98,19 +99,44 @@ State World::initial_state() const {
 void World::prepare() {
   inv_mass_.resize(rows_);
   for (int i = 0; i < rows_; ++i) inv_mass_(i) = (pinned_[i] || !(mass_(i) > 0)) ? 0.0 : 1.0 / mass_(i);
-  // Per-element force scratch.
-  edge_row0_.assign(bodies_.size(), 0);
-  tet_row0_.assign(bodies_.size(), 0);
-  int ne = 0, nt = 0;
+  // Elements of every deformable object in state rows, and per row its scratch slots.
+  edges_.clear();
+  tet_elems_.clear();
   for (int b = 0; b < bodies(); ++b) {
-    if (state_row_[b] < 0) continue;
-    edge_row0_[b] = ne;
-    tet_row0_[b] = nt;
-    ne += 2 * static_cast<int>(bodies_[b].E.rows());
-    nt += 4 * bodies_[b].tets();
+    const int r0 = state_row_[b];
+    if (r0 < 0) continue;
+    const Body& B = bodies_[b];
+    const Material& m = B.material;
+    for (int e = 0; e < B.E.rows(); ++e)
+      edges_.push_back({r0 + B.E(e, 0), r0 + B.E(e, 1), B.D0(e), m.k_distance, m.damping_distance});
+    for (int t = 0; t < B.tets(); ++t)
+      tet_elems_.push_back({{r0 + B.T(t, 0), r0 + B.T(t, 1), r0 + B.T(t, 2), r0 + B.T(t, 3)}, B.V0(t), m.k_volume,
+                            m.damping_volume});
   }
-  edge_f_.resize(ne, 3);
-  tet_f_.resize(nt, 3);
+  elem_f_.assign(6 * edges_.size() + 12 * tet_elems_.size(), 0.0);
+  gather_start_.assign(static_cast<size_t>(rows_) + 1, 0);
+  gather_.clear();
+  {
+    int e0 = 0, t0 = 0;  // first edge / tet of the body in the global lists
+    const int tet_base = 6 * static_cast<int>(edges_.size());
+    for (int b = 0; b < bodies(); ++b) {
+      const int r0 = state_row_[b];
+      if (r0 < 0) continue;
+      const Body& B = bodies_[b];
+      for (int i = 0; i < B.vertices(); ++i) {
+        gather_start_[r0 + i] = static_cast<int>(gather_.size());
+        for (int c = B.edge_start[i]; c < B.edge_start[i + 1]; ++c) gather_.push_back(3 * (2 * e0 + B.edge_code[c]));
+        for (int c = B.tet_start[i]; c < B.tet_start[i + 1]; ++c)
+          gather_.push_back(tet_base + 3 * (4 * t0 + B.tet_code[c]));
+      }
+      e0 += static_cast<int>(B.E.rows());
+      t0 += B.tets();
+    }
+    gather_start_[rows_] = static_cast<int>(gather_.size());
+  }
+  contact_head_.assign(static_cast<size_t>(rows_), -1);
+  contact_tail_.assign(static_cast<size_t>(rows_), -1);
+  contact_rows_.clear();
   // Collision numbering: deformables in state order, then rigid objects.
   scene_ = CollisionScene{};
   filter_ = CollisionFilter{};
@@ -156,45 +182,69 @@ void World::prepare() {
   prepared_ = true;
 }
 
+void World::element_forces(const State& s) const {
+  const double* x = s.x.data();
+  const double* v = s.v.data();
+  double* out = elem_f_.data();
+  const int ne = static_cast<int>(edges_.size()), nt = static_cast<int>(tet_elems_.size());
+  // One pass over edges then tets, in chunks (each element writes only its own slots).
+  constexpr int kEdgeChunk = 1024, kTetChunk = 512;
+  const int ce = (ne + kEdgeChunk - 1) / kEdgeChunk, ct = (nt + kTetChunk - 1) / kTetChunk;
+  // Small scenes (a single chunk of each kind) run on the calling thread.
+  tbb::parallel_for(tbb::blocked_range<int>(0, ce + ct, ce <= 1 && ct <= 1 ? 2 : 1), [&](const tbb::blocked_range<int>& r) {
+    for (int c = r.begin(); c != r.end(); ++c) {
+      if (c < ce) {
+        const int e1 = std::min(ne, (c + 1) * kEdgeChunk);
+        for (int e = c * kEdgeChunk; e < e1; ++e) {
+          const EdgeElem& E = edges_[e];
+          Vec3 fi, fj;
+          distance_forces(Vec3(x + 3 * E.i), Vec3(x + 3 * E.j), Vec3(v + 3 * E.i), Vec3(v + 3 * E.j), E.D0, E.k, E.kd,
+                          fi, fj);
+          double* o = out + 6 * e;
+          o[0] = fi[0], o[1] = fi[1], o[2] = fi[2], o[3] = fj[0], o[4] = fj[1], o[5] = fj[2];
+        }
+      } else {
+        const int tc = c - ce;
+        const int t1 = std::min(nt, (tc + 1) * kTetChunk);
+        double* base = out + 6 * static_cast<size_t>(ne);
+        for (int t = tc * kTetChunk; t < t1; ++t) {
+          const TetElem& T = tet_elems_[t];
+          Vec3 p[4], vel[4], f[4];
+          for (int k = 0; k < 4; ++k) {
+            p[k] = Vec3(x + 3 * T.v[k]);
+            vel[k] = Vec3(v + 3 * T.v[k]);
+          }
+          volume_forces(p, vel, T.V0, T.k, T.kd, f);
+          double* o = base + 12 * t;
+          for (int k = 0; k < 4; ++k) o[3 * k] = f[k][0], o[3 * k + 1] = f[k][1], o[3 * k + 2] = f[k][2];
+        }
+      }
+    }
+  });
+}
+
+Eigen::Vector3d World::gathered(int row) const {
+  Vec3 f = Vec3::Zero();
+  const double* src = elem_f_.data();
+  for (int c = gather_start_[row]; c < gather_start_[row + 1]; ++c) f += Vec3(src + gather_[c]);
+  return f;
+}
+
 void World::internal_forces(const State& s, RowMatrixX3d& F) const {
   if (s.x.rows() != rows_ || s.v.rows() != rows_)
     throw InputError("fem world: the state has " + std::to_string(s.x.rows()) + " rows, the world " +
                      std::to_string(rows_));
   if (!prepared_) const_cast<World*>(this)->prepare();
   F.resize(rows_, 3);
-  for (int b = 0; b < bodies(); ++b) {
-    const int r0 = state_row_[b];
-    if (r0 < 0) continue;
-    const Body& B = bodies_[b];
-    const Material& m = B.material;
-    const int e0 = edge_row0_[b], t0 = tet_row0_[b];
-    parallel_rows(static_cast<int>(B.E.rows()), [&](int e) {
-      const int i = r0 + B.E(e, 0), j = r0 + B.E(e, 1);
-      Vec3 fi, fj;
-      distance_forces(s.x.row(i).transpose(), s.x.row(j).transpose(), s.v.row(i).transpose(), s.v.row(j).transpose(),
-                      B.D0(e), m.k_distance, m.damping_distance, fi, fj);
-      edge_f_.row(e0 + 2 * e) = fi.transpose();
-      edge_f_.row(e0 + 2 * e + 1) = fj.transpose();
-    });
-    parallel_rows(B.tets(), [&](int t) {
-      Vec3 p[4], v[4], f[4];
-      for (int k = 0; k < 4; ++k) {
-        p[k] = s.x.row(r0 + B.T(t, k)).transpose();
-        v[k] = s.v.row(r0 + B.T(t, k)).transpose();
-      }
-      volume_forces(p, v, B.V0(t), m.k_volume, m.damping_volume, f);
-      for (int k = 0; k < 4; ++k) tet_f_.row(t0 + 4 * t + k) = f[k].transpose();
-    });
-    parallel_rows(B.vertices(), [&](int i) {
-      Vec3 f = Vec3::Zero();
-      for (int c = B.edge_start[i]; c < B.edge_start[i + 1]; ++c) f += edge_f_.row(e0 + B.edge_code[c]).transpose();
-      for (int c = B.tet_start[i]; c < B.tet_start[i + 1]; ++c) f += tet_f_.row(t0 + B.tet_code[c]).transpose();
-      F.row(r0 + i) = f.transpose();
-    });
-  }
+  element_forces(s);
+  parallel_rows(rows_, [&](int i) { F.row(i) = gathered(i).transpose(); });
 }
 
-void World::add_contact_forces(const State& s, RowMatrixX3d& F) {
+void World::collect_contact_forces(const State& s) {
+  for (int r : contact_rows_) contact_head_[r] = contact_tail_[r] = -1;
+  contact_rows_.clear();
+  contact_next_.clear();
+  contact_f_.clear();
   stats_ = StepStats{};
   if (!options_.collisions || bodies_.empty()) return;
   X_all_.topRows(rows_) = s.x;
@@ -205,6 +255,18 @@ void World::add_contact_forces(const State& s, RowMatrixX3d& F) {
   stats_.colliding_vertices = static_cast<int>(pens.size());
   const double kc = options_.contact_stiffness, cc = options_.contact_damping;
   auto velocity = [&](int g) -> Vec3 { return g < rows_ ? Vec3(s.v.row(g).transpose()) : Vec3::Zero(); };
+  auto add = [&](int row, const Vec3& f) {  // appended: applied in the order found
+    const int id = static_cast<int>(contact_f_.size());
+    contact_f_.push_back(f);
+    contact_next_.push_back(-1);
+    if (contact_head_[row] < 0) {
+      contact_head_[row] = id;
+      contact_rows_.push_back(row);
+    } else {
+      contact_next_[contact_tail_[row]] = id;
+    }
+    contact_tail_[row] = id;
+  };
   for (const Penetration& p : pens) {  // fixed order: sequential
     if (!(p.depth > 0)) continue;
     stats_.max_depth = std::max(stats_.max_depth, p.depth);
@@ -214,14 +276,20 @@ void World::add_contact_forces(const State& s, RowMatrixX3d& F) {
     const double closing = (velocity(p.vertex) - vt).dot(r);
     const Vec3 f = (kc * p.depth - cc * closing) * r;
     if (p.vertex < rows_) {
-      F.row(p.vertex) += f.transpose();
+      add(p.vertex, f);
     } else {  // rigid vertex inside a deformable tet: the reaction acts on the tet
       for (int k = 0; k < 4; ++k) {
         const int g = T_all_(p.tet, k);
-        if (g < rows_) F.row(g) -= (p.bary[k] * f).transpose();
+        if (g < rows_) add(g, -(p.bary[k] * f));
       }
     }
   }
+}
+
+void World::add_contact_forces(const State& s, RowMatrixX3d& F) {
+  collect_contact_forces(s);
+  for (int r : contact_rows_)
+    for (int id = contact_head_[r]; id >= 0; id = contact_next_[id]) F.row(r) += contact_f_[id].transpose();
 }
 
 void World::total_forces(const State& s, const RowMatrixX3d* external, RowMatrixX3d& F) {
@@ -242,14 +310,32 @@ void World::total_forces(const State& s, const RowMatrixX3d* external, RowMatrix
 }
 
 void World::step(State& s, const RowMatrixX3d* external) {
-  total_forces(s, external, force_);
+  // Same forces, same summation order as total_forces() followed by the Verlet update, fused:
+  // contacts first (they read the state only), then the element pass, then one pass per row
+  // that gathers, adds gravity, external, floor and contact forces, and integrates.
+  if (external && external->rows() != rows_)
+    throw InputError("fem world: external forces have " + std::to_string(external->rows()) + " rows, the world " +
+                     std::to_string(rows_));
+  if (s.x.rows() != rows_ || s.v.rows() != rows_)
+    throw InputError("fem world: the state has " + std::to_string(s.x.rows()) + " rows, the world " +
+                     std::to_string(rows_));
+  if (!prepared_) prepare();
+  collect_contact_forces(s);
+  element_forces(s);
+  const Vec3 g = options_.gravity;
+  const bool floor = options_.floor;
+  const double fy = options_.floor_height, kc = options_.contact_stiffness, cc = options_.contact_damping;
   const double h = options_.h;
   parallel_rows(rows_, [&](int i) {
     if (pinned_[i]) {
       s.v.row(i).setZero();
       return;
     }
-    s.v.row(i) += (h * inv_mass_(i)) * force_.row(i);
+    Vec3 f = gathered(i) + mass_(i) * g;
+    if (external) f += external->row(i).transpose();
+    if (floor && s.x(i, 1) < fy) f.y() += kc * (fy - s.x(i, 1)) - cc * std::min(0.0, s.v(i, 1));
+    for (int id = contact_head_[i]; id >= 0; id = contact_next_[id]) f += contact_f_[id];
+    s.v.row(i) += (h * inv_mass_(i)) * f.transpose();
     s.x.row(i) += h * s.v.row(i);
   });
   s.time += h;

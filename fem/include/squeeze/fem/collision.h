@@ -74,7 +74,7 @@ class SpatialHash {
   /// small signed coordinates from colliding.
   std::uint32_t hash(std::int64_t i, std::int64_t j, std::int64_t k) const;
   double cell() const { return cell_; }
-  int table_size() const { return static_cast<int>(head_.size()); }
+  int table_size() const { return static_cast<int>(bucket_.size()); }
 
  private:
   struct VertexEntry {     // one hashed vertex, packed for the lookup loop
@@ -83,16 +83,27 @@ class SpatialHash {
     int vertex;
     int group;             // object; −1 − object for interior vertices (never tested against their own object)
   };
+  struct Bucket {           // one hash entry, packed: a lookup touches one cache line
+    std::uint32_t stamp;   // valid when == now_
+    int head, count, scount;
+  };
   double cell_;
   std::uint64_t fastmod_ = 0;  // Lemire's constant for the modulo by the table size
   std::uint32_t now_ = 0;
-  // Per hash entry (valid when stamp_ == now_): its vertices are entry_[head_ .. head_ + count_),
-  // surface vertices first (scount_ of them): a tet far from every other object's interior
+  // Per hash entry (valid when stamp == now_): its vertices are entry_[head .. head + count),
+  // surface vertices first (scount of them): a tet far from every other object's interior
   // vertices scans only those.
-  std::vector<std::uint32_t> stamp_;
-  std::vector<int> head_, count_, scount_, ifill_;
+  std::vector<Bucket> bucket_;
+  std::vector<int> ifill_;
   std::vector<std::uint32_t> vhash_, touched_;
+  std::vector<std::int64_t> vkey_;
+  std::vector<std::array<std::int64_t, 3>> vcell_;  // per vertex: its cell (i, j, k)
+  /// h mod table_size (Lemire's fast remainder).
+  std::uint32_t reduce(std::uint32_t h) const {
+    return static_cast<std::uint32_t>((static_cast<unsigned __int128>(fastmod_ * h) * bucket_.size()) >> 64);
+  }
   std::vector<VertexEntry> entry_;  // vertices grouped by hash entry (counting sort)
+  std::vector<std::vector<Contact>> blocks_;  // per block of tets (reused between queries)
 };
 
 /// The same pairs as SpatialHash::find by testing every vertex against every tet, O(#X·#T):

@@ -121,8 +121,23 @@ class World {
   Eigen::MatrixX4i T_all_;
   RowMatrixX3d X_all_;
   std::unique_ptr<SpatialHash> hash_;
-  mutable RowMatrixX3d edge_f_, tet_f_;  // per-element force scratch: 2 rows per edge, 4 per tet
-  std::vector<int> edge_row0_, tet_row0_;  // per body: first scratch row
+  // Elements of all deformable objects in one numbering (state rows), laid out for the force pass.
+  struct EdgeElem { int i, j; double D0, k, kd; };
+  struct TetElem { int v[4]; double V0, k, kd; };
+  std::vector<EdgeElem> edges_;
+  std::vector<TetElem> tet_elems_;
+  mutable std::vector<double> elem_f_;   // per-element force scratch: 2 × 3 per edge, then 4 × 3 per tet
+  // Per state row: its scratch force slots (edges then tets, increasing element order) are
+  // gather_[gather_start_[r] .. gather_start_[r + 1]), offsets in doubles into elem_f_.
+  std::vector<int> gather_start_, gather_;
+  void element_forces(const State& s) const;        // fills elem_f_ (parallel)
+  Eigen::Vector3d gathered(int row) const;          // Σ of the row's element forces, fixed order
+  // Contact forces of the step, applied in the order found: per row a singly linked list.
+  std::vector<int> contact_head_, contact_tail_;    // per state row, −1: none
+  std::vector<int> contact_next_;
+  std::vector<Eigen::Vector3d> contact_f_;
+  std::vector<int> contact_rows_;                   // rows with a list (to reset them)
+  void collect_contact_forces(const State& s);      // fills the lists above (and stats_)
   StepStats stats_;
 };
 

@@ -1,0 +1,141 @@
+// squeeze::fem — JSON scenes (issue 5): parsing and validation, meshing with a cache, building
+// a World, per-frame metrics. The format is documented key by key in scenes/README.md.
+//
+//   Scene s = load_scene("scenes/cube_drop.json");        // parse + validate (no meshing)
+//   SceneWorld w = build_scene(s, &progress);            // mesh (cached), bodies, pins
+//   State st = w.initial_state();
+//   w.step(st);                                          // per-object gravity flags applied
+//
+// Errors: every problem with the scene is an InputError with one line
+// "SCENE_FILE: KEY.PATH: problem", e.g. "cube.json: objects[2].material.k_volume: must be > 0".
+#pragma once
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "squeeze/fem/body.h"
+#include "squeeze/fem/world.h"
+#include "squeeze/meshing/tet_mesh.h"
+
+namespace squeeze {
+class Progress;
+}
+
+namespace squeeze::fem {
+
+/// Placement of an object's mesh: world = translate + R · (scale ∘ v), with R = Rz·Ry·Rx of
+/// rotate_deg (degrees about the fixed x, then y, then z axis).
+struct SceneTransform {
+  Eigen::Vector3d scale{1, 1, 1};      // per axis, > 0
+  Eigen::Vector3d rotate_deg{0, 0, 0};  // degrees
+  Eigen::Vector3d translate{0, 0, 0};   // m
+  Eigen::Affine3d affine() const;
+};
+
+/// One object of a scene, defaults filled in. Optional values left empty are derived from the
+/// mesh when the world is built (see scenes/README.md for the formulas).
+struct SceneObject {
+  std::string name;                       // required, unique
+  std::filesystem::path mesh;             // required; absolute (resolved against the scene's folder)
+  bool robot = false;                     // role: "robot" | "obstacle" (default)
+  bool rigid = false;                     // kind: "rigid" | "deformable" (default)
+  int tets = 500;                         // meshing target (ignored when `mesh` is a tet mesh)
+  SceneTransform transform;
+  double density = 1000.0;                // kg/m³
+  double youngs_modulus = 1e5;            // Pa, only used to derive the default stiffnesses
+  std::optional<double> k_distance;       // J; default youngs_modulus · V / #edges
+  std::optional<double> k_volume;         // J; default 3 · youngs_modulus · V / #tets
+  std::optional<double> damping;          // J·s, both damping terms; default 0.005 s · k
+  bool gravity = true;                    // false: gravity does not act on this object
+  Eigen::Vector3d velocity{0, 0, 0};      // m/s, initial
+  std::vector<Eigen::AlignedBox3d> pinned;  // world boxes (m): vertices at rest inside are fixed
+};
+
+struct SceneGoal {
+  Eigen::Vector3d position{0, 0, 0};  // m
+  double tolerance = 0.05;            // m
+  std::string object;                 // name of the object that must reach it (default: the robot)
+};
+
+/// A parsed, validated scene.
+struct Scene {
+  std::filesystem::path file;              // the scene file as given
+  std::optional<double> time_step;         // s; default: stable step derived from the meshes
+  Eigen::Vector3d gravity{0, -9.81, 0};    // m/s²
+  std::optional<double> floor = 0.0;       // m, height of the floor y >= floor; null: no floor
+  std::optional<Eigen::AlignedBox3d> bounds;  // m; default: derived (see build_scene)
+  double contact_stiffness = 1e5;          // N/m per penetrating vertex (objects and floor)
+  double contact_damping = 10.0;           // N·s/m along the contact normal while penetrating
+  bool self_collision = true;
+  std::vector<SceneObject> objects;
+  std::optional<SceneGoal> goal;
+
+  /// Index of the object called `name`, or -1.
+  int find(const std::string& name) const;
+};
+
+/// Reads and validates a scene file (JSON). Mesh paths are resolved relative to the scene's folder
+/// and must exist. Throws InputError "FILE: KEY.PATH: problem" on any problem: unreadable file,
+/// invalid JSON, unknown key, missing key, wrong type, NaN or infinite number, out-of-range value
+/// (time_step <= 0, negative stiffness, ...), duplicate or unknown object name, missing mesh file.
+Scene load_scene(const std::filesystem::path& file);
+/// The same from JSON text; `file` names the scene in messages and anchors relative mesh paths.
+Scene parse_scene(const std::string& json_text, const std::filesystem::path& file);
+
+/// Directory of the coarse-mesh cache: $SQUEEZE_CACHE_DIR, else $XDG_CACHE_HOME/squeeze, else
+/// $HOME/.cache/squeeze (empty if none of them is set).
+std::filesystem::path mesh_cache_dir();
+
+/// The coarse tetrahedral mesh of an object in its model units (before the transform): loaded
+/// directly if `mesh` is a tet mesh (.mesh, .msh, .vtk, .vtu, .node, .ele), otherwise made by the
+/// meshing pipeline with target_tets = tets and cached as CACHE/meshes/HASH.mesh, HASH being a
+/// 128-bit hash of the file's bytes and every meshing option. `cache_hit` (optional) tells
+/// whether the cache served it. Throws InputError "PATH: problem".
+TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bool* cache_hit = nullptr,
+                        Progress* progress = nullptr);
+
+/// A World built from a scene, with what it needs to step it like the scene says.
+class SceneWorld {
+ public:
+  Scene scene;
+  World world;
+  double h = 0;                       // time step used (s)
+  std::vector<TetMesh> meshes;        // per object: rest mesh in world coordinates (m)
+  Eigen::AlignedBox3d bounds;         // scene bounds (given, or derived)
+  std::vector<double> rest_volume;    // per object, m³
+  RowMatrixX3d external;              // per state row: cancels gravity of objects with gravity=false
+
+  SceneWorld(Scene s, World w) : scene(std::move(s)), world(std::move(w)) {}
+  /// Rest positions, initial velocities (zero on pinned vertices), time 0.
+  State initial_state() const;
+  /// Changes the time step (s, > 0): the world is rebuilt from the same bodies and pins.
+  void set_time_step(double step);
+  /// One step of h with the per-object gravity flags.
+  void step(State& s);
+  /// Positions of object b in state s (#V by 3, m); rigid objects: their rest positions.
+  RowMatrixX3d positions(const State& s, int b) const;
+};
+
+/// The largest stable explicit step (s) of a world's deformable objects (estimate): for every
+/// vertex, ω² = (Σ k_distance/D0² over its edges + Σ k_volume·|∂C/∂p|² over its tets +
+/// contact_stiffness) / m, γ = (same with the damping coefficients + contact_damping) / m;
+/// h = min over vertices of 1 / (ω + γ), at most 1e-3 s. Returns 1e-3 with no deformable object.
+double stable_time_step(const World& world);
+
+/// Meshes every object (through the cache), builds bodies, pins and the time step.
+/// Throws InputError "FILE: objects[i].KEY: problem" (e.g. a pin box that holds no vertex).
+SceneWorld build_scene(const Scene& scene, Progress* progress = nullptr);
+
+/// Measures of one object in one state.
+struct ObjectMetrics {
+  double volume_ratio = 1;   // V / V0
+  Eigen::Vector3d com;       // m, mass-weighted centre
+  Eigen::AlignedBox3d aabb;  // m
+  double kinetic_energy = 0; // J
+};
+ObjectMetrics object_metrics(const SceneWorld& w, const State& s, int b);
+
+}  // namespace squeeze::fem

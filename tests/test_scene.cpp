@@ -1,0 +1,303 @@
+// JSON scenes and `squeeze simulate` (issue 5, second half): defaults, validation errors that name
+// the key path, the mesh cache, per-object options, and the CLI end to end (metrics.csv columns
+// and rows, trajectory, the cube coming to rest, bad input through the binary).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "meshing_test_util.h"
+#include "squeeze/common/error.h"
+#include "squeeze/fem/scene.h"
+#include "squeeze/meshing/tet_io.h"
+
+namespace {
+using namespace sqt;
+using namespace squeeze::fem;
+
+const fs::path kAssets = fs::path(SQUEEZE_SOURCE_DIR) / "scenes" / "assets";
+const fs::path kCubeScene = fs::path(SQUEEZE_SOURCE_DIR) / "scenes" / "cube_drop.json";
+
+// Every test meshes into its own cache (never the user's).
+class SceneTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::make_unique<TempDir>("scene");
+    ::setenv("SQUEEZE_CACHE_DIR", (dir_->path() / "cache").c_str(), 1);
+  }
+  fs::path write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_->path() / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+  // A scene in the temp dir whose object list is `objects` (cube.mesh is copied next to it).
+  fs::path scene_file(const std::string& body) {
+    fs::copy_file(kAssets / "cube.mesh", dir_->path() / "cube.mesh", fs::copy_options::overwrite_existing);
+    return write("scene.json", body);
+  }
+  std::unique_ptr<TempDir> dir_;
+};
+
+std::string error_of(const fs::path& scene) {
+  try {
+    load_scene(scene);
+  } catch (const squeeze::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST_F(SceneTest, DefaultsFillAMinimalScene) {
+  const fs::path p = scene_file(R"({"objects": [{"name": "blob", "mesh": "cube.mesh"}]})");
+  const Scene s = load_scene(p);
+  EXPECT_FALSE(s.time_step.has_value());
+  EXPECT_EQ(s.gravity, Eigen::Vector3d(0, -9.81, 0));
+  ASSERT_TRUE(s.floor.has_value());
+  EXPECT_EQ(*s.floor, 0.0);
+  EXPECT_FALSE(s.bounds.has_value());
+  EXPECT_FALSE(s.goal.has_value());
+  ASSERT_EQ(s.objects.size(), 1u);
+  const SceneObject& o = s.objects[0];
+  EXPECT_EQ(o.name, "blob");
+  EXPECT_EQ(o.mesh, dir_->path() / "cube.mesh");
+  EXPECT_FALSE(o.robot);
+  EXPECT_FALSE(o.rigid);
+  EXPECT_EQ(o.tets, 500);
+  EXPECT_EQ(o.transform.scale, Eigen::Vector3d(1, 1, 1));
+  EXPECT_EQ(o.transform.translate, Eigen::Vector3d::Zero());
+  EXPECT_EQ(o.density, 1000.0);
+  EXPECT_TRUE(o.gravity);
+  EXPECT_EQ(o.velocity, Eigen::Vector3d::Zero());
+  EXPECT_TRUE(o.pinned.empty());
+
+  SceneWorld w = build_scene(s);
+  EXPECT_GT(w.h, 0.0);
+  EXPECT_LE(w.h, 1e-3);
+  EXPECT_EQ(w.world.options().h, w.h);
+  const Body& B = w.world.body(0);
+  EXPECT_NEAR(B.material.k_distance, 1e5 * B.total_volume() / B.E.rows(), 1e-12);
+  EXPECT_NEAR(B.material.k_volume, 3e5 * B.total_volume() / B.tets(), 1e-12);
+  EXPECT_NEAR(B.material.damping_distance, 5e-3 * B.material.k_distance, 1e-15);
+  EXPECT_TRUE(w.bounds.contains(Eigen::Vector3d(0, 0, 0)));
+}
+
+TEST_F(SceneTest, TransformScaleRotateTranslate) {
+  const fs::path p = scene_file(R"({"objects": [
+    {"name": "a", "mesh": "cube.mesh", "transform": {"scale": [2, 1, 1], "rotate_deg": [0, 0, 90], "translate": [1, 2, 3]}},
+    {"name": "b", "mesh": "cube.mesh", "kind": "rigid", "transform": {"scale": 0.5}, "role": "robot"}],
+    "goal": {"position": [1, 1, 1]}})");
+  const Scene s = load_scene(p);
+  EXPECT_EQ(s.goal->object, "b");
+  EXPECT_EQ(s.goal->tolerance, 0.05);
+  const SceneWorld w = build_scene(s);
+  // x scaled by 2, then rotated 90° about z: the x extent becomes the y extent.
+  const Eigen::AlignedBox3d box = object_metrics(w, w.initial_state(), 0).aabb;
+  EXPECT_NEAR(box.sizes().x(), 1.0, 1e-12);
+  EXPECT_NEAR(box.sizes().y(), 2.0, 1e-12);
+  EXPECT_NEAR(box.center().x(), 1.0, 1e-12);
+  EXPECT_NEAR(box.center().z(), 3.0, 1e-12);
+  EXPECT_NEAR(w.world.body(1).total_volume(), 0.125, 1e-12);
+  EXPECT_EQ(w.world.first_state_row(1), -1);
+}
+
+TEST_F(SceneTest, BadScenesNameTheKeyPath) {
+  const std::string cube = R"("name": "cube", "mesh": "cube.mesh")";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({})", "objects: missing"},
+      {R"({"objects": []})", "objects: must hold at least one object"},
+      {R"({"objects": {}})", "objects: must be an array"},
+      {R"({"objects": [{"mesh": "cube.mesh"}]})", "objects[0].name: missing"},
+      {R"({"objects": [{"name": "cube"}]})", "objects[0].mesh: missing"},
+      {R"({"objects": [{"name": "cube", "mesh": "nope.off"}]})", "objects[0].mesh: file"},
+      {R"({"objects": [{"name": "cube", "mesh": 3}]})", "objects[0].mesh: must be a string"},
+      {R"({"objects": [{)" + cube + R"(}, {)" + cube + R"(}]})", "objects[1].name: duplicate object name"},
+      {R"({"objects": [{"name": "a,b", "mesh": "cube.mesh"}]})", "objects[0].name:"},
+      {R"({"objects": [{)" + cube + R"(, "material": {"k_volume": -5}}]})", "objects[0].material.k_volume: must be > 0"},
+      {R"({"objects": [{)" + cube + R"(}, {"name": "c2", "mesh": "cube.mesh", "material": {"k_volume": 0}}]})",
+       "objects[1].material.k_volume: must be > 0"},
+      {R"({"objects": [{)" + cube + R"(, "material": {"k_distance": -1}}]})", "objects[0].material.k_distance: must be > 0"},
+      {R"({"objects": [{)" + cube + R"(, "material": {"damping": -1}}]})", "objects[0].material.damping: must be >= 0"},
+      {R"({"objects": [{)" + cube + R"(, "material": {"density": "heavy"}}]})", "objects[0].material.density: must be a number"},
+      {R"({"objects": [{)" + cube + R"(, "materiel": {}}]})", "objects[0].materiel: unknown key"},
+      {R"({"time_step": 0, "objects": [{)" + cube + R"(}]})", "time_step: must be > 0"},
+      {R"({"time_step": -0.001, "objects": [{)" + cube + R"(}]})", "time_step: must be > 0"},
+      {R"({"time_step": NaN, "objects": [{)" + cube + R"(}]})", "time_step: must be a finite number, got NaN"},
+      {R"({"floor": -Infinity, "objects": [{)" + cube + R"(}]})", "floor: must be a finite number"},
+      {R"({"objects": [{)" + cube + R"(, "velocity": [0, NaN, 0]}]})", "objects[0].velocity[1]: must be a finite number"},
+      {R"({"gravity": [0, -9.81], "objects": [{)" + cube + R"(}]})", "gravity: must be an array of 3 numbers"},
+      {R"({"objects": [{)" + cube + R"(, "kind": "soft"}]})", "objects[0].kind: must be \"deformable\" or \"rigid\""},
+      {R"({"objects": [{)" + cube + R"(, "role": "goal"}]})", "objects[0].role: must be \"robot\" or \"obstacle\""},
+      {R"({"objects": [{)" + cube + R"(, "gravity": 1}]})", "objects[0].gravity: must be true or false"},
+      {R"({"objects": [{)" + cube + R"(, "tets": 12.5}]})", "objects[0].tets: must be an integer"},
+      {R"({"objects": [{)" + cube + R"(, "transform": {"scale": -1}}]})", "objects[0].transform.scale: must be > 0"},
+      {R"({"objects": [{)" + cube + R"(, "transform": {"scale": [1, 0, 1]}}]})", "objects[0].transform.scale[1]: must be > 0"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"box": {"min": [0, 0, 0], "max": [1, -1, 1]}}]}]})",
+       "objects[0].pinned[0].box: min must be below max"},
+      {R"({"bounds": {"min": [0, 0, 0]}, "objects": [{)" + cube + R"(}]})", "bounds.max: missing"},
+      {R"({"goal": {"position": [0, 0, 0], "object": "ghost"}, "objects": [{)" + cube + R"(}]})",
+       "goal.object: no object named 'ghost'"},
+      {R"({"goal": {"position": [0, 0, 0]}, "objects": [{)" + cube + R"(}]})", "goal.object: missing"},
+      {R"({"goal": {"position": [0, 0, 0], "object": "cube", "tolerance": 0}, "objects": [{)" + cube + R"(}]})",
+       "goal.tolerance: must be > 0"},
+      {R"({"objects": [{)" + cube + R"(}],})", "invalid JSON"},
+  };
+  for (const auto& [text, expected] : cases) {
+    const fs::path p = scene_file(text);
+    const std::string err = error_of(p);
+    EXPECT_NE(err.find(p.string() + ": "), std::string::npos) << text << "\n-> " << err;
+    EXPECT_NE(err.find(expected), std::string::npos) << text << "\n-> " << err;
+    EXPECT_EQ(err.find('\n'), std::string::npos) << err;
+  }
+  EXPECT_NE(error_of(dir_->path() / "missing.json").find("missing.json: scene file does not exist"), std::string::npos);
+}
+
+TEST_F(SceneTest, PinBoxWithoutVertexIsAnError) {
+  const fs::path p = scene_file(
+      R"({"objects": [{"name": "cube", "mesh": "cube.mesh", "pinned": [{"box": {"min": [5, 5, 5], "max": [6, 6, 6]}}]}]})");
+  try {
+    build_scene(load_scene(p));
+    FAIL() << "no error";
+  } catch (const squeeze::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("objects[0].pinned[0].box: holds no vertex"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(SceneTest, PinsGravityFlagAndInitialVelocity) {
+  // a: pinned top face, b: no gravity, c: initial velocity, no gravity, no floor.
+  const fs::path p = scene_file(R"({"floor": null, "objects": [
+    {"name": "a", "mesh": "cube.mesh", "pinned": [{"box": {"min": [-1, 0.45, -1], "max": [1, 1, 1]}}]},
+    {"name": "b", "mesh": "cube.mesh", "gravity": false, "transform": {"translate": [3, 0, 0]}},
+    {"name": "c", "mesh": "cube.mesh", "gravity": false, "velocity": [1, 0, 0], "transform": {"translate": [-3, 0, 0]}}]})");
+  SceneWorld w = build_scene(load_scene(p));
+  State s = w.initial_state();
+  const int steps = static_cast<int>(0.1 / w.h);
+  for (int k = 0; k < steps; ++k) w.step(s);
+  const double t = steps * w.h;
+  const ObjectMetrics a = object_metrics(w, s, 0), b = object_metrics(w, s, 1), c = object_metrics(w, s, 2);
+  EXPECT_NEAR(a.aabb.max().y(), 0.5, 1e-12);  // pinned top
+  EXPECT_LT(a.com.y(), -1e-4);                // the rest sags
+  EXPECT_NEAR(b.com.y(), 0.0, 1e-9);
+  EXPECT_NEAR(c.com.x(), -3.0 + t, 1e-9);
+  EXPECT_NEAR(c.volume_ratio, 1.0, 1e-9);
+}
+
+TEST_F(SceneTest, SurfaceMeshesAreMeshedOnceAndCached) {
+  const fs::path off = kAssets / "cube.off";
+  bool hit = true;
+  const squeeze::TetMesh m1 = object_tet_mesh(off, 200, &hit);
+  EXPECT_FALSE(hit);
+  EXPECT_GT(m1.T.rows(), 20);
+  const squeeze::TetMesh m2 = object_tet_mesh(off, 200, &hit);
+  EXPECT_TRUE(hit);
+  EXPECT_EQ(m1.V, m2.V);
+  EXPECT_EQ(m1.T, m2.T);
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir_->path() / "cache" / "meshes")) {
+    EXPECT_EQ(e.path().extension(), ".mesh");
+    ++files;
+  }
+  EXPECT_EQ(files, 1);  // no temporary left
+  // A different tet count is another entry.
+  object_tet_mesh(off, 100, &hit);
+  EXPECT_FALSE(hit);
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> v;
+  std::stringstream ss(line);
+  std::string cell;
+  while (std::getline(ss, cell, ',')) v.push_back(cell);
+  return v;
+}
+
+TEST_F(SceneTest, SimulateCubeDropEndToEnd) {
+  const fs::path out = dir_->path() / "out";
+  const RunResult r = run_squeeze({"-q", "simulate", kCubeScene.string(), "--duration", "1.5", "--fps", "20", "-o",
+                                   out.string()},
+                                  dir_->path());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  const auto rows = lines(read_text(out / "metrics.csv"));
+  ASSERT_EQ(rows.size(), 1u + 31u);  // header + duration × fps + 1
+  std::vector<std::string> expected = {"time", "max_penetration", "colliding_vertices"};
+  for (const char* c : {"volume_ratio", "com_x", "com_y", "com_z", "aabb_min_x", "aabb_min_y", "aabb_min_z", "aabb_max_x",
+                        "aabb_max_y", "aabb_max_z", "kinetic_energy"})
+    expected.push_back(std::string("cube.") + c);
+  EXPECT_EQ(split(rows[0]), expected);
+  std::map<std::string, double> last;
+  const auto cells = split(rows.back());
+  ASSERT_EQ(cells.size(), expected.size());
+  for (size_t k = 0; k < cells.size(); ++k) last[expected[k]] = std::stod(cells[k]);
+  EXPECT_NEAR(last["time"], 1.5, 1e-9);
+  EXPECT_NEAR(std::stod(split(rows[1])[0]), 0.0, 0.0);
+  // At rest on the floor: bottom at y = 0 (penalty contact: sub-millimetre), volume kept within 3%.
+  EXPECT_NEAR(last["cube.volume_ratio"], 1.0, 0.03);
+  EXPECT_NEAR(last["cube.aabb_min_y"], 0.0, 1e-3);
+  EXPECT_NEAR(last["cube.com_y"], 0.1, 0.01);
+  EXPECT_NEAR(last["cube.com_x"], 0.0, 1e-6);
+  EXPECT_LT(last["cube.kinetic_energy"], 0.01);  // from about 7 J at impact
+  EXPECT_LT(last["max_penetration"], 1e-3);
+
+  // Trajectory: index, rest mesh, one binary frame per row.
+  std::ifstream idx(out / "trajectory" / "index.json");
+  const nlohmann::json index = nlohmann::json::parse(idx);
+  EXPECT_EQ(index["format"], "squeeze-trajectory");
+  EXPECT_EQ(index["frames"], 31);
+  EXPECT_EQ(index["fps"], 20.0);
+  ASSERT_EQ(index["objects"].size(), 1u);
+  const auto& o = index["objects"][0];
+  EXPECT_EQ(o["name"], "cube");
+  const squeeze::TetMesh rest = squeeze::load_tet_mesh(out / "trajectory" / o["rest_mesh"].get<std::string>());
+  EXPECT_EQ(rest.V.rows(), o["vertices"].get<int>());
+  EXPECT_EQ(rest.T.rows(), o["tets"].get<int>());
+  for (int f = 0; f < 31; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof name, "%06d.bin", f);
+    EXPECT_EQ(fs::file_size(out / "trajectory" / "frames" / name), rest.V.rows() * 3 * sizeof(double)) << name;
+  }
+  // Frame 0 holds the rest positions; the last frame's bottom matches metrics.
+  std::vector<double> x(static_cast<size_t>(rest.V.rows()) * 3);
+  std::ifstream f0(out / "trajectory" / "frames" / "000000.bin", std::ios::binary);
+  f0.read(reinterpret_cast<char*>(x.data()), static_cast<std::streamsize>(x.size() * sizeof(double)));
+  for (Eigen::Index v = 0; v < rest.V.rows(); ++v)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(x[3 * v + k], rest.V(v, k), 1e-12);
+  std::ifstream fl(out / "trajectory" / "frames" / "000030.bin", std::ios::binary);
+  fl.read(reinterpret_cast<char*>(x.data()), static_cast<std::streamsize>(x.size() * sizeof(double)));
+  double ymin = 1e9;
+  for (Eigen::Index v = 0; v < rest.V.rows(); ++v) ymin = std::min(ymin, x[3 * v + 1]);
+  EXPECT_NEAR(ymin, last["cube.aabb_min_y"], 1e-8);
+  // No temporary left.
+  for (const auto& e : fs::directory_iterator(out))
+    EXPECT_TRUE(e.path().filename() == "metrics.csv" || e.path().filename() == "trajectory") << e.path();
+}
+
+TEST_F(SceneTest, SimulateBadInputFailsCleanly) {
+  const fs::path bad = scene_file(R"({"objects": [{"name": "cube", "mesh": "cube.mesh", "material": {"k_volume": -1}}]})");
+  const fs::path good = scene_file(R"({"objects": [{"name": "cube", "mesh": "cube.mesh"}]})");
+  fs::copy_file(good, dir_->path() / "good.json");
+  scene_file(R"({"objects": [{"name": "cube", "mesh": "cube.mesh", "material": {"k_volume": -1}}]})");
+  const fs::path out = dir_->path() / "out";
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+    int code;
+  };
+  const std::vector<Case> cases = {
+      {{"simulate", bad.string(), "--duration", "1", "-o", out.string()}, "objects[0].material.k_volume: must be > 0", 1},
+      {{"simulate", (dir_->path() / "nope.json").string(), "--duration", "1", "-o", out.string()}, "nope.json", 1},
+      {{"simulate", (dir_->path() / "good.json").string(), "--duration", "0", "-o", out.string()}, "--duration", 1},
+      {{"simulate", (dir_->path() / "good.json").string(), "--duration", "1", "--fps", "-3", "-o", out.string()}, "--fps", 1},
+      {{"simulate", (dir_->path() / "good.json").string(), "--duration", "1", "-o", (dir_->path() / "no/such/dir").string()},
+       "does not exist", 1},
+      {{"simulate", (dir_->path() / "good.json").string(), "-o", out.string()}, "--duration", 2},
+  };
+  for (const Case& c : cases) {
+    const RunResult r = run_squeeze(c.args, dir_->path());
+    EXPECT_EQ(r.code, c.code) << r.err;
+    const auto err = lines(r.err);
+    ASSERT_EQ(err.size(), 1u) << r.err;
+    EXPECT_NE(err[0].find(c.message), std::string::npos) << err[0];
+    EXPECT_FALSE(fs::exists(out)) << c.args[1];
+  }
+}
+
+}  // namespace
