@@ -22,6 +22,16 @@ using squeeze::InputError;
 // ---------------------------------------------------------------------------------------------
 // Geometry built here.
 
+/// Points and triangles (index triples) as a SurfaceMesh.
+SurfaceMesh to_mesh(const std::vector<Eigen::RowVector3d>& pts, const std::vector<std::array<int, 3>>& tris) {
+  SurfaceMesh m;
+  m.V.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = pts[i];
+  m.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
+  for (size_t i = 0; i < tris.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << tris[i][0], tris[i][1], tris[i][2];
+  return m;
+}
+
 /// Closed, outward-oriented surface of a union of unit cubes (cells (i,j,k) of the integer grid):
 /// every cube face not shared with another cube, as two triangles on grid vertices (no
 /// T-junctions), scaled by `scale` and shifted by `shift`.
@@ -62,12 +72,7 @@ SurfaceMesh cubes_surface(const std::vector<std::array<int, 3>>& cells, double s
           tris.push_back({i[0], i[3], i[2]});
         }
       }
-  SurfaceMesh m;
-  m.V.resize(static_cast<Eigen::Index>(pts.size()), 3);
-  for (size_t i = 0; i < pts.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = pts[i];
-  m.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
-  for (size_t i = 0; i < tris.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << tris[i][0], tris[i][1], tris[i][2];
-  return m;
+  return to_mesh(pts, tris);
 }
 
 SurfaceMesh box(Eigen::RowVector3d lo, Eigen::RowVector3d hi) {
@@ -416,12 +421,7 @@ SurfaceMesh hemisphere(int rings = 12, int sectors = 32) {
       tris.push_back({id(r, s), id(r + 1, s), id(r + 1, s + 1)});
       tris.push_back({id(r, s), id(r + 1, s + 1), id(r, s + 1)});
     }
-  SurfaceMesh m;
-  m.V.resize(static_cast<Eigen::Index>(pts.size()), 3);
-  for (size_t i = 0; i < pts.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = pts[i];
-  m.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
-  for (size_t i = 0; i < tris.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << tris[i][0], tris[i][1], tris[i][2];
-  return m;
+  return to_mesh(pts, tris);
 }
 
 TEST(MeshingWindingNumber, OneInsideZeroOutsideClosedMesh) {

@@ -4,9 +4,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Delaunay_triangulation_3.h>
 #include <CGAL/Random.h>
-#include <CGAL/Surface_mesh.h>
 #include <CGAL/box_intersection_d.h>
-#include <CGAL/convex_hull_3.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -19,7 +17,6 @@ namespace squeeze {
 namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
-using Mesh = CGAL::Surface_mesh<Point>;
 using Delaunay = CGAL::Delaunay_triangulation_3<K>;
 }  // namespace
 

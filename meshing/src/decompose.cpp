@@ -406,11 +406,6 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
   };
   for (auto& piece : pieces) evaluate_piece(piece, thickness, g.h), measure_voxels(piece);
 
-  // owner[v]: index into `pieces` of the piece holding voxel v (for the boundary-voxel test).
-  std::vector<int> owner(g.size(), -1);
-  for (size_t i = 0; i < pieces.size(); ++i)
-    for (int v : pieces[i].voxels) owner[v] = static_cast<int>(i);
-
   std::vector<char> alive(pieces.size(), 1);
   auto count_alive = [&] { return static_cast<int>(std::count(alive.begin(), alive.end(), 1)); };
   std::vector<char> splittable(pieces.size(), 1);
@@ -573,8 +568,6 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
       if (children[s].polys.empty()) continue;
       evaluate_piece(children[s], thickness, g.h);
       measure_voxels(children[s]);
-      const int id = static_cast<int>(pieces.size());
-      for (int v : children[s].voxels) owner[v] = id;
       pieces.push_back(std::move(children[s]));
       alive.push_back(1);
       splittable.push_back(1);

@@ -35,15 +35,14 @@ using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr>;
 using Criteria = CGAL::Mesh_criteria_3<Tr>;
 namespace params = CGAL::parameters;
 
-// Union of shells as a signed function: min over shells of max over facet planes. Shells whose
-// box does not hold p are skipped (their value there is positive anyway).
+// Union of the shells, dilated by `offset`, as an inside test. Shells whose (dilated) box does not
+// hold p are skipped.
 struct UnionFunction {
   struct Shell {
     Eigen::MatrixX4d planes;
     Eigen::Vector3d lo, hi;
   };
   std::vector<Shell> shells;
-  double far_value = 1.0;
   double offset = 0.0;  // dilation
 
   explicit UnionFunction(const std::vector<ConvexShell>& in) {
@@ -54,19 +53,6 @@ struct UnionFunction {
       sh.hi = s.hull.V.colwise().maxCoeff().transpose();
       shells.push_back(std::move(sh));
     }
-  }
-  double operator()(double x, double y, double z) const {
-    double best = far_value;
-    for (const Shell& s : shells) {
-      if (x < s.lo(0) - offset || y < s.lo(1) - offset || z < s.lo(2) - offset || x > s.hi(0) + offset ||
-          y > s.hi(1) + offset || z > s.hi(2) + offset)
-        continue;
-      double v = -INFINITY;
-      for (Eigen::Index i = 0; i < s.planes.rows() && v < best; ++i)
-        v = std::max(v, s.planes(i, 0) * x + s.planes(i, 1) * y + s.planes(i, 2) * z - s.planes(i, 3));
-      best = std::min(best, v);
-    }
-    return best - offset;
   }
   bool inside(double x, double y, double z) const {
     for (const Shell& s : shells) {
@@ -98,7 +84,6 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
   }
   const double diag = (hi - lo).norm();
   UnionFunction f(shells);
-  f.far_value = diag;
   f.offset = opt.offset * diag;
   const Eigen::Vector3d centre = 0.5 * (lo + hi);
   const double radius = 0.5 * diag * 1.05 + 2 * f.offset + 1e-12;

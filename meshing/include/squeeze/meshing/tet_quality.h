@@ -26,9 +26,9 @@ void orient_positively(TetMesh& mesh);
 void remove_unused_vertices(TetMesh& mesh);
 
 /// Repeatedly removes tetrahedra with a face on the boundary and a dihedral angle below
-/// `min_degrees` (flat boundary slivers add no volume worth keeping), as long as removing them
-/// does not disconnect the mesh's face adjacency locally (a tet is only peeled when it keeps at
-/// most two boundary faces... see source). Returns how many were removed.
+/// `min_degrees` (flat boundary slivers add no volume worth keeping), in up to 16 passes since
+/// peeling exposes new boundary tetrahedra; it never removes the last one. Interior slivers are
+/// left alone. Returns how many were removed.
 int peel_boundary_slivers(TetMesh& mesh, double min_degrees);
 
 /// Faces of the mesh with how many tetrahedra share them.
