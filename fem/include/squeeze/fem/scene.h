@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -72,6 +73,9 @@ struct Scene {
   bool self_collision = true;
   std::vector<SceneObject> objects;
   std::optional<SceneGoal> goal;
+  // The `planner` and `render` blocks as written (null if absent); plan/ and render/ validate
+  // them (NaN/Infinity literals appear as marked strings, see squeeze/common/json_check.h).
+  nlohmann::json planner, render;
 
   /// Index of the object called `name`, or -1.
   int find(const std::string& name) const;

@@ -1,0 +1,154 @@
+#include "squeeze/common/json_check.h"
+
+#include <cmath>
+#include <cstring>
+#include <iomanip>
+#include <sstream>
+
+#include "squeeze/common/error.h"
+
+namespace squeeze {
+using json = nlohmann::json;
+
+namespace {
+
+constexpr const char* kNonFinite = "\x01squeeze-non-finite:";  // marks NaN/Infinity literals
+
+// JSON has no NaN or Infinity; scenes written by scripts sometimes contain them anyway. Replace
+// such bare literals (outside strings) by a marked string so that validation can name the key.
+std::string mark_non_finite(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      out += c;
+      if (c == '\\' && i + 1 < text.size()) out += text[++i];
+      else if (c == '"') in_string = false;
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+      out += c;
+      continue;
+    }
+    bool replaced = false;
+    for (const char* lit : {"-Infinity", "+Infinity", "Infinity", "-NaN", "NaN", "-nan", "nan", "-inf", "inf"}) {
+      const size_t n = std::char_traits<char>::length(lit);
+      const bool boundary_before = i == 0 || !std::isalnum(static_cast<unsigned char>(text[i - 1]));
+      const bool boundary_after = i + n >= text.size() || !std::isalnum(static_cast<unsigned char>(text[i + n]));
+      if (boundary_before && boundary_after && text.compare(i, n, lit) == 0) {
+        out += '"';
+        out += "\\u0001squeeze-non-finite:";
+        out += lit;
+        out += '"';
+        i += n - 1;
+        replaced = true;
+        break;
+      }
+    }
+    if (!replaced) out += c;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string json_type_name(const json& j) {
+  if (j.is_string() && j.get_ref<const std::string&>().rfind(kNonFinite, 0) == 0)
+    return j.get_ref<const std::string&>().substr(std::char_traits<char>::length(kNonFinite));
+  if (j.is_null()) return "null";
+  if (j.is_boolean()) return "a boolean";
+  if (j.is_number()) return "a number";
+  if (j.is_string()) return "a string";
+  if (j.is_array()) return "an array";
+  return "an object";
+}
+
+std::string format_number(double x) {
+  std::ostringstream s;
+  s << std::setprecision(10) << x;
+  return s.str();
+}
+
+
+json parse_json(const std::string& text, const std::string& file) {
+  try {
+    return json::parse(mark_non_finite(text));
+  } catch (const json::parse_error& e) {
+    std::string what = e.what();
+    const auto pos = what.find("] ");
+    if (pos != std::string::npos) what = what.substr(pos + 2);
+    throw InputError(file + ": invalid JSON: " + what);
+  }
+}
+
+void JsonChecker::fail(const std::string& path, const std::string& problem) const {
+  throw InputError(file + ": " + path + ": " + problem);
+}
+void JsonChecker::keys(const json& j, const std::string& path, std::initializer_list<const char*> allowed) const {
+  if (!j.is_object()) fail(path.empty() ? "(top level)" : path, "must be an object, got " + json_type_name(j));
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    bool ok = false;
+    for (const char* a : allowed) ok = ok || it.key() == a;
+    if (!ok) {
+      std::string list;
+      for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+      fail(path.empty() ? it.key() : path + "." + it.key(), "unknown key (allowed here: " + list + ")");
+    }
+  }
+}
+double JsonChecker::number(const json& j, const std::string& path) const {
+  if (!j.is_number()) {
+    if (j.is_string() && j.get_ref<const std::string&>().rfind(kNonFinite, 0) == 0)
+      fail(path, "must be a finite number, got " + json_type_name(j));
+    fail(path, "must be a number, got " + json_type_name(j));
+  }
+  const double x = j.get<double>();
+  if (!std::isfinite(x)) fail(path, "must be a finite number");
+  return x;
+}
+double JsonChecker::positive(const json& j, const std::string& path) const {
+  const double x = number(j, path);
+  if (!(x > 0)) fail(path, "must be > 0, got " + format_number(x));
+  return x;
+}
+double JsonChecker::non_negative(const json& j, const std::string& path) const {
+  const double x = number(j, path);
+  if (x < 0) fail(path, "must be >= 0, got " + format_number(x));
+  return x;
+}
+Eigen::Vector3d JsonChecker::vec3(const json& j, const std::string& path) const {
+  if (!j.is_array() || j.size() != 3) fail(path, "must be an array of 3 numbers, got " + json_type_name(j) +
+                                                     (j.is_array() ? " of " + std::to_string(j.size()) : ""));
+  Eigen::Vector3d v;
+  for (int k = 0; k < 3; ++k) v(k) = number(j[k], path + "[" + std::to_string(k) + "]");
+  return v;
+}
+bool JsonChecker::boolean(const json& j, const std::string& path) const {
+  if (!j.is_boolean()) fail(path, "must be true or false, got " + json_type_name(j));
+  return j.get<bool>();
+}
+std::string JsonChecker::string(const json& j, const std::string& path) const {
+  if (!j.is_string() || j.get_ref<const std::string&>().rfind(kNonFinite, 0) == 0)
+    fail(path, "must be a string, got " + json_type_name(j));
+  return j.get<std::string>();
+}
+Eigen::AlignedBox3d JsonChecker::box(const json& j, const std::string& path) const {
+  keys(j, path, {"min", "max"});
+  if (!j.contains("min")) fail(path + ".min", "missing (required)");
+  if (!j.contains("max")) fail(path + ".max", "missing (required)");
+  const Eigen::Vector3d lo = vec3(j["min"], path + ".min"), hi = vec3(j["max"], path + ".max");
+  if (!(lo.array() < hi.array()).all()) fail(path, "min must be below max on every axis");
+  return {lo, hi};
+}
+
+long long JsonChecker::integer(const json& j, const std::string& path, long long lo, long long hi) const {
+  const double x = number(j, path);
+  if (x != std::floor(x) || x < static_cast<double>(lo) || x > static_cast<double>(hi))
+    fail(path, "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + format_number(x));
+  return static_cast<long long>(x);
+}
+
+}  // namespace squeeze
