@@ -18,10 +18,14 @@ using Runner = std::function<int()>;
 Runner add_mesh_command(CLI::App& app, const Global& global);
 Runner add_deform_command(CLI::App& app, const Global& global);
 Runner add_simulate_command(CLI::App& app, const Global& global);
+Runner add_plan_command(CLI::App& app, const Global& global);    // cmd_plan.cpp
+Runner add_replay_command(CLI::App& app, const Global& global);  // cmd_plan.cpp
+Runner add_render_command(CLI::App& app, const Global& global);  // cmd_render.cpp
 
 /// Exit codes.
 constexpr int kExitOk = 0;
 constexpr int kExitInputError = 1;   // bad input, configuration or output path
 constexpr int kExitUsage = 2;        // bad command line
+constexpr int kExitNotSolved = 3;    // planner: no solution (an approximate plan was written)
 
 }  // namespace squeeze::cli

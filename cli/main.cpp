@@ -28,6 +28,9 @@ int main(int argc, char** argv) {
   const Runner mesh = add_mesh_command(app, global);
   const Runner deform = add_deform_command(app, global);
   const Runner simulate = add_simulate_command(app, global);
+  const Runner plan = add_plan_command(app, global);
+  const Runner replay = add_replay_command(app, global);
+  const Runner render = add_render_command(app, global);
 
   try {
     app.parse(argc, argv);
@@ -49,6 +52,9 @@ int main(int argc, char** argv) {
       if (sub->get_name() == "mesh") return mesh();
       if (sub->get_name() == "deform") return deform();
       if (sub->get_name() == "simulate") return simulate();
+      if (sub->get_name() == "plan") return plan();
+      if (sub->get_name() == "replay") return replay();
+      if (sub->get_name() == "render") return render();
     }
   } catch (const squeeze::InputError& e) {
     std::fprintf(stderr, "squeeze: error: %s\n", e.what());
