@@ -17,6 +17,10 @@ namespace squeeze {
 
 class Progress;
 
+/// Version of the meshing algorithms: part of every cache key made from meshing results (the
+/// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
+constexpr int kMeshingAlgorithmVersion = 1;
+
 struct MeshOptions {
   DecompositionOptions decomposition;   // concavity threshold, hull budget, voxel grid
   TetrahedralizeOptions tetrahedralize; // target tet count, facet distance, sliver bound
