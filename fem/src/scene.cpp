@@ -245,7 +245,7 @@ TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progres
   // The cache key: format version, the input's extension and bytes, every meshing option.
   const std::string bytes = read_file_bytes(mesh);
   std::ostringstream opt;
-  opt << std::setprecision(17) << "squeeze-mesh-cache-v1|" << mesh.extension().string() << '|'
+  opt << std::setprecision(17) << "squeeze-mesh-cache-v1|algorithm " << kMeshingAlgorithmVersion << "|" << mesh.extension().string() << '|'
       << options.decomposition.concavity << ',' << options.decomposition.max_hulls << ','
       << options.decomposition.max_hull_volume_ratio << ',' << options.decomposition.voxel_resolution << ','
       << options.decomposition.cut_samples << ',' << options.decomposition.flat_thickness << '|'
