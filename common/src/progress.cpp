@@ -15,6 +15,7 @@ void Progress::stage(const std::string& name, double total) {
   finish();
   std::lock_guard<std::mutex> lock(mutex_);
   name_ = name;
+  detail_.clear();
   total_ = total;
   done_ = 0.0;
   shown_ = false;
@@ -23,12 +24,22 @@ void Progress::stage(const std::string& name, double total) {
 
 void Progress::update(double done) {
   if (!enabled_) return;
+  std::string detail;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    detail = detail_;
+  }
+  update(done, detail);
+}
+
+void Progress::update(double done, const std::string& detail) {
+  if (!enabled_) return;
   std::lock_guard<std::mutex> lock(mutex_);
   done_ = done;
+  detail_ = detail;
   const auto now = clock::now();
   if (now - start_ < std::chrono::seconds(1)) return;
-  if (shown_ && now - last_draw_ < std::chrono::milliseconds(100)) return;
-  if (!tty_ && shown_) return;  // log files: one line when a stage turns out long, one at its end
+  if (shown_ && now - last_draw_ < std::chrono::milliseconds(tty_ ? 100 : 10000)) return;
   last_draw_ = now;
   draw(false);
 }
@@ -43,16 +54,21 @@ void Progress::finish() {
 void Progress::draw(bool final_line) {
   const double secs = std::chrono::duration<double>(clock::now() - start_).count();
   char buf[256];
-  if (total_ > 0.0 && !final_line)
-    std::snprintf(buf, sizeof buf, "%s: %.0f%% (%.0f/%.0f), %.1f s", name_.c_str(),
-                  100.0 * done_ / total_, done_, total_, secs);
-  else
+  if (total_ > 0.0 && !final_line) {
+    const double rate = secs > 0 ? done_ / secs : 0.0;
+    char eta[48] = "";
+    if (rate > 0 && done_ < total_) std::snprintf(eta, sizeof eta, ", %.0f s left", (total_ - done_) / rate);
+    std::snprintf(buf, sizeof buf, "%s: %.0f%% (%.0f/%.0f), %.3g/s%s, %.1f s", name_.c_str(),
+                  100.0 * done_ / total_, done_, total_, rate, eta, secs);
+  } else {
     std::snprintf(buf, sizeof buf, "%s: %s %.1f s", name_.c_str(), final_line ? "done in" : "",
                   secs);
+  }
+  const std::string tail = detail_.empty() ? "" : " | " + detail_;
   if (tty_)
-    std::fprintf(stderr, "\r\033[Ksqueeze: %s%s", buf, final_line ? "\n" : "");
+    std::fprintf(stderr, "\r\033[Ksqueeze: %s%s%s", buf, tail.c_str(), final_line ? "\n" : "");
   else
-    std::fprintf(stderr, "squeeze: %s\n", buf);
+    std::fprintf(stderr, "squeeze: %s%s\n", buf, tail.c_str());
   std::fflush(stderr);
   shown_ = true;
 }
