@@ -1,14 +1,206 @@
-// Placeholder until issue plan lands.
+// `squeeze plan SCENE -o PLAN.json`: kinodynamic RRT over the whole deformable state (plan/).
+// `squeeze replay SCENE PLAN.json -o DIR`: re-simulates a plan and writes what `simulate` writes.
+#include <tbb/global_control.h>
+
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
 #include "commands.h"
+#include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
+#include "squeeze/common/progress.h"
+#include "squeeze/fem/scene.h"
+#include "squeeze/plan/plan_io.h"
+#include "squeeze/plan/planner.h"
+#include "trajectory_writer.h"
 
 namespace squeeze::cli {
-Runner add_plan_command(CLI::App& app, const Global&) {
-  app.add_subcommand("plan", "Plan a motion (not implemented yet)");
-  return [] () -> int { throw InputError("squeeze plan: not implemented yet"); };
+namespace fs = std::filesystem;
+
+namespace {
+
+struct PlanArgs {
+  std::string scene, output;
+  long long seed = -1, iterations = -1;
+  double time_limit = 0;
+  int threads = 0;
+};
+
+struct ReplayArgs {
+  std::string scene, plan, output;
+  double fps = 30;
+  double settle = -1;
+};
+
+std::string hex64(std::uint64_t h) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016" PRIx64, h);
+  return buf;
 }
-Runner add_replay_command(CLI::App& app, const Global&) {
-  app.add_subcommand("replay", "Replay a plan (not implemented yet)");
-  return [] () -> int { throw InputError("squeeze replay: not implemented yet"); };
+
+}  // namespace
+
+Runner add_plan_command(CLI::App& app, const Global& global) {
+  auto args = std::make_shared<PlanArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "plan",
+      "Plan a motion of the scene's robot to its goal: a kinodynamic RRT whose nodes are full\n"
+      "simulation states of the robot and every deformable obstacle (Rodriguez, Lien, Amato 2006).\n"
+      "Writes PLAN.json (status, statistics, the path as controls from the start). Exit 0 when\n"
+      "solved, 3 when not (an approximate plan is still written). Planner keys: scenes/README.md.\n"
+      "Example: squeeze plan scenes/barriers1.json -o out/barriers1.plan.json --seed 3");
+  cmd->add_option("SCENE", args->scene, "Scene file (JSON) with a robot and a goal")->required();
+  cmd->add_option("-o,--output", args->output, "Plan file to write (JSON)")->required();
+  cmd->add_option("--seed", args->seed, "Random seed (default: planner.seed of the scene, else 1)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--iterations", args->iterations, "Expansions to attempt at most (default: planner.iterations)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--time-limit", args->time_limit, "Stop after this many seconds of planning (0: no limit)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--threads", args->threads, "Worker threads (default: -j, else all cores); the plan does not depend on it")
+      ->check(CLI::NonNegativeNumber);
+
+  return [args, &global]() -> int {
+    const PlanArgs& a = *args;
+    std::unique_ptr<tbb::global_control> threads;
+    if (a.threads > 0)
+      threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                      static_cast<size_t>(a.threads));
+    check_output_directory(a.output);
+    Progress progress(!global.quiet);
+    const fem::Scene scene = fem::load_scene(a.scene);
+    plan::robot_index(scene);  // errors about the robot before meshing
+    if (!scene.goal) throw InputError(a.scene + ": goal: missing (the planner needs \"goal\": {\"position\": [x, y, z]})");
+    plan::PlannerOptions options;
+    {
+      const fem::SceneWorld w = fem::build_scene(scene, &progress);  // meshes (cached) and checks
+      options = plan::planner_options(w);
+      if (!w.bounds.contains(scene.goal->position)) throw InputError(a.scene + ": goal.position: outside the bounds");
+    }
+    if (a.seed >= 0) options.seed = static_cast<std::uint64_t>(a.seed);
+    if (a.iterations > 0) options.iterations = static_cast<int>(std::min<long long>(a.iterations, 100000000));
+    options.time_limit = a.time_limit;
+    const plan::PlanResult r = plan::plan(scene, options, &progress);
+
+    plan::PlanFile f;
+    f.scene = fs::absolute(scene.file).lexically_normal().string();
+    f.status = r.status;
+    f.options = options;
+    f.stats = r.stats;
+    f.time_step = r.time_step;
+    f.path = r.path;
+    {
+      plan::PropagatorOptions po;
+      plan::SimulationPropagator p(scene, po);
+      f.settle = plan::settle_control(p, options);
+    }
+    f.settle_steps = static_cast<int>(std::lround(options.settle / r.time_step));
+    f.final_state_hash = r.final_state_hash;
+    plan::save_plan(a.output, f);
+    if (!global.quiet) {
+      const plan::PlanStatistics& s = r.stats;
+      std::fprintf(stderr,
+                   "squeeze: %s: %s after %d iterations (%d nodes, %d discarded: %d diverged, %d volume, %d bounds) "
+                   "in %.1f s, %.1f it/s; distance to goal %.3g m (tolerance %.3g m); path of %zu segments, %.2f s; "
+                   "%.0f bytes per node, peak memory %.0f MiB; wrote %s\n",
+                   a.scene.c_str(), plan::to_string(r.status), s.iterations, s.nodes,
+                   s.discarded_diverged + s.discarded_volume + s.discarded_bounds, s.discarded_diverged,
+                   s.discarded_volume, s.discarded_bounds, s.seconds, s.seconds > 0 ? s.iterations / s.seconds : 0.0,
+                   s.final_distance, scene.goal->tolerance, r.path.size(),
+                   [&] {
+                     long long n = 0;
+                     for (const auto& seg : r.path) n += seg.steps;
+                     return n * r.time_step;
+                   }(),
+                   s.bytes_per_node, s.peak_memory / 1048576.0, a.output.c_str());
+    }
+    return r.status == plan::PlanStatus::solved ? kExitOk : kExitNotSolved;
+  };
 }
+
+Runner add_replay_command(CLI::App& app, const Global& global) {
+  auto args = std::make_shared<ReplayArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "replay",
+      "Re-simulate a plan from the start (the path's controls, then an interpolation phase that\n"
+      "brings the robot to rest near the goal) and write DIR/metrics.csv and DIR/trajectory/ like\n"
+      "`squeeze simulate`. Checks that the state at the end of the path equals the planner's bit for bit.\n"
+      "Example: squeeze replay scenes/barriers1.json out/barriers1.plan.json -o out/barriers1");
+  cmd->add_option("SCENE", args->scene, "Scene file (JSON) the plan was made for")->required();
+  cmd->add_option("PLAN", args->plan, "Plan file written by `squeeze plan`")->required();
+  cmd->add_option("-o,--output", args->output, "Output directory (created if missing; its parent must exist)")
+      ->required();
+  cmd->add_option("--fps", args->fps, "Output frames per simulated second, > 0")->capture_default_str();
+  cmd->add_option("--settle", args->settle, "Seconds of the final interpolation phase (default: the plan's)")
+      ->check(CLI::NonNegativeNumber);
+
+  return [args, &global]() -> int {
+    const ReplayArgs& a = *args;
+    if (!(a.fps > 0) || !std::isfinite(a.fps)) throw InputError("--fps must be > 0");
+    check_output_dir(a.output);
+    Progress progress(!global.quiet);
+    const fem::Scene scene = fem::load_scene(a.scene);
+    const plan::PlanFile f = plan::load_plan(a.plan);
+    plan::PropagatorOptions po;
+    po.stop_when_invalid = false;
+    plan::SimulationPropagator p(scene, po);
+    if (p.world().h != f.time_step) p.world().set_time_step(f.time_step);
+    const double h = f.time_step;
+    const int robot_vertices = p.robot().vertices;
+    for (const auto& seg : f.path)
+      if (seg.control.kind == plan::ForceKind::control_point && seg.control.vertex >= robot_vertices)
+        throw InputError(a.plan + ": a control point names robot vertex " + std::to_string(seg.control.vertex) +
+                         " but the robot of " + a.scene + " has " + std::to_string(robot_vertices) +
+                         ": the plan was made for another scene");
+    const int settle_steps = a.settle >= 0 ? static_cast<int>(std::lround(a.settle / h)) : f.settle_steps;
+    long long total = settle_steps;
+    for (const auto& seg : f.path) total += seg.steps;
+    const double duration = total * h;
+    const double frames_d = std::floor(duration * a.fps + 1e-9);
+    if (frames_d > 1e7) throw InputError("--fps: too many frames (at most 10 million)");
+    const int frames = static_cast<int>(frames_d) + 1;
+
+    fem::SceneWorld metrics_world = fem::build_scene(scene);  // contacts for the metrics, apart from the replay
+    if (metrics_world.h != h) metrics_world.set_time_step(h);
+    TrajectoryWriter writer(metrics_world, a.output, a.fps, h, frames);
+    // Frame f shows the state after step round(f / (fps h)) (within h/2 of t = f / fps).
+    auto frame_step = [&](int fr) { return std::llround(fr / (a.fps * h)); };
+    long long step = 0;
+    int next = 0;
+    progress.stage("replaying", static_cast<double>(total));
+    fem::State settled = p.world().initial_state();
+    p.on_step = [&](const fem::State& s, int) {
+      ++step;
+      if (step == total) settled = s;
+      while (next < frames && frame_step(next) <= step) writer.add_frame(s, next++ / a.fps);
+      progress.update(static_cast<double>(step));
+    };
+    fem::State s0 = p.world().initial_state();
+    writer.add_frame(s0, 0.0);
+    next = 1;
+    const std::vector<fem::State> ends = plan::replay(p, f.path, f.settle, settle_steps);
+    while (next < frames) writer.add_frame(ends.empty() ? s0 : ends.back(), next++ / a.fps);  // rounding at the very end
+    progress.finish();
+    writer.commit();
+
+    const fem::State& last = ends.empty() ? s0 : ends.back();
+    const std::uint64_t hash = plan::state_hash(last);
+    if (!global.quiet) {
+      const double distance = scene.goal ? (p.goal_com(settled) - scene.goal->position).norm() : 0.0;
+      std::fprintf(stderr,
+                   "squeeze: replayed %zu segments and %.2f s of settling, %d frames; at the end: distance to "
+                   "goal %.3g m, largest volume change %.2f%%; wrote %s\n",
+                   f.path.size(), settle_steps * h, frames, distance, 100 * p.max_volume_change(settled),
+                   a.output.c_str());
+    }
+    if (f.final_state_hash != 0 && hash != f.final_state_hash)
+      throw InputError(a.plan + ": the replay does not reproduce the planner's final state (hash " + hex64(hash) +
+                       ", plan " + hex64(f.final_state_hash) + "): the scene or its meshes changed since planning");
+    return kExitOk;
+  };
+}
+
 }  // namespace squeeze::cli

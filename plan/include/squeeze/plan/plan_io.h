@@ -1,0 +1,34 @@
+// squeeze::plan — PLAN.json: what `squeeze plan` writes and `squeeze replay` reads.
+//
+// { "format": "squeeze-plan", "version": 1, "scene": ABSOLUTE PATH, "status": "solved" | ...,
+//   "seed": N, "time_step": h (s), "planner": {every PlannerOptions field},
+//   "statistics": {...PlanStatistics...},
+//   "path": [ {"kind": "body" | "control_point" | "interpolation", "target": [x,y,z] (m),
+//              "force": N, "vertex": i, "radius": m, "omega": 1/s, "steps": n, "duration": s}, ... ],
+//   "settle": {"kind": "interpolation", ..., "steps": n, "duration": s},
+//   "final_state_hash": "16 hex digits" }
+#pragma once
+#include <filesystem>
+
+#include "squeeze/plan/planner.h"
+
+namespace squeeze::plan {
+
+struct PlanFile {
+  std::string scene;
+  PlanStatus status = PlanStatus::failed;
+  PlannerOptions options;
+  PlanStatistics stats;
+  double time_step = 0;
+  std::vector<PathSegment> path;
+  Control settle;
+  int settle_steps = 0;
+  std::uint64_t final_state_hash = 0;
+};
+
+/// Writes atomically (temporary name, rename). Throws InputError on I/O errors.
+void save_plan(const std::filesystem::path& file, const PlanFile& plan);
+/// Reads and validates; throws InputError "FILE: KEY: problem".
+PlanFile load_plan(const std::filesystem::path& file);
+
+}  // namespace squeeze::plan

@@ -1,0 +1,68 @@
+// squeeze::plan — the simulator as the planner sees it (the propagator of OMPL's kinodynamic
+// planners): propagate(state, control, duration, result). Runs the steps of paper Algorithm 1,
+// lines 7–11: every step the world computes collisions and penalty forces, and the control adds
+// the manipulation forces.
+#pragma once
+#include <Eigen/Geometry>
+#include <functional>
+
+#include "squeeze/fem/scene.h"
+#include "squeeze/plan/control.h"
+
+namespace squeeze::plan {
+
+/// Why an expansion was kept or discarded (paper: invalid expansions are not added to the tree).
+enum class Validity { valid, diverged, volume, bounds };
+const char* to_string(Validity v);
+
+struct PropagatorOptions {
+  double max_volume_change = 0.1;  // fraction: |V/V0 − 1| above it in any deformable object is invalid
+  int check_every = 10;            // steps between validity checks (and at the last step)
+  bool stop_when_invalid = true;   // false: run every step anyway (replay)
+};
+
+class Propagator {
+ public:
+  virtual ~Propagator() = default;
+  /// Simulates `steps` time steps from `start` with `control` applied to the robot; `result`
+  /// receives the final state (or the state where the expansion became invalid).
+  virtual Validity propagate(const fem::State& start, const Control& control, int steps, fem::State& result) = 0;
+};
+
+/// The propagator of a scene: owns a SceneWorld (one per thread: a World is not thread-safe).
+class SimulationPropagator : public Propagator {
+ public:
+  /// Builds the scene's world (meshes come from the cache). Throws InputError like build_scene,
+  /// or if the robot is missing or rigid.
+  SimulationPropagator(const fem::Scene& scene, const PropagatorOptions& options);
+
+  Validity propagate(const fem::State& start, const Control& control, int steps, fem::State& result) override;
+
+  /// Called after every step with the state and the number of steps done in this propagation.
+  std::function<void(const fem::State&, int)> on_step;
+
+  const fem::SceneWorld& world() const { return world_; }
+  fem::SceneWorld& world() { return world_; }
+  const Robot& robot() const { return robot_; }
+  int goal_object() const { return goal_object_; }
+  /// Centre of mass of the goal object in state s (m).
+  Eigen::Vector3d goal_com(const fem::State& s) const;
+  /// Largest |V/V0 − 1| over the deformable objects in s, and the object (or −1).
+  double max_volume_change(const fem::State& s, int* object = nullptr) const;
+  long long steps_done() const { return steps_done_; }  // all propagations so far
+
+ private:
+  Validity check(const fem::State& s) const;
+  fem::SceneWorld world_;
+  PropagatorOptions options_;
+  Robot robot_;
+  Robot goal_;  // the goal object (usually the robot)
+  int goal_object_ = -1;
+  fem::RowMatrixX3d F_;
+  long long steps_done_ = 0;
+};
+
+/// Index of the scene's robot; throws InputError "FILE: objects: …" if there is none or several.
+int robot_index(const fem::Scene& scene);
+
+}  // namespace squeeze::plan

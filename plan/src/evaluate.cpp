@@ -1,0 +1,42 @@
+#include "squeeze/plan/evaluate.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace squeeze::plan {
+
+PlanEvaluation evaluate_plan(const fem::Scene& scene, const PlannerOptions& options, Progress* progress) {
+  PlanEvaluation e;
+  e.result = plan(scene, options, progress);
+  PropagatorOptions po;
+  po.stop_when_invalid = false;
+  SimulationPropagator p(scene, po);
+  const fem::World& w = p.world().world;
+  std::vector<int> bodies;
+  for (int b = 0; b < w.bodies(); ++b)
+    if (!w.body(b).rigid) {
+      bodies.push_back(b);
+      e.objects.push_back(scene.objects[b].name);
+    }
+  e.max_volume_change.assign(bodies.size(), 0.0);
+  p.on_step = [&](const fem::State& s, int) {
+    for (size_t k = 0; k < bodies.size(); ++k) {
+      const double c = std::abs(w.body_volume(s, bodies[k]) / p.world().rest_volume[bodies[k]] - 1.0);
+      if (!(c <= e.max_volume_change[k])) e.max_volume_change[k] = c;
+    }
+  };
+  const Control settle = settle_control(p, options);
+  const int settle_steps = static_cast<int>(std::lround(options.settle / e.result.time_step));
+  const std::vector<fem::State> ends = replay(p, e.result.path, settle, settle_steps);
+  e.replay_matches = ends.size() == e.result.path_states.size();
+  for (size_t i = 0; e.replay_matches && i < ends.size(); ++i) {
+    const fem::State& a = ends[i];
+    const fem::State& b = e.result.path_states[i];
+    e.replay_matches = a.x.size() == b.x.size() &&
+                       std::memcmp(a.x.data(), b.x.data(), sizeof(double) * a.x.size()) == 0 &&
+                       std::memcmp(a.v.data(), b.v.data(), sizeof(double) * a.v.size()) == 0;
+  }
+  return e;
+}
+
+}  // namespace squeeze::plan

@@ -1,0 +1,144 @@
+#include "squeeze/plan/plan_io.h"
+
+#include <cinttypes>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "squeeze/common/atomic_file.h"
+#include "squeeze/common/error.h"
+#include "squeeze/common/json_check.h"
+
+namespace squeeze::plan {
+using json = nlohmann::json;
+
+namespace {
+
+json control_json(const Control& c, int steps, double h) {
+  json j = {{"kind", to_string(c.kind)},
+            {"target", {c.target.x(), c.target.y(), c.target.z()}},
+            {"force", c.force},
+            {"steps", steps},
+            {"duration", steps * h}};
+  if (c.kind == ForceKind::control_point) {
+    j["vertex"] = c.vertex;
+    j["radius"] = c.radius;
+  }
+  if (c.kind == ForceKind::interpolation) j["omega"] = c.omega;
+  return j;
+}
+
+Control read_control(const JsonChecker& c, const json& j, const std::string& path, int* steps) {
+  c.keys(j, path, {"kind", "target", "force", "vertex", "radius", "omega", "steps", "duration"});
+  for (const char* k : {"kind", "target", "force", "steps"})
+    if (!j.contains(k)) c.fail(path + "." + k, "missing (required)");
+  Control ctl;
+  ctl.kind = force_kind_from_string(c.string(j["kind"], path + ".kind"), c.file + ": " + path + ".kind");
+  ctl.target = c.vec3(j["target"], path + ".target");
+  ctl.force = c.non_negative(j["force"], path + ".force");
+  *steps = static_cast<int>(c.integer(j["steps"], path + ".steps", 0, 1LL << 30));
+  if (ctl.kind == ForceKind::control_point) {
+    if (!j.contains("vertex")) c.fail(path + ".vertex", "missing (required for a control_point force)");
+    if (!j.contains("radius")) c.fail(path + ".radius", "missing (required for a control_point force)");
+    ctl.vertex = static_cast<int>(c.integer(j["vertex"], path + ".vertex", 0, 1LL << 30));
+    ctl.radius = c.non_negative(j["radius"], path + ".radius");
+  }
+  if (ctl.kind == ForceKind::interpolation) {
+    if (!j.contains("omega")) c.fail(path + ".omega", "missing (required for an interpolation force)");
+    ctl.omega = c.positive(j["omega"], path + ".omega");
+  }
+  return ctl;
+}
+
+}  // namespace
+
+void save_plan(const std::filesystem::path& file, const PlanFile& p) {
+  json j;
+  j["format"] = "squeeze-plan";
+  j["version"] = 1;
+  j["scene"] = p.scene;
+  j["status"] = to_string(p.status);
+  j["seed"] = p.options.seed;
+  j["time_step"] = p.time_step;
+  const PlannerOptions& o = p.options;
+  j["planner"] = {{"iterations", o.iterations},
+                  {"seed", o.seed},
+                  {"goal_bias", o.goal_bias},
+                  {"t_min", o.t_min},
+                  {"t_max", o.t_max},
+                  {"max_force", o.max_force},
+                  {"control_radius", o.control_radius},
+                  {"max_volume_change", o.max_volume_change},
+                  {"interpolation_omega", o.interpolation_omega},
+                  {"settle", o.settle},
+                  {"batch", o.batch},
+                  {"weights", {{"body", o.weights.body},
+                               {"control_point", o.weights.control_point},
+                               {"interpolation", o.weights.interpolation}}}};
+  const PlanStatistics& s = p.stats;
+  j["statistics"] = {{"iterations", s.iterations},
+                     {"nodes", s.nodes},
+                     {"discarded", {{"diverged", s.discarded_diverged},
+                                    {"volume", s.discarded_volume},
+                                    {"bounds", s.discarded_bounds},
+                                    {"total", s.discarded_diverged + s.discarded_volume + s.discarded_bounds}}},
+                     {"seconds", s.seconds},
+                     {"iterations_per_second", s.seconds > 0 ? s.iterations / s.seconds : 0.0},
+                     {"simulation_steps", s.simulation_steps},
+                     {"bytes_per_node", s.bytes_per_node},
+                     {"state_bytes", s.state_bytes},
+                     {"peak_memory_bytes", s.peak_memory},
+                     {"final_distance", s.final_distance}};
+  j["path"] = json::array();
+  for (const PathSegment& seg : p.path) j["path"].push_back(control_json(seg.control, seg.steps, p.time_step));
+  j["settle"] = control_json(p.settle, p.settle_steps, p.time_step);
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016" PRIx64, p.final_state_hash);
+  j["final_state_hash"] = hex;
+  write_atomically(file, [&](const std::filesystem::path& tmp) {
+    std::ofstream out(tmp);
+    out << j.dump(2) << '\n';
+    if (!out) throw InputError(file.string() + ": write failed");
+  });
+}
+
+PlanFile load_plan(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string() + ": cannot be read (missing or unreadable plan file)");
+  std::ostringstream text;
+  text << in.rdbuf();
+  const json j = parse_json(text.str(), file.string());
+  const JsonChecker c{file.string()};
+  if (!j.is_object() || !j.contains("format") || j["format"] != "squeeze-plan")
+    c.fail("format", "not a squeeze plan (expected \"format\": \"squeeze-plan\")");
+  PlanFile p;
+  if (c.integer(j.value("version", json(0)), "version", 1, 1) != 1) c.fail("version", "unsupported");
+  for (const char* k : {"scene", "status", "time_step", "path", "settle"})
+    if (!j.contains(k)) c.fail(k, "missing (required)");
+  p.scene = c.string(j["scene"], "scene");
+  const std::string st = c.string(j["status"], "status");
+  p.status = st == "solved" ? PlanStatus::solved : st == "approximate" ? PlanStatus::approximate : PlanStatus::failed;
+  p.time_step = c.positive(j["time_step"], "time_step");
+  if (!j["path"].is_array()) c.fail("path", "must be an array");
+  for (size_t i = 0; i < j["path"].size(); ++i) {
+    PathSegment seg;
+    seg.control = read_control(c, j["path"][i], "path[" + std::to_string(i) + "]", &seg.steps);
+    p.path.push_back(seg);
+  }
+  p.settle = read_control(c, j["settle"], "settle", &p.settle_steps);
+  if (j.contains("seed")) p.options.seed = static_cast<std::uint64_t>(c.integer(j["seed"], "seed", 0, 1LL << 53));
+  if (j.contains("final_state_hash")) {
+    const std::string h = c.string(j["final_state_hash"], "final_state_hash");
+    p.final_state_hash = std::strtoull(h.c_str(), nullptr, 16);
+  }
+  if (j.contains("statistics") && j["statistics"].is_object()) {
+    const json& s = j["statistics"];
+    p.stats.iterations = s.value("iterations", 0);
+    p.stats.nodes = s.value("nodes", 0);
+    p.stats.seconds = s.value("seconds", 0.0);
+    p.stats.final_distance = s.value("final_distance", 0.0);
+  }
+  return p;
+}
+
+}  // namespace squeeze::plan

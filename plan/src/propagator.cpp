@@ -1,0 +1,112 @@
+#include "squeeze/plan/propagator.h"
+
+#include <cmath>
+
+#include "squeeze/common/error.h"
+
+namespace squeeze::plan {
+
+const char* to_string(Validity v) {
+  switch (v) {
+    case Validity::valid: return "valid";
+    case Validity::diverged: return "diverged";
+    case Validity::volume: return "volume";
+    case Validity::bounds: return "bounds";
+  }
+  return "?";
+}
+
+int robot_index(const fem::Scene& scene) {
+  int robot = -1;
+  for (size_t i = 0; i < scene.objects.size(); ++i)
+    if (scene.objects[i].robot) {
+      if (robot >= 0)
+        throw InputError(scene.file.string() + ": objects[" + std::to_string(i) + "].role: a second robot (\"" +
+                         scene.objects[i].name + "\"; \"" + scene.objects[robot].name + "\" is the robot): only one is allowed");
+      robot = static_cast<int>(i);
+    }
+  if (robot < 0) throw InputError(scene.file.string() + ": objects: no object has \"role\": \"robot\"");
+  if (scene.objects[robot].rigid)
+    throw InputError(scene.file.string() + ": objects[" + std::to_string(robot) +
+                     "].kind: the robot must be deformable (rigid objects never move)");
+  return robot;
+}
+
+SimulationPropagator::SimulationPropagator(const fem::Scene& scene, const PropagatorOptions& options)
+    : world_(fem::build_scene(scene)), options_(options) {
+  const int r = robot_index(scene);
+  auto g_of = [&](int b) -> Eigen::Vector3d {
+    return scene.objects[b].gravity ? scene.gravity : Eigen::Vector3d::Zero();
+  };
+  robot_ = Robot(world_.world, r, g_of(r));
+  goal_object_ = r;
+  if (scene.goal && !scene.goal->object.empty()) {
+    const int g = scene.find(scene.goal->object);
+    if (g < 0) throw InputError(scene.file.string() + ": goal.object: no object is called \"" + scene.goal->object + "\"");
+    if (scene.objects[g].rigid)
+      throw InputError(scene.file.string() + ": goal.object: \"" + scene.goal->object + "\" is rigid and never moves");
+    goal_object_ = g;
+  }
+  goal_ = goal_object_ == r ? robot_ : Robot(world_.world, goal_object_, g_of(goal_object_));
+  F_.setZero(world_.world.state_rows(), 3);
+}
+
+Eigen::Vector3d SimulationPropagator::goal_com(const fem::State& s) const { return goal_.com(s); }
+
+double SimulationPropagator::max_volume_change(const fem::State& s, int* object) const {
+  double worst = 0;
+  if (object) *object = -1;
+  for (int b = 0; b < world_.world.bodies(); ++b) {
+    if (world_.world.body(b).rigid) continue;
+    const double change = std::abs(world_.world.body_volume(s, b) / world_.rest_volume[b] - 1.0);
+    if (!(change <= worst)) {  // NaN counts as the worst
+      worst = change;
+      if (object) *object = b;
+    }
+  }
+  return worst;
+}
+
+Validity SimulationPropagator::check(const fem::State& s) const {
+  // Faster than 1 km/s is a blow-up, not motion (the same bound as `squeeze simulate`).
+  if (!s.x.allFinite() || !s.v.allFinite() || (s.v.size() && s.v.cwiseAbs().maxCoeff() > 1e3))
+    return Validity::diverged;
+  const double change = max_volume_change(s);
+  if (!std::isfinite(change)) return Validity::diverged;
+  if (change > options_.max_volume_change) return Validity::volume;
+  const auto X = s.x.middleRows(robot_.first_row, robot_.vertices);
+  const Eigen::AlignedBox3d& b = world_.bounds;
+  for (int k = 0; k < 3; ++k)
+    if (X.col(k).minCoeff() < b.min()(k) || X.col(k).maxCoeff() > b.max()(k)) return Validity::bounds;
+  return Validity::valid;
+}
+
+Validity SimulationPropagator::propagate(const fem::State& start, const Control& control, int steps,
+                                         fem::State& result) {
+  if (steps < 0) throw InputError("propagate: negative number of steps");
+  result = start;
+  const AppliedControl applied(robot_, control, start);
+  const bool has_external = world_.external.rows() > 0;
+  // Constant forces: the sum is the same every step.
+  F_.setZero();
+  if (has_external) F_ = world_.external;
+  if (applied.constant()) applied.add_forces(start, F_);
+  Validity v = Validity::valid;
+  for (int k = 1; k <= steps; ++k) {
+    if (!applied.constant()) {
+      if (has_external) F_ = world_.external;
+      else F_.setZero();
+      applied.add_forces(result, F_);
+    }
+    world_.world.step(result, &F_);
+    ++steps_done_;
+    if (on_step) on_step(result, k);
+    if (k % options_.check_every == 0 || k == steps) {
+      v = check(result);
+      if (v != Validity::valid && options_.stop_when_invalid) return v;
+    }
+  }
+  return v;
+}
+
+}  // namespace squeeze::plan
