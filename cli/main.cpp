@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   const Runner plan = add_plan_command(app, global);
   const Runner replay = add_replay_command(app, global);
   const Runner render = add_render_command(app, global);
+  const Runner bench = add_bench_command(app, global);
 
   try {
     app.parse(argc, argv);
@@ -55,6 +56,7 @@ int main(int argc, char** argv) {
       if (sub->get_name() == "plan") return plan();
       if (sub->get_name() == "replay") return replay();
       if (sub->get_name() == "render") return render();
+      if (sub->get_name() == "bench") return bench();
     }
   } catch (const squeeze::InputError& e) {
     std::fprintf(stderr, "squeeze: error: %s\n", e.what());

@@ -287,6 +287,10 @@ TEST(Planner, ScenesWithoutARobotOrGoalAreRejected) {
   j["goal"]["position"] = {5, 0, 0};
   EXPECT_EQ(run("plan " + write_scene(d, j).string() + " -o " + (d / "p.json").string(), &err), 1);
   EXPECT_NE(err.find("goal.position: outside the bounds"), std::string::npos) << err;
+  j = mini_scene();
+  j["objects"][0]["transform"]["translate"] = {0.0, 0.5, -0.3};  // in the plate
+  EXPECT_EQ(run("plan " + write_scene(d, j).string() + " -o " + (d / "p.json").string(), &err), 1);
+  EXPECT_NE(err.find("objects[0].transform: the robot starts inside \"plate\""), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(d / "p.json"));
 }
 

@@ -239,6 +239,7 @@ PlanResult plan(const fem::Scene& scene, const PlannerOptions& options, Progress
   const Eigen::Vector3d goal = scene.goal->position;
   if (!w.bounds.contains(goal))
     throw InputError(file + ": goal.position: outside the bounds of the scene");
+  check_robot_start(w);
   for (int k = 1; k < options.batch; ++k) workers.push_back(std::make_unique<SimulationPropagator>(scene, popt));
 
   const double h = w.h;

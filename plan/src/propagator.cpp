@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "squeeze/common/error.h"
+#include "squeeze/fem/collision.h"
 
 namespace squeeze::plan {
 
@@ -30,6 +31,40 @@ int robot_index(const fem::Scene& scene) {
     throw InputError(scene.file.string() + ": objects[" + std::to_string(robot) +
                      "].kind: the robot must be deformable (rigid objects never move)");
   return robot;
+}
+
+void check_robot_start(const fem::SceneWorld& w) {
+  const fem::Scene& scene = w.scene;
+  const int r = robot_index(scene);
+  const fem::Body& robot = w.world.body(r);
+  const std::string where = scene.file.string() + ": objects[" + std::to_string(r) + "].transform: ";
+  if (scene.floor && robot.rest.col(1).minCoeff() < *scene.floor)
+    throw InputError(where + "the robot starts below the floor (y = " + std::to_string(*scene.floor) + ")");
+  // Vertices of `a` strictly inside tetrahedra of `b` (rest positions).
+  auto inside = [](const fem::Body& a, const fem::Body& b) {
+    const Eigen::AlignedBox3d abox(a.rest.colwise().minCoeff().transpose(), a.rest.colwise().maxCoeff().transpose());
+    int count = 0;
+    for (int t = 0; t < b.tets(); ++t) {
+      Eigen::AlignedBox3d tb;
+      for (int k = 0; k < 4; ++k) tb.extend(b.rest.row(b.T(t, k)).transpose().eval());
+      if (!tb.intersects(abox)) continue;
+      const fem::TetFrame f(b.rest.row(b.T(t, 0)).transpose(), b.rest.row(b.T(t, 1)).transpose(),
+                            b.rest.row(b.T(t, 2)).transpose(), b.rest.row(b.T(t, 3)).transpose());
+      for (int i = 0; i < a.vertices(); ++i) {
+        if (!tb.contains(a.rest.row(i).transpose())) continue;
+        Eigen::Vector4d l;
+        if (f.contains(a.rest.row(i).transpose(), &l) && l.minCoeff() > 1e-9) ++count;
+      }
+    }
+    return count;
+  };
+  for (int b = 0; b < w.world.bodies(); ++b) {
+    if (b == r) continue;
+    const int n = inside(robot, w.world.body(b)) + inside(w.world.body(b), robot);
+    if (n > 0)
+      throw InputError(where + "the robot starts inside \"" + scene.objects[b].name + "\" (" + std::to_string(n) +
+                       " vertices of one coarse mesh are inside the other's tetrahedra)");
+  }
 }
 
 SimulationPropagator::SimulationPropagator(const fem::Scene& scene, const PropagatorOptions& options)

@@ -99,7 +99,7 @@ struct PlanResult {
 std::uint64_t state_hash(const fem::State& s);
 
 /// Plans from the scene's initial state. Throws InputError if the scene has no goal or no robot,
-/// or the goal lies outside the bounds.
+/// the goal lies outside the bounds, or the robot starts inside another object (check_robot_start).
 PlanResult plan(const fem::Scene& scene, const PlannerOptions& options, Progress* progress = nullptr);
 
 /// The states a plan passes through: re-simulates `path` from the scene's initial state with

@@ -17,7 +17,7 @@ const char* to_string(Validity v);
 
 struct PropagatorOptions {
   double max_volume_change = 0.1;  // fraction: |V/V0 − 1| above it in any deformable object is invalid
-  int check_every = 10;            // steps between validity checks (and at the last step)
+  int check_every = 1;             // steps between validity checks (and at the last step)
   bool stop_when_invalid = true;   // false: run every step anyway (replay)
 };
 
@@ -64,5 +64,11 @@ class SimulationPropagator : public Propagator {
 
 /// Index of the scene's robot; throws InputError "FILE: objects: …" if there is none or several.
 int robot_index(const fem::Scene& scene);
+
+/// Throws InputError "FILE: objects[i].transform: the robot starts inside NAME (…)" if, at rest, a
+/// vertex of the robot's coarse mesh lies strictly inside a tetrahedron of another object or a
+/// vertex of another object strictly inside a robot tetrahedron (barycentric coordinates all
+/// > 1e-9), or the robot starts below the floor.
+void check_robot_start(const fem::SceneWorld& world);
 
 }  // namespace squeeze::plan

@@ -1,0 +1,183 @@
+// `squeeze bench table1 [--seeds N] -o DIR`: the paper's Table I reproduced. Plans every bundled
+// scene with N seeds (each within 1/20 of the paper's solution time unless --time-limit says
+// otherwise), replays every plan to measure the volume change along the path, and writes
+// DIR/table1.md and DIR/table1.csv side by side with the paper's figures.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "commands.h"
+#include "squeeze/common/atomic_file.h"
+#include "squeeze/common/error.h"
+#include "squeeze/common/progress.h"
+#include "squeeze/fem/scene.h"
+#include "squeeze/plan/evaluate.h"
+
+namespace squeeze::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Rodriguez, Lien, Amato 2006, Table I (1.7 GHz notebook, 1 GB).
+struct PaperRow {
+  const char* name;
+  const char* file;
+  const char* obstacles;
+  int tets;
+  int iterations;
+  double seconds;
+  double volume_bound;  // the paper's volume change along the path (fraction)
+};
+constexpr PaperRow kTable1[] = {
+    {"Barriers1", "barriers1.json", "deformable", 673, 500, 10 * 60 + 34, 0.03},
+    {"Barriers2", "barriers2.json", "deformable", 2343, 1000, 44 * 60 + 14, 0.03},
+    {"Windows", "windows.json", "deformable", 1710, 2200, 63 * 60 + 10, 0.10},
+    {"Falling Objects", "falling_objects.json", "deformable", 396, 1500, 16 * 60, 0.10},
+    {"Body Parts", "body_parts.json", "rigid/deformable", 300, 640, 14 * 60 + 9, 0.05},
+};
+
+struct BenchArgs {
+  std::string output, scenes = SQUEEZE_SCENES_DIR, only;
+  int seeds = 3;
+  double time_limit = 0, fraction = 1.0 / 20;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string f2(double x, const char* f = "%.2f") {
+  if (!std::isfinite(x)) return "—";
+  char b[64];
+  std::snprintf(b, sizeof b, f, x);
+  return b;
+}
+
+std::string mmss(double s) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%d:%02d", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
+  return b;
+}
+
+}  // namespace
+
+Runner add_bench_command(CLI::App& app, const Global& global) {
+  auto args = std::make_shared<BenchArgs>();
+  CLI::App* bench = app.add_subcommand("bench", "Benchmarks of the whole planner (see also bench/ for the micro-benchmarks)");
+  bench->require_subcommand(1);
+  CLI::App* cmd = bench->add_subcommand(
+      "table1",
+      "Reproduce the paper's Table I: plan every bundled scene with N seeds, each within 1/20 of the\n"
+      "paper's solution time, replay the plans, and write DIR/table1.md and DIR/table1.csv (the paper's\n"
+      "columns beside squeeze's: success rate, iterations and time (median and range), iterations/s,\n"
+      "peak memory, largest volume change along the replayed paths, speed-up).\n"
+      "Example: squeeze bench table1 --seeds 3 -o out/table1");
+  cmd->add_option("-o,--output", args->output, "Output directory (created if missing; its parent must exist)")->required();
+  cmd->add_option("--seeds", args->seeds, "Seeds per scene (1..N)")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--scenes", args->scenes, "Folder of the bundled scenes")->capture_default_str();
+  cmd->add_option("--only", args->only, "Only the scene whose file or name contains this text");
+  cmd->add_option("--time-limit", args->time_limit, "Seconds per plan (default: the paper's time / 20)")
+      ->check(CLI::NonNegativeNumber);
+
+  return [args, &global]() -> int {
+    const BenchArgs& a = *args;
+    const fs::path out = a.output;
+    std::error_code ec;
+    if (fs::exists(out, ec) && !fs::is_directory(out, ec)) throw InputError(a.output + ": exists and is not a directory");
+    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+    if (!fs::is_directory(parent, ec)) throw InputError(a.output + ": parent directory " + parent.string() + " does not exist");
+    std::vector<const PaperRow*> rows;
+    for (const PaperRow& r : kTable1)
+      if (a.only.empty() || std::string(r.file).find(a.only) != std::string::npos ||
+          std::string(r.name).find(a.only) != std::string::npos) {
+        if (!fs::exists(fs::path(a.scenes) / r.file)) throw InputError((fs::path(a.scenes) / r.file).string() + ": scene file does not exist");
+        rows.push_back(&r);
+      }
+    if (rows.empty()) throw InputError("--only " + a.only + ": no bundled scene matches");
+    fs::create_directories(out, ec);
+    if (ec) throw InputError(a.output + ": cannot create the directory: " + ec.message());
+
+    std::ostringstream md, csv;
+    csv << "environment,obstacles,paper_tets,paper_iterations,paper_seconds,tets,seeds,solved,time_limit_s,"
+           "iterations_median,iterations_min,iterations_max,seconds_median,seconds_min,seconds_max,"
+           "iterations_per_second,peak_memory_mib,max_volume_change_pct,paper_volume_bound_pct,speedup\n";
+    md << "# Table I, reproduced\n\n"
+       << "Rodriguez, Lien, Amato 2006, Table I (a 1.7 GHz notebook) beside squeeze (`squeeze bench table1 --seeds "
+       << a.seeds << "`). Each plan runs within "
+       << (a.time_limit > 0 ? f2(a.time_limit, "%.0f") + " s" : std::string("1/20 of the paper's time"))
+       << "; times are wall-clock seconds of planning (meshing cached), medians over the solved seeds with "
+          "[min–max]; volume: the largest |V/V0 − 1| of any object over every step of the replayed paths "
+          "(settling included); speed-up: paper time / squeeze median time.\n\n"
+       << "| Environment | Obstacles | Tets (paper / squeeze) | Sol. iterations (paper / squeeze) | Sol. time (paper / "
+          "squeeze) | Solved | it/s | Peak memory | Max volume change (paper bound) | Speed-up |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const PaperRow* r : rows) {
+      const fs::path file = fs::path(a.scenes) / r->file;
+      const fem::Scene scene = fem::load_scene(file);
+      Progress progress(!global.quiet);
+      fem::SceneWorld w = fem::build_scene(scene, &progress);
+      plan::PlannerOptions o = plan::planner_options(w);
+      const double limit = a.time_limit > 0 ? a.time_limit : r->seconds * a.fraction;
+      o.time_limit = limit;
+      o.iterations = 100000000;  // the time limit decides
+      std::vector<double> it, secs, all_secs;
+      double rate_it = 0, rate_s = 0, peak = 0, volume = 0;
+      int solved = 0;
+      for (int seed = 1; seed <= a.seeds; ++seed) {
+        o.seed = static_cast<std::uint64_t>(seed);
+        if (!global.quiet) std::fprintf(stderr, "squeeze: %s, seed %d of %d (limit %.0f s)\n", r->name, seed, a.seeds, limit);
+        const plan::PlanEvaluation e = plan::evaluate_plan(scene, o, &progress);
+        const plan::PlanStatistics& s = e.result.stats;
+        rate_it += s.iterations;
+        rate_s += s.seconds;
+        peak = std::max(peak, s.peak_memory / 1048576.0);
+        const bool ok = e.result.status == plan::PlanStatus::solved;
+        for (double v : e.max_volume_change) volume = std::max(volume, v);
+        if (ok) {
+          ++solved;
+          it.push_back(s.iterations);
+          secs.push_back(s.seconds);
+        }
+        if (!global.quiet)
+          std::fprintf(stderr, "squeeze: %s, seed %d: %s, %d iterations, %.1f s, %.1f it/s, replay %s\n", r->name, seed,
+                       plan::to_string(e.result.status), s.iterations, s.seconds, s.iterations / s.seconds,
+                       e.replay_matches ? "bit-identical" : "DIFFERENT");
+      }
+      const int tets = w.world.tets();
+      const double mi = median(it), ms = median(secs);
+      const auto lo = [](const std::vector<double>& v) { return v.empty() ? NAN : *std::min_element(v.begin(), v.end()); };
+      const auto hi = [](const std::vector<double>& v) { return v.empty() ? NAN : *std::max_element(v.begin(), v.end()); };
+      csv << r->name << ',' << r->obstacles << ',' << r->tets << ',' << r->iterations << ',' << r->seconds << ',' << tets
+          << ',' << a.seeds << ',' << solved << ',' << limit << ',' << f2(mi, "%.0f") << ',' << f2(lo(it), "%.0f") << ','
+          << f2(hi(it), "%.0f") << ',' << f2(ms) << ',' << f2(lo(secs)) << ',' << f2(hi(secs)) << ','
+          << f2(rate_it / rate_s, "%.1f") << ',' << f2(peak, "%.0f") << ',' << f2(100 * volume) << ','
+          << f2(100 * r->volume_bound, "%.0f") << ',' << f2(r->seconds / ms, "%.0f") << '\n';
+      md << "| " << r->name << " | " << r->obstacles << " | " << r->tets << " / " << tets << " | " << r->iterations
+         << " / " << f2(mi, "%.0f") << " [" << f2(lo(it), "%.0f") << "–" << f2(hi(it), "%.0f") << "] | "
+         << mmss(r->seconds) << " / " << f2(ms, "%.1f") << " s [" << f2(lo(secs), "%.1f") << "–" << f2(hi(secs), "%.1f")
+         << "] | " << solved << "/" << a.seeds << " | " << f2(rate_it / rate_s, "%.1f") << " | " << f2(peak, "%.0f")
+         << " MiB | " << f2(100 * volume) << " % (" << f2(100 * r->volume_bound, "%.0f") << " %) | "
+         << f2(r->seconds / ms, "%.0f") << "× |\n";
+    }
+    write_atomically(out / "table1.csv", [&](const fs::path& p) {
+      std::ofstream f(p);
+      f << csv.str();
+      if (!f) throw InputError((out / "table1.csv").string() + ": write failed");
+    });
+    write_atomically(out / "table1.md", [&](const fs::path& p) {
+      std::ofstream f(p);
+      f << md.str();
+      if (!f) throw InputError((out / "table1.md").string() + ": write failed");
+    });
+    if (!global.quiet) std::fprintf(stderr, "%s", md.str().c_str());
+    return kExitOk;
+  };
+}
+
+}  // namespace squeeze::cli
