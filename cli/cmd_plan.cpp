@@ -15,6 +15,7 @@
 #include "squeeze/fem/scene.h"
 #include "squeeze/plan/plan_io.h"
 #include "squeeze/plan/planner.h"
+#include "replay_output.h"
 #include "trajectory_writer.h"
 
 namespace squeeze::cli {
@@ -35,13 +36,70 @@ struct ReplayArgs {
   double settle = -1;
 };
 
+}  // namespace
+
 std::string hex64(std::uint64_t h) {
   char buf[17];
   std::snprintf(buf, sizeof buf, "%016" PRIx64, h);
   return buf;
 }
 
-}  // namespace
+ReplayOutput write_replay(const fem::Scene& scene, const plan::PlanFile& f, const std::string& plan_name,
+                          const std::string& output, double fps, int settle_steps, Progress& progress) {
+  check_output_dir(output);
+  plan::PropagatorOptions po;
+  po.stop_when_invalid = false;
+  plan::SimulationPropagator p(scene, po);
+  if (p.world().h != f.time_step) p.world().set_time_step(f.time_step);
+  const double h = f.time_step;
+  const int robot_vertices = p.robot().vertices;
+  for (const auto& seg : f.path)
+    if (seg.control.kind == plan::ForceKind::control_point && seg.control.vertex >= robot_vertices)
+      throw InputError(plan_name + ": a control point names robot vertex " + std::to_string(seg.control.vertex) +
+                       " but the robot of " + scene.file.string() + " has " + std::to_string(robot_vertices) +
+                       ": the plan was made for another scene");
+  long long total = settle_steps;
+  for (const auto& seg : f.path) total += seg.steps;
+  const double duration = total * h;
+  const double frames_d = std::floor(duration * fps + 1e-9);
+  if (frames_d > 1e7) throw InputError("--fps: too many frames (at most 10 million)");
+  ReplayOutput out;
+  out.frames = static_cast<int>(frames_d) + 1;
+
+  fem::SceneWorld metrics_world = fem::build_scene(scene);  // contacts for the metrics, apart from the replay
+  if (metrics_world.h != h) metrics_world.set_time_step(h);
+  TrajectoryWriter writer(metrics_world, output, fps, h, out.frames);
+  const fem::World& w = p.world().world;
+  for (int b = 0; b < w.bodies(); ++b) out.names.push_back(scene.objects[b].name);
+  out.max_volume_change.assign(w.bodies(), 0.0);
+  // Frame k shows the state after step round(k / (fps h)) (within h/2 of t = k / fps).
+  auto frame_step = [&](int k) { return std::llround(k / (fps * h)); };
+  long long step = 0;
+  int next = 1;
+  fem::State s0 = p.world().initial_state(), settled = s0;
+  writer.add_frame(s0, 0.0);
+  progress.stage("replaying", static_cast<double>(total));
+  p.on_step = [&](const fem::State& s, int) {
+    ++step;
+    for (int b = 0; b < w.bodies(); ++b)
+      if (!w.body(b).rigid) {
+        const double c = std::abs(w.body_volume(s, b) / p.world().rest_volume[b] - 1.0);
+        if (!(c <= out.max_volume_change[b])) out.max_volume_change[b] = c;
+      }
+    if (step == total) settled = s;
+    while (next < out.frames && frame_step(next) <= step) writer.add_frame(s, next++ / fps);
+    progress.update(static_cast<double>(step));
+  };
+  const std::vector<fem::State> ends = plan::replay(p, f.path, f.settle, settle_steps);
+  while (next < out.frames) writer.add_frame(settled, next++ / fps);  // rounding at the very end
+  progress.finish();
+  writer.commit();
+  out.hash = plan::state_hash(ends.empty() ? s0 : ends.back());
+  out.matches = f.final_state_hash == 0 || out.hash == f.final_state_hash;
+  out.final_distance = scene.goal ? (p.goal_com(settled) - scene.goal->position).norm() : 0.0;
+  out.duration = duration;
+  return out;
+}
 
 Runner add_plan_command(CLI::App& app, const Global& global) {
   auto args = std::make_shared<PlanArgs>();
@@ -144,60 +202,18 @@ Runner add_replay_command(CLI::App& app, const Global& global) {
     Progress progress(!global.quiet);
     const fem::Scene scene = fem::load_scene(a.scene);
     const plan::PlanFile f = plan::load_plan(a.plan);
-    plan::PropagatorOptions po;
-    po.stop_when_invalid = false;
-    plan::SimulationPropagator p(scene, po);
-    if (p.world().h != f.time_step) p.world().set_time_step(f.time_step);
-    const double h = f.time_step;
-    const int robot_vertices = p.robot().vertices;
-    for (const auto& seg : f.path)
-      if (seg.control.kind == plan::ForceKind::control_point && seg.control.vertex >= robot_vertices)
-        throw InputError(a.plan + ": a control point names robot vertex " + std::to_string(seg.control.vertex) +
-                         " but the robot of " + a.scene + " has " + std::to_string(robot_vertices) +
-                         ": the plan was made for another scene");
-    const int settle_steps = a.settle >= 0 ? static_cast<int>(std::lround(a.settle / h)) : f.settle_steps;
-    long long total = settle_steps;
-    for (const auto& seg : f.path) total += seg.steps;
-    const double duration = total * h;
-    const double frames_d = std::floor(duration * a.fps + 1e-9);
-    if (frames_d > 1e7) throw InputError("--fps: too many frames (at most 10 million)");
-    const int frames = static_cast<int>(frames_d) + 1;
-
-    fem::SceneWorld metrics_world = fem::build_scene(scene);  // contacts for the metrics, apart from the replay
-    if (metrics_world.h != h) metrics_world.set_time_step(h);
-    TrajectoryWriter writer(metrics_world, a.output, a.fps, h, frames);
-    // Frame f shows the state after step round(f / (fps h)) (within h/2 of t = f / fps).
-    auto frame_step = [&](int fr) { return std::llround(fr / (a.fps * h)); };
-    long long step = 0;
-    int next = 0;
-    progress.stage("replaying", static_cast<double>(total));
-    fem::State settled = p.world().initial_state();
-    p.on_step = [&](const fem::State& s, int) {
-      ++step;
-      if (step == total) settled = s;
-      while (next < frames && frame_step(next) <= step) writer.add_frame(s, next++ / a.fps);
-      progress.update(static_cast<double>(step));
-    };
-    fem::State s0 = p.world().initial_state();
-    writer.add_frame(s0, 0.0);
-    next = 1;
-    const std::vector<fem::State> ends = plan::replay(p, f.path, f.settle, settle_steps);
-    while (next < frames) writer.add_frame(ends.empty() ? s0 : ends.back(), next++ / a.fps);  // rounding at the very end
-    progress.finish();
-    writer.commit();
-
-    const fem::State& last = ends.empty() ? s0 : ends.back();
-    const std::uint64_t hash = plan::state_hash(last);
+    const int settle_steps = a.settle >= 0 ? static_cast<int>(std::lround(a.settle / f.time_step)) : f.settle_steps;
+    const ReplayOutput r = write_replay(scene, f, a.plan, a.output, a.fps, settle_steps, progress);
     if (!global.quiet) {
-      const double distance = scene.goal ? (p.goal_com(settled) - scene.goal->position).norm() : 0.0;
+      double worst = 0;
+      for (double v : r.max_volume_change) worst = std::max(worst, v);
       std::fprintf(stderr,
                    "squeeze: replayed %zu segments and %.2f s of settling, %d frames; at the end: distance to "
-                   "goal %.3g m, largest volume change %.2f%%; wrote %s\n",
-                   f.path.size(), settle_steps * h, frames, distance, 100 * p.max_volume_change(settled),
-                   a.output.c_str());
+                   "goal %.3g m; largest volume change along the path %.2f%%; wrote %s\n",
+                   f.path.size(), settle_steps * f.time_step, r.frames, r.final_distance, 100 * worst, a.output.c_str());
     }
-    if (f.final_state_hash != 0 && hash != f.final_state_hash)
-      throw InputError(a.plan + ": the replay does not reproduce the planner's final state (hash " + hex64(hash) +
+    if (!r.matches)
+      throw InputError(a.plan + ": the replay does not reproduce the planner's final state (hash " + hex64(r.hash) +
                        ", plan " + hex64(f.final_state_hash) + "): the scene or its meshes changed since planning");
     return kExitOk;
   };

@@ -21,6 +21,7 @@ Runner add_simulate_command(CLI::App& app, const Global& global);
 Runner add_plan_command(CLI::App& app, const Global& global);    // cmd_plan.cpp
 Runner add_replay_command(CLI::App& app, const Global& global);  // cmd_plan.cpp
 Runner add_render_command(CLI::App& app, const Global& global);  // cmd_render.cpp
+Runner add_run_command(CLI::App& app, const Global& global);     // cmd_run.cpp (squeeze run)
 Runner add_bench_command(CLI::App& app, const Global& global);   // cmd_bench.cpp (squeeze bench table1)
 
 /// Exit codes.

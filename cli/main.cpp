@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   const Runner replay = add_replay_command(app, global);
   const Runner render = add_render_command(app, global);
   const Runner bench = add_bench_command(app, global);
+  const Runner run = add_run_command(app, global);
 
   try {
     app.parse(argc, argv);
@@ -57,6 +58,7 @@ int main(int argc, char** argv) {
       if (sub->get_name() == "replay") return replay();
       if (sub->get_name() == "render") return render();
       if (sub->get_name() == "bench") return bench();
+      if (sub->get_name() == "run") return run();
     }
   } catch (const squeeze::InputError& e) {
     std::fprintf(stderr, "squeeze: error: %s\n", e.what());

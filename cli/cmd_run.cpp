@@ -1,0 +1,213 @@
+// `squeeze run SCENE -o OUT [--seed N]`: the whole pipeline in one command — mesh (cached), plan,
+// replay, FFD + render, plots, exports — with a summary at the end (issue 8).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "replay_output.h"
+#include "squeeze/common/atomic_file.h"
+#include "squeeze/common/error.h"
+#include "squeeze/common/progress.h"
+#include "squeeze/fem/scene.h"
+#include "squeeze/plan/plan_io.h"
+#include "squeeze/plan/planner.h"
+#include "squeeze/render/render.h"
+#include "squeeze/render/settings.h"
+#include "trajectory_writer.h"
+
+namespace squeeze::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RunArgs {
+  std::string scene, output, exports = "pc2,vtu", gl = "osmesa";
+  long long seed = -1, iterations = -1;
+  double time_limit = 0, fps = 0;
+  int width = 0, height = 0;
+  bool no_render = false;
+};
+
+using clock_type = std::chrono::steady_clock;
+double since(clock_type::time_point t) { return std::chrono::duration<double>(clock_type::now() - t).count(); }
+
+}  // namespace
+
+Runner add_run_command(CLI::App& app, const Global& global) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "run",
+      "The whole pipeline on a scene: mesh every object (cached), plan the robot's motion to the goal,\n"
+      "replay the plan, FFD the full-resolution surfaces onto the deformed coarse meshes and render\n"
+      "them, plot the volume change, export for other tools. Writes OUT/plan.json, OUT/metrics.csv,\n"
+      "OUT/trajectory/, OUT/frames/frame_*.png, OUT/volume.png (+.svg), OUT/export/, OUT/summary.json.\n"
+      "Exit 0 when solved, 3 when not (the closest approximate path is still replayed and rendered).\n"
+      "Example: squeeze run scenes/barriers1.json -o out/barriers1 --seed 2");
+  cmd->add_option("SCENE", args->scene, "Scene file (JSON) with a robot and a goal")->required();
+  cmd->add_option("-o,--output", args->output, "Output directory (created if missing; its parent must exist)")->required();
+  cmd->add_option("--seed", args->seed, "Planner seed (default: planner.seed of the scene, else 1)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--iterations", args->iterations, "Planner iterations at most (default: planner.iterations)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--time-limit", args->time_limit, "Seconds of planning at most (0: no limit)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--fps", args->fps, "Frames per simulated second (default: render.fps of the scene, else 30)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--width", args->width, "Image width in pixels (default: render.width, else 1280)")->check(CLI::PositiveNumber);
+  cmd->add_option("--height", args->height, "Image height in pixels (default: render.height, else 720)")->check(CLI::PositiveNumber);
+  cmd->add_option("--export", args->exports, "Exports: any of pc2,obj,ply,vtu, or none")->capture_default_str();
+  cmd->add_option("--gl", args->gl, "OpenGL context: osmesa or egl")->capture_default_str();
+  cmd->add_flag("--no-render", args->no_render, "Stop after the replay (no frames, plots or exports)");
+
+  return [args, &global]() -> int {
+    const RunArgs& a = *args;
+    const auto t_all = clock_type::now();
+    // Every input check before the long work.
+    check_output_dir(a.output);
+    render::RenderOptions ro;
+    ro.gl = render::parse_gl_backend(a.gl);
+    if (a.exports != "none") {
+      std::stringstream ss(a.exports);
+      for (std::string e; std::getline(ss, e, ',');) {
+        if (e == "pc2") ro.pc2 = true;
+        else if (e == "obj") ro.obj = true;
+        else if (e == "ply") ro.ply = true;
+        else if (e == "vtu") ro.vtu = true;
+        else throw InputError("--export: unknown export \"" + e + "\" (pc2, obj, ply, vtu or none)");
+      }
+    }
+    Progress progress(!global.quiet);
+    std::vector<std::pair<std::string, double>> seconds;
+    auto t = clock_type::now();
+    const fem::Scene scene = fem::load_scene(a.scene);
+    const render::RenderSettings rs = render::parse_render_settings(scene.render, scene.file.string());
+    plan::robot_index(scene);
+    if (!scene.goal) throw InputError(a.scene + ": goal: missing (the planner needs \"goal\": {\"position\": [x, y, z]})");
+    plan::PlannerOptions options;
+    {
+      const fem::SceneWorld w = fem::build_scene(scene, &progress);
+      plan::check_robot_start(w);
+      options = plan::planner_options(w);
+      if (!w.bounds.contains(scene.goal->position)) throw InputError(a.scene + ": goal.position: outside the bounds");
+    }
+    seconds.emplace_back("meshing", since(t));
+    if (a.seed >= 0) options.seed = static_cast<std::uint64_t>(a.seed);
+    if (a.iterations > 0) options.iterations = static_cast<int>(std::min<long long>(a.iterations, 100000000));
+    options.time_limit = a.time_limit;
+    const fs::path out = a.output;
+    std::error_code ec;
+    fs::create_directories(out, ec);
+    if (ec) throw InputError(a.output + ": cannot create the directory: " + ec.message());
+
+    // Plan.
+    t = clock_type::now();
+    const plan::PlanResult r = plan::plan(scene, options, &progress);
+    plan::PlanFile f;
+    f.scene = fs::absolute(scene.file).lexically_normal().string();
+    f.status = r.status;
+    f.options = options;
+    f.stats = r.stats;
+    f.time_step = r.time_step;
+    f.path = r.path;
+    {
+      plan::SimulationPropagator p(scene, {});
+      f.settle = plan::settle_control(p, options);
+    }
+    f.settle_steps = static_cast<int>(std::lround(options.settle / r.time_step));
+    f.final_state_hash = r.final_state_hash;
+    plan::save_plan(out / "plan.json", f);
+    seconds.emplace_back("planning", since(t));
+
+    // Replay.
+    t = clock_type::now();
+    const double fps = a.fps > 0 ? a.fps : rs.fps.value_or(30.0);
+    const ReplayOutput rep = write_replay(scene, f, (out / "plan.json").string(), a.output, fps, f.settle_steps, progress);
+    if (!rep.matches)
+      throw std::logic_error("the replay does not reproduce the planner's final state (hash " + hex64(rep.hash) +
+                             ", planner " + hex64(f.final_state_hash) + ")");
+    seconds.emplace_back("replaying", since(t));
+
+    // Render: frames into OUT/frames, then plots and exports into OUT.
+    render::RenderStats st;
+    if (!a.no_render) {
+      t = clock_type::now();
+      ro.scene = a.scene;
+      ro.trajectory = out;
+      if (a.width > 0) ro.width = a.width;
+      if (a.height > 0) ro.height = a.height;
+      render::RenderOptions frames = ro;
+      frames.output = out / "frames";
+      frames.plots = false;
+      frames.pc2 = frames.obj = frames.ply = frames.vtu = false;
+      frames.on_frame = [&](const render::FrameProgress& p) {
+        if (p.done == 1) progress.stage("rendering", p.total);
+        progress.update(p.done);
+      };
+      st = render::render_trajectory(frames, &progress);
+      progress.finish();
+      seconds.emplace_back("rendering", since(t));
+      t = clock_type::now();
+      render::RenderOptions rest = ro;
+      rest.output = out;
+      rest.png = false;
+      render::render_trajectory(rest, &progress);
+      if (ro.pc2 || ro.obj || ro.ply || ro.vtu) {
+        // The exports land in OUT/export/ (render's layout); nothing else to move.
+      }
+      seconds.emplace_back("plots and exports", since(t));
+    }
+
+    // Summary.
+    const plan::PlanStatistics& s = r.stats;
+    nlohmann::json sum;
+    sum["scene"] = f.scene;
+    sum["status"] = plan::to_string(r.status);
+    sum["seed"] = options.seed;
+    sum["iterations"] = s.iterations;
+    sum["nodes"] = s.nodes;
+    sum["iterations_per_second"] = s.seconds > 0 ? s.iterations / s.seconds : 0.0;
+    sum["final_distance"] = rep.final_distance;
+    sum["frames"] = rep.frames;
+    sum["path_seconds"] = rep.duration;
+    for (const auto& [k, v] : seconds) sum["seconds"][k] = v;
+    sum["seconds"]["total"] = since(t_all);
+    for (size_t b = 0; b < rep.names.size(); ++b) sum["max_volume_change"][rep.names[b]] = rep.max_volume_change[b];
+    sum["outputs"] = {{"plan", (out / "plan.json").string()},
+                      {"metrics", (out / "metrics.csv").string()},
+                      {"trajectory", (out / "trajectory").string()}};
+    if (!a.no_render) {
+      sum["outputs"]["frames"] = (out / "frames").string();
+      sum["outputs"]["volume_plot"] = (out / "volume.png").string();
+      sum["outputs"]["export"] = (out / "export").string();
+    }
+    write_atomically(out / "summary.json", [&](const fs::path& p) {
+      std::ofstream o(p);
+      o << sum.dump(2) << '\n';
+      if (!o) throw InputError((out / "summary.json").string() + ": write failed");
+    });
+    if (!global.quiet) {
+      std::fprintf(stderr, "\nsqueeze run %s: %s after %d iterations (%d nodes, %.1f it/s); robot %.3g m from the goal "
+                   "(tolerance %.3g m) after the path and %.1f s of settling\n",
+                   a.scene.c_str(), plan::to_string(r.status), s.iterations, s.nodes,
+                   s.seconds > 0 ? s.iterations / s.seconds : 0.0, rep.final_distance, scene.goal->tolerance, options.settle);
+      std::fprintf(stderr, "  seconds:");
+      for (const auto& [k, v] : seconds) std::fprintf(stderr, " %s %.1f,", k.c_str(), v);
+      std::fprintf(stderr, " total %.1f\n  max volume change:", since(t_all));
+      for (size_t b = 0; b < rep.names.size(); ++b)
+        if (!scene.objects[b].rigid) std::fprintf(stderr, " %s %.2f%%", rep.names[b].c_str(), 100 * rep.max_volume_change[b]);
+      std::fprintf(stderr, "\n  wrote: %s/plan.json, metrics.csv, trajectory/ (%d frames at %.3g fps)", a.output.c_str(),
+                   rep.frames, fps);
+      if (!a.no_render)
+        std::fprintf(stderr, ", frames/frame_*.png (%dx%d), volume.png, volume.svg%s", st.width, st.height,
+                     (ro.pc2 || ro.obj || ro.ply || ro.vtu) ? ", export/" : "");
+      std::fprintf(stderr, ", summary.json\n");
+    }
+    return r.status == plan::PlanStatus::solved ? kExitOk : kExitNotSolved;
+  };
+}
+
+}  // namespace squeeze::cli
