@@ -40,6 +40,12 @@ void check_robot_start(const fem::SceneWorld& w) {
   const std::string where = scene.file.string() + ": objects[" + std::to_string(r) + "].transform: ";
   if (scene.floor && robot.rest.col(1).minCoeff() < *scene.floor)
     throw InputError(where + "the robot starts below the floor (y = " + std::to_string(*scene.floor) + ")");
+  for (int k = 0; k < 3; ++k)
+    if (robot.rest.col(k).minCoeff() < w.bounds.min()(k) || robot.rest.col(k).maxCoeff() > w.bounds.max()(k))
+      throw InputError(where + "the robot starts outside the bounds (its coarse mesh spans " +
+                       std::to_string(robot.rest.col(k).minCoeff()) + " .. " + std::to_string(robot.rest.col(k).maxCoeff()) +
+                       " on axis " + "xyz"[k] + ", bounds " + std::to_string(w.bounds.min()(k)) + " .. " +
+                       std::to_string(w.bounds.max()(k)) + ")");
   // Vertices of `a` strictly inside tetrahedra of `b` (rest positions).
   auto inside = [](const fem::Body& a, const fem::Body& b) {
     const Eigen::AlignedBox3d abox(a.rest.colwise().minCoeff().transpose(), a.rest.colwise().maxCoeff().transpose());

@@ -68,7 +68,7 @@ int robot_index(const fem::Scene& scene);
 /// Throws InputError "FILE: objects[i].transform: the robot starts inside NAME (…)" if, at rest, a
 /// vertex of the robot's coarse mesh lies strictly inside a tetrahedron of another object or a
 /// vertex of another object strictly inside a robot tetrahedron (barycentric coordinates all
-/// > 1e-9), or the robot starts below the floor.
+/// > 1e-9), or the robot starts below the floor or outside the bounds.
 void check_robot_start(const fem::SceneWorld& world);
 
 }  // namespace squeeze::plan
