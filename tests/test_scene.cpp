@@ -65,6 +65,9 @@ TEST_F(SceneTest, DefaultsFillAMinimalScene) {
   EXPECT_EQ(o.transform.scale, Eigen::Vector3d(1, 1, 1));
   EXPECT_EQ(o.transform.translate, Eigen::Vector3d::Zero());
   EXPECT_EQ(o.density, 1000.0);
+  EXPECT_TRUE(o.volume_weighted);
+  EXPECT_EQ(o.mass_scaling, 1.5);
+  EXPECT_EQ(o.deformation_damping, 20.0);
   EXPECT_TRUE(o.gravity);
   EXPECT_EQ(o.velocity, Eigen::Vector3d::Zero());
   EXPECT_TRUE(o.pinned.empty());
@@ -76,7 +79,17 @@ TEST_F(SceneTest, DefaultsFillAMinimalScene) {
   const Body& B = w.world.body(0);
   EXPECT_NEAR(B.material.k_distance, 1e5 * B.total_volume() / B.E.rows(), 1e-12);
   EXPECT_NEAR(B.material.k_volume, 3e5 * B.total_volume() / B.tets(), 1e-12);
-  EXPECT_NEAR(B.material.damping_distance, 5e-3 * B.material.k_distance, 1e-15);
+  // Damping time τ = min(5 ms, (8/3) / ω_max), ω_max the body's highest frequency bound.
+  Eigen::VectorXd w2;
+  vertex_frequency_bounds(B, B.mass, w2);
+  const double tau = std::min(5e-3, (8.0 / 3.0) / std::sqrt(w2.maxCoeff()));
+  EXPECT_NEAR(B.material.damping_distance, tau * B.material.k_distance, 1e-12 * B.material.k_distance);
+  EXPECT_NEAR(B.material.damping_volume, tau * B.material.k_volume, 1e-12 * B.material.k_volume);
+  EXPECT_TRUE(B.material.volume_weighted);
+  EXPECT_EQ(B.material.mass_scaling, 1.5);
+  EXPECT_EQ(B.material.deformation_damping, 20.0);
+  EXPECT_TRUE(w.world.options().cap_contact_stiffness);
+  EXPECT_NEAR(w.h, stable_time_step(w.world), 1e-15);
   EXPECT_TRUE(w.bounds.contains(Eigen::Vector3d(0, 0, 0)));
 }
 
@@ -118,6 +131,12 @@ TEST_F(SceneTest, BadScenesNameTheKeyPath) {
       {R"({"objects": [{)" + cube + R"(, "material": {"damping": -1}}]})", "objects[0].material.damping: must be >= 0"},
       {R"({"objects": [{)" + cube + R"(, "material": {"density": "heavy"}}]})", "objects[0].material.density: must be a number"},
       {R"({"objects": [{)" + cube + R"(, "materiel": {}}]})", "objects[0].materiel: unknown key"},
+      {R"({"objects": [{)" + cube + R"(, "material": {"volume_weighted": 1}}]})",
+       "objects[0].material.volume_weighted: must be true or false"},
+      {R"({"objects": [{)" + cube + R"(, "material": {"mass_scaling": 0.5}}]})",
+       "objects[0].material.mass_scaling: must be 0 (off) or >= 1"},
+      {R"({"objects": [{)" + cube + R"(, "material": {"deformation_damping": -1}}]})",
+       "objects[0].material.deformation_damping: must be >= 0"},
       {R"({"time_step": 0, "objects": [{)" + cube + R"(}]})", "time_step: must be > 0"},
       {R"({"time_step": -0.001, "objects": [{)" + cube + R"(}]})", "time_step: must be > 0"},
       {R"({"time_step": NaN, "objects": [{)" + cube + R"(}]})", "time_step: must be a finite number, got NaN"},
@@ -178,6 +197,48 @@ TEST_F(SceneTest, PinsGravityFlagAndInitialVelocity) {
   EXPECT_NEAR(b.com.y(), 0.0, 1e-9);
   EXPECT_NEAR(c.com.x(), -3.0 + t, 1e-9);
   EXPECT_NEAR(c.volume_ratio, 1.0, 1e-9);
+}
+
+TEST_F(SceneTest, MeshWithTinyTetsGetsAUsableAutomaticStep) {
+  // A 20 cm cube whose cells shrink towards its centre (p ← p |p|∞², 6 cells per axis): the central
+  // tets are 9 times smaller (edge length) than the outer ones, like the small tets of meshed
+  // surfaces. Uniform stiffnesses (volume_weighted false, no mass scaling) collapse the step.
+  squeeze::TetMesh m = box_tet_mesh(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1), Eigen::Vector3i::Constant(6));
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v) m.V.row(v) *= 0.1 * std::pow(m.V.row(v).cwiseAbs().maxCoeff(), 2);
+  squeeze::save_tet_mesh(dir_->path() / "graded.mesh", m);
+  auto scene = [&](const std::string& head, const std::string& material) {
+    return write("graded.json", "{" + head + R"("objects": [{"name": "g", "mesh": "graded.mesh", "transform": {"translate": [0, 0.15, 0]},
+      "material": )" + material + "}]}");
+  };
+  const fs::path plain_file = scene("", R"({"volume_weighted": false, "mass_scaling": 0})");
+  try {
+    build_scene(load_scene(plain_file));
+    ADD_FAILURE() << "no error";
+  } catch (const squeeze::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("time_step: the stable step of these meshes is only"), std::string::npos) << e.what();
+  }
+  const double plain = stable_time_step(
+      build_scene(load_scene(scene(R"("time_step": 1e-4, )", R"({"volume_weighted": false, "mass_scaling": 0})"))).world);
+  SceneWorld w = build_scene(load_scene(scene("", "{}")));
+  std::printf("graded cube: automatic step %.3g s (uniform stiffnesses: %.3g s), %.2f %% mass added\n", w.h, plain,
+              100 * w.world.body(0).added_mass / w.world.body(0).mass.sum());
+  EXPECT_GT(w.h, 50 * plain);
+  EXPECT_GT(w.h, 2e-5);
+  EXPECT_LT(w.world.body(0).added_mass, 0.08 * w.world.body(0).mass.sum());  // graded everywhere: many outliers
+  // It falls, lands and settles without losing volume.
+  State s = w.initial_state();
+  const int steps = static_cast<int>(0.7 / w.h);
+  double worst = 1;
+  for (int k = 0; k < steps; ++k) {
+    w.step(s);
+    if (k % 100 == 0) worst = std::min(worst, object_metrics(w, s, 0).volume_ratio);
+  }
+  const ObjectMetrics mt = object_metrics(w, s, 0);
+  EXPECT_TRUE(s.x.allFinite());
+  EXPECT_GT(worst, 0.95);
+  EXPECT_NEAR(mt.volume_ratio, 1.0, 0.02);
+  EXPECT_NEAR(mt.aabb.min().y(), 0.0, 2e-3);  // on the floor
+  EXPECT_LT(mt.kinetic_energy, 1e-2);         // at rest (8 kg, 4 J at impact)
 }
 
 TEST_F(SceneTest, SurfaceMeshesAreMeshedOnceAndCached) {

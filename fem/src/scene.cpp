@@ -169,12 +169,21 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
     if (o.contains("material")) {
       const json& m = o["material"];
       const std::string q = p + ".material";
-      c.keys(m, q, {"density", "youngs_modulus", "k_distance", "k_volume", "damping"});
+      c.keys(m, q, {"density", "youngs_modulus", "k_distance", "k_volume", "damping", "volume_weighted", "mass_scaling",
+                    "deformation_damping"});
       if (m.contains("density")) ob.density = c.positive(m["density"], q + ".density");
       if (m.contains("youngs_modulus")) ob.youngs_modulus = c.positive(m["youngs_modulus"], q + ".youngs_modulus");
       if (m.contains("k_distance")) ob.k_distance = c.positive(m["k_distance"], q + ".k_distance");
       if (m.contains("k_volume")) ob.k_volume = c.positive(m["k_volume"], q + ".k_volume");
       if (m.contains("damping")) ob.damping = c.non_negative(m["damping"], q + ".damping");
+      if (m.contains("volume_weighted")) ob.volume_weighted = c.boolean(m["volume_weighted"], q + ".volume_weighted");
+      if (m.contains("deformation_damping"))
+        ob.deformation_damping = c.non_negative(m["deformation_damping"], q + ".deformation_damping");
+      if (m.contains("mass_scaling")) {
+        ob.mass_scaling = c.non_negative(m["mass_scaling"], q + ".mass_scaling");
+        if (ob.mass_scaling != 0 && ob.mass_scaling < 1)
+          c.fail(q + ".mass_scaling", "must be 0 (off) or >= 1, got " + num(ob.mass_scaling));
+      }
     }
     if (o.contains("gravity")) ob.gravity = c.boolean(o["gravity"], p + ".gravity");
     if (o.contains("velocity")) ob.velocity = c.vec3(o["velocity"], p + ".velocity");
@@ -282,43 +291,25 @@ TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progres
   return std::move(r.tets);
 }
 
+// γ_max / ω_max allowed to the default stiffness-proportional damping: a damped step of at least
+// a third of the undamped one (F − 1/F with F = 3).
+constexpr double kDampingStepCost = 8.0 / 3.0;
+
 double stable_time_step(const World& world) {
-  constexpr double kStableFactor = 1.0;  // h·(ω + γ) <= 1: half the symplectic Euler limit h·ω < 2
   const WorldOptions& o = world.options();
   double h = 1e-3;
   for (int b = 0; b < world.bodies(); ++b) {
     const Body& B = world.body(b);
-    if (B.rigid) continue;
-    const int nv = B.vertices();
-    Eigen::VectorXd stiff = Eigen::VectorXd::Constant(nv, o.contact_stiffness);
-    Eigen::VectorXd damp = Eigen::VectorXd::Constant(nv, o.contact_damping);
-    for (int e = 0; e < B.E.rows(); ++e) {
-      const double g2 = 1.0 / (B.D0(e) * B.D0(e));
-      for (int k = 0; k < 2; ++k) {
-        stiff(B.E(e, k)) += B.material.k_distance * g2;
-        damp(B.E(e, k)) += B.material.damping_distance * g2;
-      }
-    }
-    for (int t = 0; t < B.tets(); ++t) {
-      Vec3 p[4], g[4];
-      for (int k = 0; k < 4; ++k) p[k] = B.rest.row(B.T(t, k)).transpose();
-      {
-        const Vec3 a = p[1] - p[0], bb = p[2] - p[0], cc = p[3] - p[0];
-        const double s = 1.0 / (6.0 * B.V0(t));
-        g[1] = s * bb.cross(cc);
-        g[2] = s * cc.cross(a);
-        g[3] = s * a.cross(bb);
-        g[0] = -(g[1] + g[2] + g[3]);
-      }
-      for (int k = 0; k < 4; ++k) {
-        stiff(B.T(t, k)) += B.material.k_volume * g[k].squaredNorm();
-        damp(B.T(t, k)) += B.material.damping_volume * g[k].squaredNorm();
-      }
-    }
-    for (int i = 0; i < nv; ++i) {
-      if (!(B.mass(i) > 0)) continue;
-      const double w = std::sqrt(stiff(i) / B.mass(i)), gamma = damp(i) / B.mass(i);
-      if (w + gamma > 0) h = std::min(h, kStableFactor / (w + gamma));
+    const int r0 = world.first_state_row(b);
+    if (B.rigid || r0 < 0) continue;
+    Eigen::VectorXd w2e, ge;
+    vertex_frequency_bounds(B, world.masses().segment(r0, B.vertices()), w2e, &ge);
+    for (int i = 0; i < B.vertices(); ++i) {
+      const double m = world.masses()(r0 + i), cs = world.contact_scale(r0 + i);
+      if (!(m > 0)) continue;
+      const double w2 = w2e(i) + cs * o.contact_stiffness / m, gamma = ge(i) + cs * o.contact_damping / m;
+      const double d = gamma + std::sqrt(gamma * gamma + 4 * w2);
+      if (d > 0) h = std::min(h, 2.0 / d);
     }
   }
   return h;
@@ -333,6 +324,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
   wo.contact_stiffness = scene.contact_stiffness;
   wo.contact_damping = scene.contact_damping;
   wo.self_collision = scene.self_collision;
+  wo.cap_contact_stiffness = true;  // contact never sets the stable step
   wo.h = scene.time_step.value_or(1e-3);
   World world(wo);
   std::vector<TetMesh> meshes;
@@ -349,6 +341,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     Material mat;
     mat.density = o.density;
     mat.k_distance = mat.k_volume = 1.0;  // placeholders until the rest data is known
+    mat.volume_weighted = o.volume_weighted;
     std::optional<Body> body;
     try {
       body.emplace(m, mat, o.rigid, o.transform.affine());
@@ -356,11 +349,30 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
       throw InputError(file + ": " + p + ".mesh: " + e.what());
     }
     const double V = body->total_volume();
-    body->material.k_distance = o.k_distance.value_or(o.youngs_modulus * V / std::max<Eigen::Index>(1, body->E.rows()));
-    body->material.k_volume = o.k_volume.value_or(3.0 * o.youngs_modulus * V / std::max(1, body->tets()));
-    const double tau = 5e-3;  // s, default damping time of the constraints
-    body->material.damping_distance = o.damping.value_or(tau * body->material.k_distance);
-    body->material.damping_volume = o.damping.value_or(tau * body->material.k_volume);
+    mat.k_distance = o.k_distance.value_or(o.youngs_modulus * V / std::max<Eigen::Index>(1, body->E.rows()));
+    mat.k_volume = o.k_volume.value_or(3.0 * o.youngs_modulus * V / std::max(1, body->tets()));
+    mat.mass_scaling = o.rigid ? 0.0 : o.mass_scaling;
+    mat.deformation_damping = o.deformation_damping;
+    body->set_material(mat);  // masses (mass scaling) from the final stiffnesses
+    if (o.damping) {
+      mat.damping_distance = mat.damping_volume = *o.damping;
+    } else {
+      // Damping time τ = min(5 ms, (8/3) / ω_max) (ω_max: the object's highest frequency bound):
+      // stiffness-proportional damping gives the stiffest vertex a damping rate γ = τ ω_max²;
+      // with γ <= (8/3) ω_max the step 2 / (γ + sqrt(γ² + 4ω²)) stays >= 1 / (3 ω_max), a third of
+      // the undamped one (with 5 ms, fine meshes would get steps ∝ edge length²). The slow modes
+      // that τ then damps too little are damped by deformation_damping.
+      double w2max = 0;
+      if (!o.rigid) {
+        Eigen::VectorXd w2;
+        vertex_frequency_bounds(*body, body->mass, w2);
+        w2max = w2.maxCoeff();
+      }
+      const double tau = w2max > 0 ? std::min(5e-3, kDampingStepCost / std::sqrt(w2max)) : 5e-3;  // s
+      mat.damping_distance = tau * mat.k_distance;
+      mat.damping_volume = tau * mat.k_volume;
+    }
+    body->set_material(mat);
     TetMesh rest;
     rest.V = body->rest;
     rest.T = body->T;

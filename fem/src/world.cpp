@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -48,6 +49,7 @@ World& World::operator=(World&&) noexcept = default;
 
 int World::add_body(Body body) {
   const int b = static_cast<int>(bodies_.size());
+  body.set_material(body.material);  // coefficients and masses follow the material as assigned
   if (body.rigid) {
     state_row_.push_back(-1);
   } else {
@@ -56,6 +58,15 @@ int World::add_body(Body body) {
     mass_.conservativeResize(rows_ + n);
     mass_.segment(rows_, n) = body.mass;
     pinned_.resize(static_cast<size_t>(rows_ + n), 0);
+    contact_scale_.conservativeResize(rows_ + n);
+    contact_scale_.segment(rows_, n).setOnes();
+    if (options_.cap_contact_stiffness && options_.contact_stiffness > 0) {
+      Eigen::VectorXd w2v;
+      vertex_frequency_bounds(body, body.mass, w2v);
+      const double w2 = w2v.maxCoeff();  // bound of the object's highest elastic ω² (1/s²)
+      for (int i = 0; i < n; ++i)
+        contact_scale_(rows_ + i) = std::min(1.0, body.mass(i) * w2 / options_.contact_stiffness);
+    }
     rows_ += n;
   }
   bodies_.push_back(std::move(body));
@@ -99,6 +110,12 @@ State World::initial_state() const {
 void World::prepare() {
   inv_mass_.resize(rows_);
   for (int i = 0; i < rows_; ++i) inv_mass_(i) = (pinned_[i] || !(mass_(i) > 0)) ? 0.0 : 1.0 / mass_(i);
+  contact_k_.resize(rows_);
+  contact_c_.resize(rows_);
+  for (int i = 0; i < rows_; ++i) {
+    contact_k_(i) = options_.contact_stiffness * contact_scale(i);
+    contact_c_(i) = options_.contact_damping * contact_scale(i);
+  }
   // Elements of every deformable object in state rows, and per row its scratch slots.
   edges_.clear();
   tet_elems_.clear();
@@ -106,12 +123,11 @@ void World::prepare() {
     const int r0 = state_row_[b];
     if (r0 < 0) continue;
     const Body& B = bodies_[b];
-    const Material& m = B.material;
     for (int e = 0; e < B.E.rows(); ++e)
-      edges_.push_back({r0 + B.E(e, 0), r0 + B.E(e, 1), B.D0(e), m.k_distance, m.damping_distance});
+      edges_.push_back({r0 + B.E(e, 0), r0 + B.E(e, 1), B.D0(e), B.k_edge(e), B.kd_edge(e)});
     for (int t = 0; t < B.tets(); ++t)
-      tet_elems_.push_back({{r0 + B.T(t, 0), r0 + B.T(t, 1), r0 + B.T(t, 2), r0 + B.T(t, 3)}, B.V0(t), m.k_volume,
-                            m.damping_volume});
+      tet_elems_.push_back({{r0 + B.T(t, 0), r0 + B.T(t, 1), r0 + B.T(t, 2), r0 + B.T(t, 3)}, B.V0(t), B.k_tet(t),
+                            B.kd_tet(t)});
   }
   elem_f_.assign(6 * edges_.size() + 12 * tet_elems_.size(), 0.0);
   gather_start_.assign(static_cast<size_t>(rows_) + 1, 0);
@@ -253,7 +269,6 @@ void World::collect_contact_forces(const State& s) {
   if (contacts.empty()) return;
   const std::vector<Penetration> pens = penetration_depths(scene_, X_all_, contacts);
   stats_.colliding_vertices = static_cast<int>(pens.size());
-  const double kc = options_.contact_stiffness, cc = options_.contact_damping;
   auto velocity = [&](int g) -> Vec3 { return g < rows_ ? Vec3(s.v.row(g).transpose()) : Vec3::Zero(); };
   auto add = [&](int row, const Vec3& f) {  // appended: applied in the order found
     const int id = static_cast<int>(contact_f_.size());
@@ -274,6 +289,20 @@ void World::collect_contact_forces(const State& s) {
     for (int k = 0; k < 4; ++k) vt += p.bary[k] * velocity(T_all_(p.tet, k));
     const Vec3& r = p.direction;
     const double closing = (velocity(p.vertex) - vt).dot(r);
+    double kc, cc;  // of the penetrating vertex; a rigid one: interpolated from the tet's corners
+    if (!options_.cap_contact_stiffness) {
+      kc = options_.contact_stiffness;
+      cc = options_.contact_damping;
+    } else if (p.vertex < rows_) {
+      kc = contact_k_(p.vertex);
+      cc = contact_c_(p.vertex);
+    } else {
+      kc = cc = 0;
+      for (int k = 0; k < 4; ++k) {
+        const int g = T_all_(p.tet, k);
+        if (g < rows_) kc += p.bary[k] * contact_k_(g), cc += p.bary[k] * contact_c_(g);
+      }
+    }
     const Vec3 f = (kc * p.depth - cc * closing) * r;
     if (p.vertex < rows_) {
       add(p.vertex, f);
@@ -299,11 +328,11 @@ void World::total_forces(const State& s, const RowMatrixX3d* external, RowMatrix
   internal_forces(s, F);
   const Vec3 g = options_.gravity;
   const bool floor = options_.floor;
-  const double fy = options_.floor_height, kc = options_.contact_stiffness, cc = options_.contact_damping;
+  const double fy = options_.floor_height;
   parallel_rows(rows_, [&](int i) {
     Vec3 f = F.row(i).transpose() + mass_(i) * g;
     if (external) f += external->row(i).transpose();
-    if (floor && s.x(i, 1) < fy) f.y() += kc * (fy - s.x(i, 1)) - cc * std::min(0.0, s.v(i, 1));
+    if (floor && s.x(i, 1) < fy) f.y() += contact_k_(i) * (fy - s.x(i, 1)) - contact_c_(i) * std::min(0.0, s.v(i, 1));
     F.row(i) = f.transpose();
   });
   add_contact_forces(s, F);
@@ -320,11 +349,12 @@ void World::step(State& s, const RowMatrixX3d* external) {
     throw InputError("fem world: the state has " + std::to_string(s.x.rows()) + " rows, the world " +
                      std::to_string(rows_));
   if (!prepared_) prepare();
+  damp_deformation(s);
   collect_contact_forces(s);
   element_forces(s);
   const Vec3 g = options_.gravity;
   const bool floor = options_.floor;
-  const double fy = options_.floor_height, kc = options_.contact_stiffness, cc = options_.contact_damping;
+  const double fy = options_.floor_height;
   const double h = options_.h;
   parallel_rows(rows_, [&](int i) {
     if (pinned_[i]) {
@@ -333,12 +363,54 @@ void World::step(State& s, const RowMatrixX3d* external) {
     }
     Vec3 f = gathered(i) + mass_(i) * g;
     if (external) f += external->row(i).transpose();
-    if (floor && s.x(i, 1) < fy) f.y() += kc * (fy - s.x(i, 1)) - cc * std::min(0.0, s.v(i, 1));
+    if (floor && s.x(i, 1) < fy) f.y() += contact_k_(i) * (fy - s.x(i, 1)) - contact_c_(i) * std::min(0.0, s.v(i, 1));
     for (int id = contact_head_[i]; id >= 0; id = contact_next_[id]) f += contact_f_[id];
     s.v.row(i) += (h * inv_mass_(i)) * f.transpose();
     s.x.row(i) += h * s.v.row(i);
   });
   s.time += h;
+}
+
+void World::damp_deformation(State& s) const {
+  for (int b = 0; b < bodies(); ++b) {
+    const Body& B = bodies_[b];
+    const int r0 = state_row_[b];
+    const double alpha = B.material.deformation_damping;
+    if (r0 < 0 || !(alpha > 0)) continue;
+    const int n = B.vertices();
+    // Rigid motion with the momentum of the object (sequential: fixed summation order). A pinned
+    // object is anchored: its reference motion is rest (v_rigid = 0).
+    bool anchored = false;
+    for (int i = r0; i < r0 + n && !anchored; ++i) anchored = pinned_[i] != 0;
+    Vec3 c = Vec3::Zero(), vcm = Vec3::Zero(), w = Vec3::Zero();
+    if (!anchored) {
+      double M = 0;
+      Vec3 mx = Vec3::Zero(), mv = Vec3::Zero();
+      for (int i = r0; i < r0 + n; ++i) {
+        M += mass_(i);
+        mx += mass_(i) * Vec3(s.x.row(i).transpose());
+        mv += mass_(i) * Vec3(s.v.row(i).transpose());
+      }
+      if (!(M > 0)) continue;
+      c = mx / M;
+      vcm = mv / M;
+      Vec3 L = Vec3::Zero();
+      Eigen::Matrix3d I = Eigen::Matrix3d::Zero();
+      for (int i = r0; i < r0 + n; ++i) {
+        const Vec3 r = Vec3(s.x.row(i).transpose()) - c;
+        L += mass_(i) * r.cross(Vec3(s.v.row(i).transpose()) - vcm);
+        I += mass_(i) * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+      }
+      const Eigen::FullPivLU<Eigen::Matrix3d> lu(I);
+      if (lu.isInvertible()) w = lu.solve(L);
+    }
+    const double keep = std::exp(-alpha * options_.h);
+    for (int i = r0; i < r0 + n; ++i) {
+      if (pinned_[i]) continue;
+      const Vec3 vr = vcm + w.cross(Vec3(s.x.row(i).transpose()) - c);
+      s.v.row(i) = (vr + keep * (Vec3(s.v.row(i).transpose()) - vr)).transpose();
+    }
+  }
 }
 
 double World::elastic_energy(const State& s) const {
@@ -349,11 +421,11 @@ double World::elastic_energy(const State& s) const {
     const Body& B = bodies_[b];
     for (int k = 0; k < B.E.rows(); ++k)
       e += distance_energy(s.x.row(r0 + B.E(k, 0)).transpose(), s.x.row(r0 + B.E(k, 1)).transpose(), B.D0(k),
-                           B.material.k_distance);
+                           B.k_edge(k));
     for (int t = 0; t < B.tets(); ++t)
       e += volume_energy(s.x.row(r0 + B.T(t, 0)).transpose(), s.x.row(r0 + B.T(t, 1)).transpose(),
                          s.x.row(r0 + B.T(t, 2)).transpose(), s.x.row(r0 + B.T(t, 3)).transpose(), B.V0(t),
-                         B.material.k_volume);
+                         B.k_tet(t));
   }
   return e;
 }

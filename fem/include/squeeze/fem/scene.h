@@ -47,9 +47,12 @@ struct SceneObject {
   SceneTransform transform;
   double density = 1000.0;                // kg/m³
   double youngs_modulus = 1e5;            // Pa, only used to derive the default stiffnesses
-  std::optional<double> k_distance;       // J; default youngs_modulus · V / #edges
-  std::optional<double> k_volume;         // J; default 3 · youngs_modulus · V / #tets
-  std::optional<double> damping;          // J·s, both damping terms; default 0.005 s · k
+  std::optional<double> k_distance;       // J, of an edge of average volume share; default youngs_modulus · V / #edges
+  std::optional<double> k_volume;         // J, of a tet of average volume; default 3 · youngs_modulus · V / #tets
+  std::optional<double> damping;          // J·s, both damping terms; default τ · k, τ = min(5 ms, (8/3) / ω_max)
+  bool volume_weighted = true;            // Material::volume_weighted
+  double mass_scaling = 1.5;              // Material::mass_scaling (κ >= 1, or 0: off)
+  double deformation_damping = 20.0;      // 1/s, Material::deformation_damping
   bool gravity = true;                    // false: gravity does not act on this object
   Eigen::Vector3d velocity{0, 0, 0};      // m/s, initial
   std::vector<Eigen::AlignedBox3d> pinned;  // world boxes (m): vertices at rest inside are fixed
@@ -124,9 +127,13 @@ class SceneWorld {
 };
 
 /// The largest stable explicit step (s) of a world's deformable objects (estimate): for every
-/// vertex, ω² = (Σ k_distance/D0² over its edges + Σ k_volume·|∂C/∂p|² over its tets +
-/// contact_stiffness) / m, γ = (same with the damping coefficients + contact_damping) / m;
-/// h = min over vertices of 1 / (ω + γ), at most 1e-3 s. Returns 1e-3 with no deformable object.
+/// vertex i, ω² = ω_i² + k_c,i / m_i and γ = γ_i + c_c,i / m_i, with ω_i², γ_i the element-by-element
+/// bounds of vertex_frequency_bounds (body.h: Σ over the vertex's edges and tets of
+/// k Σ_k |∂C/∂p_k|² / m_k, and the same with the damping coefficients), k_c,i, c_c,i the vertex's
+/// contact stiffness and damping (World::contact_scale) and m the masses (mass scaling included);
+/// h = min over vertices of 2 / (γ + sqrt(γ² + 4ω²)), at most 1e-3 s. That is half the exact limit
+/// of a damped oscillator under the symplectic Euler step, (hω)² + 2hγ <= 4 (1/ω without damping,
+/// 1/γ when overdamped). Returns 1e-3 with no deformable object.
 double stable_time_step(const World& world);
 
 /// Meshes every object (through the cache), builds bodies, pins and the time step.

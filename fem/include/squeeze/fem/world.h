@@ -37,6 +37,13 @@ struct WorldOptions {
   bool self_collision = true;                      // ... and within a deformable object
   double contact_stiffness = 1e5;                  // N/m, k_c of the penalty force k_c·d·r (also the floor)
   double contact_damping = 0.0;                    // N·s/m, along r, only while penetrating (also the floor)
+  // true: vertex i of object b gets the contact coefficients times min(1, m_i ω_b² / k_c), ω_b² =
+  // the largest of b's vertex_frequency_bounds (body.h; the object's highest elastic frequency):
+  // a light vertex (small tets) is never made stiffer by contact than the stiffest
+  // vertex of its object is by elasticity, so contact does not set the stable step (the contact
+  // damping ratio is kept). Vertices of coarse meshes keep k_c. A rigid vertex inside a
+  // deformable tet uses Σ bary_k · factor_k of the tet's corners. false: k_c and c_c everywhere.
+  bool cap_contact_stiffness = false;
   double cell_size = 0.0;                          // m, spatial hash cell; 0: mean edge length of the deformable objects
   int table_size = 0;                              // spatial hash entries; 0: a prime >= 4 × vertex count
 };
@@ -82,11 +89,15 @@ class World {
   int tets() const;  // all objects
   bool pinned(int row) const { return pinned_[row] != 0; }
   const Eigen::VectorXd& masses() const { return mass_; }  // #N kg per state row
+  /// Factor (<= 1) of the contact coefficients of a state row: see WorldOptions::cap_contact_stiffness.
+  double contact_scale(int row) const { return contact_scale_(row); }
 
   /// Rest positions, zero velocities, time 0.
   State initial_state() const;
 
-  /// Advances s by one step h. external: #N by 3 forces (N) per state row, or null.
+  /// Advances s by one step h. external: #N by 3 forces (N) per state row, or null. Objects with
+  /// Material::deformation_damping > 0 first get their deformation velocities damped (exactly,
+  /// see body.h); then the forces of total_forces() and the Verlet update.
   /// Throws InputError if s or external has the wrong number of rows.
   void step(State& s, const RowMatrixX3d* external = nullptr);
 
@@ -105,6 +116,7 @@ class World {
  private:
   void prepare();  // global numbering, hash
   void add_contact_forces(const State& s, RowMatrixX3d& F);
+  void damp_deformation(State& s) const;  // Material::deformation_damping, per object, fixed order
 
   WorldOptions options_;
   std::vector<Body> bodies_;
@@ -112,6 +124,8 @@ class World {
   int rows_ = 0;
   Eigen::VectorXd mass_;         // per state row
   Eigen::VectorXd inv_mass_;     // per state row, 0 for pinned or massless vertices
+  Eigen::VectorXd contact_scale_;  // per state row, see contact_scale()
+  Eigen::VectorXd contact_k_, contact_c_;  // per state row: contact stiffness and damping (contact_scale applied)
   RowMatrixX3d force_;           // step scratch
   std::vector<char> pinned_;     // per state row
   // Collision numbering: all vertices (deformables in state order, then rigid), all tets.
