@@ -137,6 +137,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       t = clock_type::now();
       ro.scene = a.scene;
       ro.trajectory = out;
+      ro.fps = fps;  // the trajectory's: one PNG per trajectory frame
       if (a.width > 0) ro.width = a.width;
       if (a.height > 0) ro.height = a.height;
       render::RenderOptions frames = ro;

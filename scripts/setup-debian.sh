@@ -11,6 +11,7 @@ packages=(build-essential cmake ninja-build pkg-config
   libassimp-dev libeigen3-dev libtbb-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev libnanoflann-dev
   libosmesa6-dev libegl-dev libgl-dev libpng-dev libplplot-dev libcairo2-dev
+  plplot-driver-cairo libegl-mesa0 libgl1-mesa-dri
   tetgen)
 
 missing=()

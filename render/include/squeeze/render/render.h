@@ -1,0 +1,71 @@
+// squeeze::render — `squeeze render`: every frame of a trajectory, FFD-replayed onto each object's
+// high-resolution surface and drawn offscreen into PNGs, plus the volume plot and the exports.
+//
+//   RenderOptions o;
+//   o.scene = "scenes/bunny.json"; o.trajectory = "out/bunny"; o.output = "out/bunny/frames";
+//   RenderStats s = render_trajectory(o, &progress);
+//
+// Output folder (docs/render.md): frame_00000.png … (k = output frame, t = k / fps), volume.png,
+// volume.svg, and with exports export/NAME.obj + export/NAME.pc2, export/obj/NAME_00000.obj,
+// export/ply/NAME_00000.ply, export/vtu/NAME_00000.vtu + export/NAME.pvd.
+#pragma once
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "squeeze/render/gl_context.h"
+
+namespace squeeze {
+class Progress;
+}
+
+namespace squeeze::render {
+
+/// Per-frame progress of render_trajectory.
+struct FrameProgress {
+  int done = 0, total = 0;  // frames written (rendered and queued for encoding) of the range
+  double seconds = 0;       // since the first frame started
+};
+
+struct RenderOptions {
+  std::filesystem::path scene;                 // scene file (JSON)
+  std::filesystem::path trajectory;            // `squeeze simulate` output folder, or its trajectory/
+  std::filesystem::path output;                // folder, created if missing (its parent must exist)
+  std::optional<int> width, height;            // pixels; default: the scene's render block, else 1280x720
+  std::optional<std::pair<int, int>> frames;   // inclusive output-frame range; default: all
+  std::optional<double> fps;                   // output frames per second; default: the scene's render.fps, else the trajectory's
+  bool coarse = false;                         // overlay the coarse tet meshes as wireframes
+  bool png = true;                             // write frame PNGs (false: exports and plots only)
+  bool plots = true;                           // write volume.png and volume.svg
+  bool pc2 = false, obj = false, ply = false, vtu = false;  // exports
+  GlBackend gl = GlBackend::osmesa;            // context backend
+  int samples = 4;                             // MSAA samples
+  std::function<void(const FrameProgress&)> on_frame;  // called after each frame (may be empty)
+};
+
+struct RenderStats {
+  int width = 0, height = 0, samples = 0;
+  int total_frames = 0;           // output frames of the whole path: floor(duration × fps) + 1
+  int rendered = 0;               // frames of the range
+  double fps = 0;                 // output frames per simulated second
+  double setup_seconds = 0;       // loading, binding, context creation
+  double frame_seconds = 0;       // the frame loop, PNG encoding included (waited for)
+  double frame_cpu_seconds = 0;   // CPU time of the process (all threads) during the frame loop
+  std::string gl;                 // GL backend and renderer description
+  long long surface_triangles = 0;  // triangles drawn per frame
+};
+
+/// Parses "A-B" (inclusive, 0 <= A <= B) or "A" into a range. Throws InputError ("--frames x: ...").
+std::pair<int, int> parse_frame_range(const std::string& text);
+
+/// Renders a trajectory of a scene. Every input is checked before anything is written: scene and
+/// render block, trajectory (index, same objects and coarse meshes as the scene), image size
+/// (kMinImageSide..kMaxImageSide and the GL limit), frame range (within 0..total-1), output folder
+/// (created if missing; must be writable). Throws InputError with one line naming the file or
+/// option and the problem. Files are written atomically (no half-written PNG is ever left).
+/// `progress` (may be null) gets the loading and binding stages.
+RenderStats render_trajectory(const RenderOptions& options, Progress* progress = nullptr);
+
+}  // namespace squeeze::render

@@ -1,0 +1,495 @@
+#include "squeeze/render/render.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "squeeze/common/atomic_file.h"
+#include "squeeze/common/error.h"
+#include "squeeze/common/progress.h"
+#include "squeeze/fem/scene.h"
+#include "squeeze/ffd/ffd.h"
+#include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/tet_io.h"
+#include "squeeze/render/exports.h"
+#include "squeeze/render/plot.h"
+#include "squeeze/render/png_io.h"
+#include "squeeze/render/renderer.h"
+#include "squeeze/render/settings.h"
+#include "squeeze/render/trajectory.h"
+
+namespace squeeze::render {
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+std::pair<int, int> parse_frame_range(const std::string& text) {
+  const auto bad = [&](const std::string& why) { return InputError("--frames " + text + ": " + why); };
+  const auto parse_int = [&](const std::string& s) {
+    if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos)
+      throw bad("expected A-B with whole numbers 0 <= A <= B (e.g. 0-99)");
+    return std::stoi(s);
+  };
+  const auto dash = text.find('-');
+  if (dash == std::string::npos) {
+    const int a = parse_int(text);
+    return {a, a};
+  }
+  const int a = parse_int(text.substr(0, dash)), b = parse_int(text.substr(dash + 1));
+  if (a > b) throw bad("the first frame is after the last");
+  return {a, b};
+}
+
+namespace {
+
+// Outward boundary triangles of a positively oriented tet mesh (faces used by one tet only).
+Eigen::MatrixX3i boundary_faces(const Eigen::MatrixX4i& T) {
+  static const int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::map<std::array<int, 3>, std::pair<int, std::array<int, 3>>> faces;
+  for (Eigen::Index t = 0; t < T.rows(); ++t)
+    for (const auto& f : kFace) {
+      std::array<int, 3> tri{T(t, f[0]), T(t, f[1]), T(t, f[2])};
+      std::array<int, 3> key = tri;
+      std::sort(key.begin(), key.end());
+      auto [it, inserted] = faces.emplace(key, std::make_pair(1, tri));
+      if (!inserted) ++it->second.first;
+    }
+  std::vector<std::array<int, 3>> out;
+  for (const auto& [key, v] : faces)
+    if (v.first == 1) out.push_back(v.second);
+  Eigen::MatrixX3i F(static_cast<Eigen::Index>(out.size()), 3);
+  for (size_t i = 0; i < out.size(); ++i)
+    for (int c = 0; c < 3; ++c) F(static_cast<Eigen::Index>(i), c) = out[i][static_cast<size_t>(c)];
+  return F;
+}
+
+Eigen::MatrixX2i unique_edges(const Eigen::MatrixX3i& F) {
+  std::vector<std::pair<int, int>> e;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      int a = F(f, c), b = F(f, (c + 1) % 3);
+      if (a > b) std::swap(a, b);
+      e.emplace_back(a, b);
+    }
+  std::sort(e.begin(), e.end());
+  e.erase(std::unique(e.begin(), e.end()), e.end());
+  Eigen::MatrixX2i E(static_cast<Eigen::Index>(e.size()), 2);
+  for (size_t i = 0; i < e.size(); ++i) E.row(static_cast<Eigen::Index>(i)) << e[i].first, e[i].second;
+  return E;
+}
+
+double tet_volume(const Eigen::MatrixX4i& T, const Eigen::MatrixX3d& X) {
+  double v = 0;
+  for (Eigen::Index t = 0; t < T.rows(); ++t) {
+    const Eigen::Vector3d a = X.row(T(t, 0)), b = X.row(T(t, 1)), c = X.row(T(t, 2)), d = X.row(T(t, 3));
+    v += (b - a).dot((c - a).cross(d - a)) / 6.0;
+  }
+  return v;
+}
+
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
+}
+
+// The diffuse colour (Kd) of the first material an OBJ uses, from its MTL library, if any.
+std::optional<Eigen::Vector3f> obj_material_colour(const fs::path& obj) {
+  std::string ext = obj.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext != ".obj") return std::nullopt;
+  std::ifstream in(obj);
+  std::string line, mtllib, usemtl;
+  while (std::getline(in, line) && (mtllib.empty() || usemtl.empty())) {
+    if (line.rfind("mtllib", 0) == 0 && mtllib.empty()) mtllib = trim(line.substr(6));
+    if (line.rfind("usemtl", 0) == 0 && usemtl.empty()) usemtl = trim(line.substr(6));
+  }
+  if (mtllib.empty()) return std::nullopt;
+  std::ifstream mtl(obj.parent_path() / mtllib);
+  bool in_material = false;
+  std::optional<Eigen::Vector3f> first;
+  while (std::getline(mtl, line)) {
+    const std::string l = trim(line);
+    if (l.rfind("newmtl", 0) == 0) in_material = usemtl.empty() || trim(l.substr(6)) == usemtl;
+    if (l.rfind("Kd", 0) == 0 && (in_material || (!first && usemtl.empty()))) {
+      std::istringstream s(l.substr(2));
+      Eigen::Vector3f c;
+      if (s >> c.x() >> c.y() >> c.z()) {
+        if (in_material) return c.cwiseMax(0).cwiseMin(1);
+        first = c.cwiseMax(0).cwiseMin(1);
+      }
+    }
+  }
+  return first;
+}
+
+// Deformable objects: warm and saturated; rigid ones: neutral greys (visibly different).
+Eigen::Vector3f palette(int deformable_index) {
+  static const float kColours[][3] = {{0.88f, 0.50f, 0.28f}, {0.27f, 0.56f, 0.82f}, {0.42f, 0.72f, 0.36f},
+                                      {0.78f, 0.38f, 0.66f}, {0.92f, 0.76f, 0.26f}, {0.33f, 0.74f, 0.74f},
+                                      {0.86f, 0.33f, 0.35f}, {0.55f, 0.45f, 0.80f}};
+  const auto& c = kColours[deformable_index % 8];
+  return {c[0], c[1], c[2]};
+}
+Eigen::Vector3f rigid_colour(int rigid_index) {
+  const float g = 0.58f - 0.08f * static_cast<float>(rigid_index % 3);
+  return {g, g + 0.02f, g + 0.05f};
+}
+
+struct Object {
+  std::string name;
+  bool rigid = false;
+  bool direct = false;      // the scene mesh is a tet mesh: its boundary is drawn, no FFD
+  bool closed = false;      // closed and oriented outwards: back faces culled
+  Binding binding;          // surface -> coarse mesh (when !direct)
+  Eigen::MatrixX3d rest;    // high-res surface vertices at rest (world, m)
+  Eigen::MatrixX3i F;       // its triangles
+  Eigen::MatrixX4i T;       // coarse tets
+  Eigen::MatrixX2i coarse_edges;  // boundary edges of the coarse mesh
+  int offset = 0, vertices = 0;   // coarse vertices in a frame
+  Eigen::Vector3f colour;
+  int mesh_id = -1, lines_id = -1;
+  Eigen::MatrixX3i draw_F;         // faces drawn (split along creases for tet-mesh objects)
+  Eigen::VectorXi draw_source;     // drawn vertex -> surface vertex (empty: the same vertices)
+  Eigen::MatrixX3d surface, normals, coarse, drawn;  // per frame
+};
+
+// Splits the vertices of F along creases for drawing: the faces around a vertex are grouped by
+// their rest normals (within `crease_deg` of a group's first face), and each group gets its own
+// copy of the vertex, so that vertex normals stay smooth inside a group and sharp between groups
+// (a box keeps its edges). Returns the faces over the copies; source(i) is the original of copy i.
+Eigen::MatrixX3i split_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double crease_deg,
+                               Eigen::VectorXi& source) {
+  const double cos_max = std::cos(crease_deg * M_PI / 180.0);
+  Eigen::MatrixX3d N(F.rows(), 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    N.row(f) = n.norm() > 0 ? Eigen::RowVector3d(n.normalized().transpose()) : Eigen::RowVector3d::Zero();
+  }
+  std::vector<std::vector<std::pair<int, int>>> corners(static_cast<size_t>(V.rows()));  // (face, corner)
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) corners[static_cast<size_t>(F(f, c))].emplace_back(static_cast<int>(f), c);
+  Eigen::MatrixX3i out = F;
+  std::vector<int> src;
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    std::vector<int> leaders;  // first face of each group
+    std::vector<int> ids;
+    for (const auto& [f, c] : corners[static_cast<size_t>(v)]) {
+      size_t g = 0;
+      while (g < leaders.size() && N.row(leaders[g]).dot(N.row(f)) < cos_max) ++g;
+      if (g == leaders.size()) {
+        leaders.push_back(f);
+        ids.push_back(static_cast<int>(src.size()));
+        src.push_back(static_cast<int>(v));
+      }
+      out(f, c) = ids[g];
+    }
+  }
+  source = Eigen::Map<Eigen::VectorXi>(src.data(), static_cast<Eigen::Index>(src.size()));
+  return out;
+}
+
+std::string frame_name(const char* prefix, int k, const char* ext) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%s%05d%s", prefix, k, ext);
+  return buf;
+}
+
+}  // namespace
+
+RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
+  const auto t0 = Clock::now();
+  RenderStats stats;
+  // --- inputs ---
+  const fem::Scene scene = fem::load_scene(o.scene);
+  const RenderSettings settings = parse_render_settings(scene.render, scene.file.string());
+  const int W = o.width ? *o.width : settings.width.value_or(1280);
+  const int H = o.height ? *o.height : settings.height.value_or(720);
+  const auto check_side = [](const char* opt, int v) {
+    if (v < kMinImageSide || v > kMaxImageSide)
+      throw InputError(std::string(opt) + " " + std::to_string(v) + ": must be in [" + std::to_string(kMinImageSide) +
+                       ", " + std::to_string(kMaxImageSide) + "] pixels");
+  };
+  check_side("--width", W);
+  check_side("--height", H);
+  if (static_cast<long long>(W) * H > 100'000'000LL)
+    throw InputError("--width × --height: " + std::to_string(W) + "x" + std::to_string(H) +
+                     " is more than 100 megapixels");
+  if (o.samples < 1 || o.samples > 64) throw InputError("samples: must be in [1, 64]");
+
+  const Trajectory traj = load_trajectory(o.trajectory);
+  check_trajectory_matches_scene(traj, scene);
+
+  const double fps = o.fps ? *o.fps : settings.fps.value_or(traj.fps);
+  const double duration = traj.duration();
+  const int total = static_cast<int>(std::floor(duration * fps + 1e-6)) + 1;
+  int first = 0, last = total - 1;
+  if (o.frames) {
+    first = o.frames->first;
+    last = o.frames->second;
+    if (last >= total)
+      throw InputError("--frames " + std::to_string(first) + "-" + std::to_string(last) + ": the path has " +
+                       std::to_string(total) + " frames (0-" + std::to_string(total - 1) + ")");
+  }
+  stats.total_frames = total;
+  stats.fps = fps;
+
+  // Output folder: created if missing (its parent must exist), then checked for writing.
+  const fs::path out = o.output;
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw InputError(out.string() + ": exists and is not a directory");
+  if (!fs::exists(out, ec)) {
+    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+    if (!fs::is_directory(parent, ec))
+      throw InputError(out.string() + ": parent directory " + parent.string() + " does not exist");
+  }
+  const bool plots = o.plots;
+  if (plots && !plot_drivers_available())
+    throw InputError("volume.png: PLplot's cairo drivers are missing (Debian: install plplot-driver-cairo)");
+
+  // Objects: high-res surfaces bound to the coarse rest meshes.
+  std::vector<Object> objects(scene.objects.size());
+  int deformable_count = 0, rigid_count = 0;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const fem::SceneObject& so = scene.objects[i];
+    Object& ob = objects[i];
+    ob.name = so.name;
+    ob.rigid = so.rigid;
+    ob.offset = traj.objects[i].offset;
+    ob.vertices = traj.objects[i].vertices;
+    const TetMesh rest = traj.rest_mesh(static_cast<int>(i));
+    ob.T = rest.T;
+    const Eigen::MatrixX3i coarse_faces = boundary_faces(rest.T);
+    ob.coarse_edges = unique_edges(coarse_faces);
+    ob.direct = is_tet_format(so.mesh);
+    if (ob.direct) {
+      ob.rest = rest.V;
+      ob.F = coarse_faces;
+    } else {
+      if (progress) progress->stage("loading " + so.name);
+      LoadOptions lo;
+      lo.keep_order = true;
+      SurfaceMesh s = load_surface(so.mesh, lo);
+      const Eigen::Affine3d A = so.transform.affine();
+      for (Eigen::Index v = 0; v < s.V.rows(); ++v) s.V.row(v) = (A * Eigen::Vector3d(s.V.row(v).transpose())).transpose();
+      if (A.linear().determinant() < 0) s.F.col(1).swap(s.F.col(2));  // a mirroring transform keeps outward faces
+      ob.rest = std::move(s.V);
+      ob.F = std::move(s.F);
+      ob.binding = bind_surface(ob.rest, rest, BindOptions{}, progress, so.mesh.filename().string());
+    }
+    // A closed, consistently oriented surface is drawn with back faces culled; turned outwards first.
+    ob.closed = is_closed_oriented(ob.F);
+    if (ob.closed) {
+      double vol = 0;
+      for (Eigen::Index f = 0; f < ob.F.rows(); ++f)
+        vol += Eigen::Vector3d(ob.rest.row(ob.F(f, 0))).dot(
+            Eigen::Vector3d(ob.rest.row(ob.F(f, 1))).cross(Eigen::Vector3d(ob.rest.row(ob.F(f, 2)))));
+      if (vol < 0) ob.F.col(1).swap(ob.F.col(2));
+    }
+    // Tet-mesh objects (boxes, plates) are drawn with sharp edges; surfaces smooth everywhere.
+    if (ob.direct)
+      ob.draw_F = split_creases(ob.rest, ob.F, 40.0, ob.draw_source);
+    else
+      ob.draw_F = ob.F;
+    const std::optional<Eigen::Vector3f> mtl = ob.direct ? std::nullopt : obj_material_colour(so.mesh);
+    ob.colour = mtl ? *mtl : so.rigid ? rigid_colour(rigid_count) : palette(deformable_count);
+    (so.rigid ? rigid_count : deformable_count)++;
+    stats.surface_triangles += ob.F.rows();
+  }
+
+  // One pass over the trajectory: volumes (plot) and the bounds of the motion (camera, shadows).
+  std::vector<std::vector<double>> volume(objects.size());
+  std::vector<double> rest_volume(objects.size());
+  Eigen::AlignedBox3d bounds;
+  for (const Object& ob : objects)
+    for (Eigen::Index v = 0; v < ob.rest.rows(); ++v) bounds.extend(Eigen::Vector3d(ob.rest.row(v).transpose()));
+  Eigen::MatrixX3d X, X1;
+  if (progress) progress->stage("reading the trajectory", traj.frames);
+  for (int f = 0; f < traj.frames; ++f) {
+    traj.read_frame(f, X);
+    for (size_t b = 0; b < objects.size(); ++b) {
+      const Object& ob = objects[b];
+      const Eigen::MatrixX3d Xb = X.middleRows(ob.offset, ob.vertices);
+      const double vol = tet_volume(ob.T, Xb);
+      if (f == 0) rest_volume[b] = vol;
+      volume[b].push_back(rest_volume[b] > 0 ? 100.0 * (vol / rest_volume[b] - 1.0) : 0.0);
+      for (Eigen::Index v = 0; v < Xb.rows(); ++v) bounds.extend(Eigen::Vector3d(Xb.row(v).transpose()));
+    }
+    if (progress) progress->update(f + 1);
+  }
+  if (progress) progress->finish();
+  // The surfaces may stick out of the coarse meshes a little: grow by 5 %.
+  const Eigen::Vector3d grow = 0.05 * bounds.diagonal();
+  bounds.min() -= grow;
+  bounds.max() += grow;
+  Eigen::AlignedBox3d view_bounds = bounds;
+  if (traj.floor) {
+    // Keep the floor contact in view.
+    view_bounds.min().y() = std::min(view_bounds.min().y(), *traj.floor);
+  }
+
+  // GL context and scene.
+  std::unique_ptr<GlContext> ctx = create_gl_context(o.gl);
+  stats.gl = ctx->description();
+  RendererOptions ro;
+  ro.width = W;
+  ro.height = H;
+  ro.samples = o.samples;
+  Renderer renderer(*ctx, ro);
+  stats.width = W;
+  stats.height = H;
+  stats.samples = renderer.samples();
+  renderer.set_floor(scene.floor);
+  renderer.set_bounds(view_bounds);
+  renderer.set_camera(settings.camera ? *settings.camera : frame_bounds(view_bounds, double(W) / H));
+  for (Object& ob : objects) {
+    const int drawn = static_cast<int>(ob.draw_source.size() ? ob.draw_source.size() : ob.rest.rows());
+    ob.mesh_id = renderer.add_mesh(ob.draw_F, drawn, ob.colour, ob.rigid ? 0.6f : 0.25f, ob.closed);
+    if (o.coarse) ob.lines_id = renderer.add_lines(ob.coarse_edges, ob.vertices, Eigen::Vector3f(0.08f, 0.1f, 0.2f));
+  }
+
+  // Output folder and export streams (after every check).
+  const bool created = !fs::exists(out, ec);
+  fs::create_directories(out, ec);
+  if (ec) throw InputError(out.string() + ": cannot create the directory: " + ec.message());
+  try {
+    check_output_directory(out / "frame_00000.png");
+  } catch (...) {
+    if (created) fs::remove(out, ec);
+    throw;
+  }
+  const fs::path exp = out / "export";
+  if (o.pc2 || o.obj || o.ply || o.vtu) {
+    for (const char* sub : {"obj", "ply", "vtu"}) {
+      const bool on = (sub[0] == 'o' && o.obj) || (sub[0] == 'p' && o.ply) || (sub[0] == 'v' && o.vtu);
+      if (on) fs::create_directories(exp / sub, ec);
+    }
+    fs::create_directories(exp, ec);
+    if (ec) throw InputError(exp.string() + ": cannot create the directory: " + ec.message());
+  }
+  const int count = last - first + 1;
+  std::vector<std::unique_ptr<Pc2Writer>> pc2(objects.size());
+  if (o.pc2)
+    for (size_t b = 0; b < objects.size(); ++b) {
+      SurfaceMesh rest{objects[b].rest, objects[b].F};
+      save_surface(exp / (objects[b].name + ".obj"), rest);
+      pc2[b] = std::make_unique<Pc2Writer>(exp / (objects[b].name + ".pc2"), static_cast<int>(objects[b].rest.rows()),
+                                           count, static_cast<float>(first), 1.0f);
+    }
+  std::vector<std::vector<std::pair<double, std::string>>> pvd(objects.size());
+  stats.setup_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+
+  // --- frames ---
+  const auto t1 = Clock::now();
+  const std::clock_t c1 = std::clock();
+  PngWriter writer(2, 1);
+  Image image;
+  int loaded0 = -1, loaded1 = -1;
+  Eigen::MatrixX3d state;
+  double draw_s = 0, wait_s = 0;  // drawing + read-back, waiting for the encoder
+  for (int k = first; k <= last; ++k) {
+    // The coarse state at t = k / fps, interpolated linearly between trajectory frames.
+    const double s = std::min<double>(traj.frames - 1, k / fps * traj.fps);
+    int i0 = static_cast<int>(std::floor(s + 1e-9));
+    i0 = std::clamp(i0, 0, traj.frames - 1);
+    const double a = std::clamp(s - i0, 0.0, 1.0);
+    const int i1 = std::min(i0 + 1, traj.frames - 1);
+    if (loaded0 != i0) {
+      if (loaded1 == i0) {
+        std::swap(X, X1);
+      } else {
+        traj.read_frame(i0, X);
+      }
+      loaded0 = i0;
+      loaded1 = -1;
+    }
+    if (a > 1e-9 && loaded1 != i1) {
+      traj.read_frame(i1, X1);
+      loaded1 = i1;
+    }
+    state = a > 1e-9 ? Eigen::MatrixX3d((1 - a) * X + a * X1) : X;
+    const double t = k / fps;
+    for (size_t b = 0; b < objects.size(); ++b) {
+      Object& ob = objects[b];
+      ob.coarse = state.middleRows(ob.offset, ob.vertices);
+      if (ob.direct)
+        ob.surface = ob.coarse;
+      else
+        replay(ob.binding, ob.coarse, ob.surface);
+      if (ob.draw_source.size()) {
+        ob.drawn.resize(ob.draw_source.size(), 3);
+        for (Eigen::Index i = 0; i < ob.draw_source.size(); ++i) ob.drawn.row(i) = ob.surface.row(ob.draw_source(i));
+        ob.normals = vertex_normals(ob.drawn, ob.draw_F);
+        renderer.update_mesh(ob.mesh_id, ob.drawn, ob.normals);
+      } else {
+        ob.normals = vertex_normals(ob.surface, ob.draw_F);
+        renderer.update_mesh(ob.mesh_id, ob.surface, ob.normals);
+      }
+      if (ob.lines_id >= 0) renderer.update_lines(ob.lines_id, ob.coarse);
+    }
+    if (o.png) {
+      const auto d0 = Clock::now();
+      writer.recycle(image);
+      renderer.draw(image);
+      const auto d1 = Clock::now();
+      writer.push(out / frame_name("frame_", k, ".png"), std::move(image));
+      draw_s += std::chrono::duration<double>(d1 - d0).count();
+      wait_s += std::chrono::duration<double>(Clock::now() - d1).count();
+    }
+    for (size_t b = 0; b < objects.size(); ++b) {
+      Object& ob = objects[b];
+      if (pc2[b]) pc2[b]->append(ob.surface);
+      if (o.obj || o.ply) {
+        SurfaceMesh m{ob.surface, ob.F};
+        if (o.obj) save_surface(exp / "obj" / frame_name((ob.name + "_").c_str(), k, ".obj"), m);
+        if (o.ply) save_surface(exp / "ply" / frame_name((ob.name + "_").c_str(), k, ".ply"), m);
+      }
+      if (o.vtu) {
+        TetMesh tm;
+        tm.V = ob.coarse;
+        tm.T = ob.T;
+        const std::string rel = "vtu/" + frame_name((ob.name + "_").c_str(), k, ".vtu");
+        save_tet_mesh(exp / rel, tm);
+        pvd[b].emplace_back(t, rel);
+      }
+    }
+    ++stats.rendered;
+    if (o.on_frame)
+      o.on_frame(FrameProgress{k - first + 1, count, std::chrono::duration<double>(Clock::now() - t1).count()});
+  }
+  writer.finish();
+  for (auto& p : pc2)
+    if (p) p->close();
+  if (o.vtu)
+    for (size_t b = 0; b < objects.size(); ++b) write_pvd(exp / (objects[b].name + ".pvd"), pvd[b]);
+  stats.frame_seconds = std::chrono::duration<double>(Clock::now() - t1).count();
+  stats.frame_cpu_seconds = double(std::clock() - c1) / CLOCKS_PER_SEC;
+  spdlog::debug("render: {} frames in {:.3f} s: drawing and read-back {:.3f} s, waiting for the PNG encoder {:.3f} s",
+                stats.rendered, stats.frame_seconds, draw_s, wait_s);
+
+  // --- plot: volume change of every deformable object (every object if none is deformable) ---
+  if (plots) {
+    LinePlot plot;
+    plot.title = "Volume change along the path (" + scene.file.stem().string() + ")";
+    plot.x_label = "time (s)";
+    plot.y_label = "volume change (%)";
+    for (int f = 0; f < traj.frames; ++f) plot.x.push_back(f / traj.fps);
+    for (size_t b = 0; b < objects.size(); ++b)
+      if (!objects[b].rigid || deformable_count == 0)
+        plot.series.push_back(PlotSeries{objects[b].name, volume[b], objects[b].colour});
+    save_plot(out / "volume.png", plot);
+    save_plot(out / "volume.svg", plot);
+  }
+  return stats;
+}
+
+}  // namespace squeeze::render

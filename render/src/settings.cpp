@@ -1,0 +1,43 @@
+#include "squeeze/render/settings.h"
+
+#include <nlohmann/json.hpp>
+
+#include "squeeze/common/json_check.h"
+
+namespace squeeze::render {
+
+RenderSettings parse_render_settings(const nlohmann::json& r, const std::string& file) {
+  RenderSettings s;
+  if (r.is_null()) return s;
+  const JsonChecker c{file};
+  c.keys(r, "render", {"width", "height", "fps", "camera"});
+  if (r.contains("width")) s.width = static_cast<int>(c.integer(r["width"], "render.width", kMinImageSide, kMaxImageSide));
+  if (r.contains("height"))
+    s.height = static_cast<int>(c.integer(r["height"], "render.height", kMinImageSide, kMaxImageSide));
+  if (r.contains("fps")) {
+    s.fps = c.positive(r["fps"], "render.fps");
+    if (*s.fps > 10000) c.fail("render.fps", "must be <= 10000, got " + format_number(*s.fps));
+  }
+  if (r.contains("camera")) {
+    const nlohmann::json& j = r["camera"];
+    c.keys(j, "render.camera", {"eye", "target", "up", "fov_deg"});
+    Camera cam;
+    if (!j.contains("eye")) c.fail("render.camera.eye", "missing (a camera needs eye and target)");
+    if (!j.contains("target")) c.fail("render.camera.target", "missing (a camera needs eye and target)");
+    cam.eye = c.vec3(j["eye"], "render.camera.eye");
+    cam.target = c.vec3(j["target"], "render.camera.target");
+    if (j.contains("up")) cam.up = c.vec3(j["up"], "render.camera.up");
+    if (j.contains("fov_deg")) {
+      cam.fov_deg = c.positive(j["fov_deg"], "render.camera.fov_deg");
+      if (!(cam.fov_deg < 180)) c.fail("render.camera.fov_deg", "must be < 180, got " + format_number(cam.fov_deg));
+    }
+    const Eigen::Vector3d d = cam.target - cam.eye;
+    if (!(d.norm() > 0)) c.fail("render.camera.target", "must differ from render.camera.eye");
+    if (!(cam.up.norm() > 0) || d.normalized().cross(cam.up.normalized()).norm() < 1e-6)
+      c.fail("render.camera.up", "must be non-zero and not parallel to target - eye");
+    s.camera = cam;
+  }
+  return s;
+}
+
+}  // namespace squeeze::render
