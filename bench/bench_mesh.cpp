@@ -1,7 +1,10 @@
 // Benchmarks of `squeeze mesh` (issue 3); see bench/README.md for what each figure means.
 //
 //  BM_Mesh/<model>            the whole pipeline on a corpus model (load, analyse, decompose,
-//                             tetrahedralize, measure), per-stage seconds as counters
+//                             tetrahedralize, measure) as `squeeze mesh MODEL` runs it without
+//                             --target-tets, per-stage seconds as counters
+//  BM_MeshTarget/<model>_<N>  the same with --target-tets N: tets, hulls, min dihedral, min/mean
+//                             edge, volume ratio and coverage as counters
 //  BM_TetrahedralizeVsTetgen  squeeze's tetrahedralization of the bunny's convex shells (their union,
 //                             one conforming mesh) against the Debian `tetgen` binary meshing each
 //                             shell on its own (`tetgen -pq1.414 -Q shell.off`), and their ratio
@@ -28,9 +31,19 @@ fs::path data(const std::string& name) { return fs::path(SQUEEZE_TEST_DATA) / na
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// The options of `squeeze mesh` without --target-tets (cli/cmd_mesh.cpp): max_hulls shells, a
+// boundary within 0.7% of the diagonal, slivers perturbed up to 6 degrees.
+squeeze::MeshOptions boundary_first_options() {
+  squeeze::MeshOptions o;
+  o.tets_per_hull = 0;
+  o.tetrahedralize.facet_distance = 0.007;
+  o.tetrahedralize.sliver_bound = 6.0;
+  return o;
+}
+
 // The whole pipeline, as `squeeze mesh MODEL -o out.mesh` runs it (without writing the file).
 void BM_Mesh(benchmark::State& state, const std::string& model) {
-  const squeeze::MeshOptions options;  // the command line's defaults
+  const squeeze::MeshOptions options = boundary_first_options();  // the command line's defaults
   std::map<std::string, double> stage_sum;
   double tets = 0, hulls = 0, volume_ratio = 0;
   for (auto _ : state) {
@@ -57,6 +70,39 @@ BENCHMARK_CAPTURE(BM_Mesh, dragon, std::string("ChineseDragon-10kv.off"))
 BENCHMARK_CAPTURE(BM_Mesh, elephant, std::string("elephant.off"))
     ->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
+// `squeeze mesh MODEL --target-tets N`: the count and the quality figures of goal "small coarse
+// meshes for the scenes" (the Falling Objects scene: bunny + dragon + plate in about 400 tets).
+void BM_MeshTarget(benchmark::State& state, const std::string& model, int target) {
+  squeeze::MeshOptions options;
+  options.tetrahedralize.target_tets = target;
+  squeeze::MeshResult r;
+  for (auto _ : state) {
+    r = squeeze::mesh_file(data(model), options);
+    benchmark::DoNotOptimize(r.tets.T.data());
+  }
+  state.counters["target"] = target;
+  state.counters["tets"] = r.quality.tets;
+  state.counters["hulls"] = static_cast<double>(r.decomposition.shells.size());
+  state.counters["min_dihedral"] = r.quality.min_dihedral;
+  state.counters["min_edge_ratio"] = r.quality.mean_edge > 0 ? r.quality.min_edge / r.quality.mean_edge : 0;
+  state.counters["volume_ratio"] = r.input_volume > 0 ? r.quality.volume / r.input_volume : 0;
+  state.counters["covered"] = r.covered_fraction;
+  for (const auto& [name, s] : r.seconds) {
+    std::string key = "s_" + name;
+    for (char& c : key)
+      if (c == ' ') c = '_';
+    state.counters[key] = s;
+  }
+}
+BENCHMARK_CAPTURE(BM_MeshTarget, bunny_300, std::string("bunny00.off"), 300)
+    ->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_MeshTarget, bunny_150, std::string("bunny00.off"), 150)
+    ->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_MeshTarget, dragon_150, std::string("ChineseDragon-10kv.off"), 150)
+    ->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_MeshTarget, heart_300, std::string("organs/heart.off"), 300)
+    ->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
 // One convex shell as an OFF file (TetGen 1.5 reads .off with -p).
 void write_shell_off(const fs::path& p, const squeeze::ConvexHull& h) {
   std::ofstream out(p);
@@ -81,7 +127,7 @@ void BM_TetrahedralizeVsTetgen(benchmark::State& state) {
     return;
   }
   // Decompose once, outside the timing.
-  squeeze::MeshOptions options;
+  const squeeze::MeshOptions options = boundary_first_options();
   const squeeze::SurfaceMesh bunny = squeeze::load_surface(data("bunny00.off"));
   squeeze::SurfaceMesh oriented{bunny.V, squeeze::orient_outward(bunny.V, bunny.F)};
   const squeeze::Decomposition d = squeeze::decompose(oriented, options.decomposition);

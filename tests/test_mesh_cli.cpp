@@ -350,6 +350,18 @@ TEST(MeshCliDeterminism, SameInputGivesByteIdenticalOutputTwiceAndForAnyThreadCo
   EXPECT_TRUE(a.err.empty()) << a.err;
 }
 
+TEST(MeshCliDeterminism, SmallTargetIsByteIdenticalForAnyThreadCount) {
+  TempDir dir("determinism-target");
+  const std::string in = data("elephant.off").string();
+  const RunResult one = run_squeeze({"-q", "-j", "1", "mesh", in, "-o", "j1.mesh", "--target-tets", "300"}, dir.path(), 300);
+  const RunResult two = run_squeeze({"-q", "-j", "2", "mesh", in, "-o", "j2.mesh", "--target-tets", "300"}, dir.path(), 300);
+  ASSERT_EQ(one.code, 0) << one.err;
+  ASSERT_EQ(two.code, 0) << two.err;
+  const std::string t1 = read_text(dir / "j1.mesh"), t2 = read_text(dir / "j2.mesh");
+  ASSERT_FALSE(t1.empty());
+  EXPECT_TRUE(t1 == t2) << "-j 1 and -j 2 differ (" << t1.size() << " vs " << t2.size() << " bytes)";
+}
+
 // ---------------------------------------------------------------------------------------------
 // Output formats and side outputs through the command line.
 

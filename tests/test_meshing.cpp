@@ -290,6 +290,64 @@ TEST(MeshingPipeline, SameInputSameOutput) {
   EXPECT_TRUE(a.tets.label == b.tets.label);
 }
 
+TEST(MeshingPipeline, HullBudgetFollowsTheTarget) {
+  squeeze::MeshOptions o;  // tets_per_hull 40, max_hulls 32
+  auto budget = [&](int target) {
+    o.tetrahedralize.target_tets = target;
+    return squeeze::hull_budget(o);
+  };
+  EXPECT_EQ(budget(10), 1);
+  EXPECT_EQ(budget(150), 4);
+  EXPECT_EQ(budget(300), 8);
+  EXPECT_EQ(budget(600), 15);
+  EXPECT_EQ(budget(1500), 32);  // max_hulls caps it
+  o.tets_per_hull = 0;          // max_hulls alone
+  EXPECT_EQ(budget(150), 32);
+  o.tets_per_hull = -1;
+  EXPECT_THROW(squeeze::mesh_surface(box({0, 0, 0}, {1, 1, 1}), o), InputError);
+}
+
+TEST(MeshingQuality, InflateToCoverMovesTheBoundaryOutLocally) {
+  // The Kuhn cube [0,1]³ (6 tets) and points just outside two of its faces.
+  TetMesh m;
+  m.V.resize(8, 3);
+  for (int i = 0; i < 8; ++i) m.V.row(i) << (i & 1), ((i >> 1) & 1), ((i >> 2) & 1);
+  const int tets[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
+  m.T.resize(6, 4);
+  for (int t = 0; t < 6; ++t) m.T.row(t) << tets[t][0], tets[t][1], tets[t][2], tets[t][3];
+  squeeze::orient_positively(m);
+  Eigen::MatrixX3d P(3, 3);
+  P << 0.5, 0.5, 1.05,  // above the top face
+      0.3, -0.04, 0.5,  // in front of the front face
+      0.5, 0.5, 0.5;    // inside already
+  const double before = squeeze::tet_volumes(m).sum();
+  const int moves = squeeze::inflate_to_cover(m, P, 0.01, 10.0);
+  EXPECT_GT(moves, 0);
+  const squeeze::TetLocator locator(m);
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    double d = 0;
+    locator.nearest(P.row(i), &d);
+    EXPECT_LE(d, 0.01) << "point " << i << " still " << d << " outside";
+  }
+  EXPECT_GT(squeeze::tet_volumes(m).minCoeff(), 0);
+  const double after = squeeze::tet_volumes(m).sum();
+  EXPECT_GT(after, before);
+  EXPECT_LT(after, 1.5 * before);  // local moves, not a blow-up
+  // Nothing outside: nothing moves.
+  const Eigen::MatrixX3d V = m.V;
+  EXPECT_EQ(squeeze::inflate_to_cover(m, P.bottomRows(1), 0.01, 10.0), 0);
+  EXPECT_TRUE(m.V == V);
+}
+
+TEST(MeshingQuality, EdgeFiguresAreReported) {
+  const auto r = squeeze::mesh_surface(l_shape(), fast_options());
+  const TetFacts f = tet_facts(r.tets);
+  EXPECT_NEAR(r.quality.min_edge, f.min_edge, 1e-12);
+  EXPECT_NEAR(r.quality.mean_edge, f.mean_edge, 1e-9 * f.mean_edge);
+  EXPECT_GE(r.quality.min_edge, 0.1 * r.quality.mean_edge);
+  EXPECT_GE(r.quality.min_dihedral, 10.0 - 1e-9);
+}
+
 TEST(MeshingPipeline, DegenerateInputIsAnInputError) {
   SurfaceMesh m;
   m.V.resize(3, 3);

@@ -50,12 +50,61 @@ Eigen::MatrixX3d extreme_points(const ConvexHull& hull) {
   return out;
 }
 
+namespace {
+
+// Akl–Toussaint filter: the points extreme along 26 directions span a polytope inside the hull;
+// points strictly inside it (by more than a rounding margin) are no hull points and are dropped.
+// Returns the indices of the points kept (all of them when the filter does not apply).
+std::vector<Eigen::Index> hull_candidates(const Eigen::MatrixX3d& P) {
+  std::vector<Eigen::Index> keep;
+  const Eigen::Index n = P.rows();
+  if (n < 2000) {
+    for (Eigen::Index i = 0; i < n; ++i) keep.push_back(i);
+    return keep;
+  }
+  std::vector<Eigen::Vector3d> dirs;
+  for (int x = -1; x <= 1; ++x)
+    for (int y = -1; y <= 1; ++y)
+      for (int z = -1; z <= 1; ++z)
+        if (x || y || z) dirs.emplace_back(x, y, z);
+  std::vector<Eigen::Index> arg(dirs.size(), 0);
+  std::vector<double> best(dirs.size(), -INFINITY);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (size_t d = 0; d < dirs.size(); ++d) {
+      const double s = dirs[d].dot(P.row(i).transpose());
+      if (s > best[d]) best[d] = s, arg[d] = i;  // ties: the first (deterministic)
+    }
+  std::sort(arg.begin(), arg.end());
+  arg.erase(std::unique(arg.begin(), arg.end()), arg.end());
+  Eigen::MatrixX3d E(static_cast<Eigen::Index>(arg.size()), 3);
+  for (size_t k = 0; k < arg.size(); ++k) E.row(static_cast<Eigen::Index>(k)) = P.row(arg[k]);
+  const ConvexHull inner = convex_hull(E);  // fewer than 2000 points: no recursion
+  if (inner.planes.rows() == 0 || !(inner.volume > 0)) {
+    for (Eigen::Index i = 0; i < n; ++i) keep.push_back(i);
+    return keep;
+  }
+  const double scale = P.cwiseAbs().maxCoeff() + (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm();
+  const double margin = 1e-9 * scale;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    bool strictly_inside = true;
+    for (Eigen::Index k = 0; k < inner.planes.rows() && strictly_inside; ++k)
+      strictly_inside = inner.planes(k, 0) * P(i, 0) + inner.planes(k, 1) * P(i, 1) + inner.planes(k, 2) * P(i, 2) -
+                            inner.planes(k, 3) < -margin;
+    if (!strictly_inside) keep.push_back(i);
+  }
+  return keep;
+}
+
+}  // namespace
+
 ConvexHull convex_hull(const Eigen::MatrixX3d& P) {
   ConvexHull hull;
   if (P.rows() < 4) return hull;
   std::vector<Point> pts;
-  pts.reserve(static_cast<size_t>(P.rows()));
-  for (Eigen::Index i = 0; i < P.rows(); ++i) pts.emplace_back(P(i, 0), P(i, 1), P(i, 2));
+  const std::vector<Eigen::Index> candidates = hull_candidates(P);
+  pts.reserve(candidates.size());
+  for (Eigen::Index i : candidates) pts.emplace_back(P(i, 0), P(i, 1), P(i, 2));
+  if (pts.size() < 4) return hull;
   // Dimension check: all points coplanar?
   const Point& a = pts[0];
   size_t ib = 1;

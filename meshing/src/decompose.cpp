@@ -490,8 +490,21 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     }
     Eigen::MatrixX3d piece_hull_pts;
     {
-      Eigen::MatrixX3d all(static_cast<Eigen::Index>(centres.size()), 3);
-      for (size_t i = 0; i < centres.size(); ++i) all.row(static_cast<Eigen::Index>(i)) = centres[i].transpose();
+      // Only voxels with a 6-neighbour outside the piece can be hull corners (an inner voxel is
+      // the midpoint of two neighbours, and the jitter is far too small to change that): the hull
+      // of ~n^(2/3) points, not n. P.voxels is sorted: membership by binary search.
+      std::vector<size_t> ends;
+      for (size_t i = 0; i < P.voxels.size(); ++i) {
+        bool boundary = false;
+        int neighbours = 0;
+        g.neighbours6(P.voxels[i], [&](int u) {
+          ++neighbours;
+          boundary = boundary || !std::binary_search(P.voxels.begin(), P.voxels.end(), u);
+        });
+        if (boundary || neighbours < 6) ends.push_back(i);
+      }
+      Eigen::MatrixX3d all(static_cast<Eigen::Index>(ends.size()), 3);
+      for (size_t i = 0; i < ends.size(); ++i) all.row(static_cast<Eigen::Index>(i)) = centres[ends[i]].transpose();
       piece_hull_pts = extreme_points(convex_hull(all));
       if (piece_hull_pts.rows() == 0) piece_hull_pts = all;
     }

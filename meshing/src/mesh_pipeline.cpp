@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 
 #include "squeeze/common/error.h"
@@ -37,8 +38,17 @@ class StageTimer {
 
 }  // namespace
 
+int hull_budget(const MeshOptions& opt) {
+  const double per_hull = opt.tets_per_hull;
+  if (per_hull <= 0) return opt.decomposition.max_hulls;
+  const double n = std::round(static_cast<double>(opt.tetrahedralize.target_tets) / per_hull);
+  return static_cast<int>(std::clamp(n, 1.0, static_cast<double>(std::max(1, opt.decomposition.max_hulls))));
+}
+
 MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
   if (!(opt.coverage_tolerance >= 0)) throw InputError("coverage tolerance must be >= 0");
+  if (!(opt.tets_per_hull >= 0)) throw InputError("tets_per_hull must be >= 0");
+  if (opt.tetrahedralize.target_tets < 1) throw InputError("--target-tets must be at least 1");
   MeshResult r;
   StageTimer timer(r, progress);
   timer.start("analysing input");
@@ -50,13 +60,16 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   if (!(diag > 0)) throw InputError("input has zero extent (all vertices coincide)");
 
   timer.start("decomposing");
-  r.decomposition = decompose(r.input, opt.decomposition, progress);
+  DecompositionOptions dopt = opt.decomposition;
+  if (dopt.max_hulls >= 1) dopt.max_hulls = hull_budget(opt);
+  r.hull_budget = dopt.max_hulls;
+  r.decomposition = decompose(r.input, dopt, progress);
   r.input_volume_from_winding_number = !r.info.closed;
   r.input_volume = r.info.closed ? r.info.volume : r.decomposition.solid_volume;
   if (!r.info.closed) r.info.volume = r.input_volume;
 
   timer.start("tetrahedralizing");
-  r.tets = tetrahedralize(r.decomposition.shells, opt.tetrahedralize, &r.tet_stats, progress);
+  r.tets = tetrahedralize(r.decomposition.shells, opt.tetrahedralize, &r.tet_stats, progress, &r.input.V);
   if (r.tets.T.rows() == 0) throw InputError("tetrahedralization produced no tetrahedra");
 
   timer.start("measuring");
@@ -137,19 +150,25 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"max_concavity", r.decomposition.max_concavity},
         {"max_concavity_fraction", diag > 0 ? r.decomposition.max_concavity / diag : 0.0},
         {"concavity_threshold", r.decomposition.threshold},
-        {"hit_max_hulls", r.decomposition.hit_max_hulls}}},
+        {"hit_max_hulls", r.decomposition.hit_max_hulls},
+        {"hull_budget", r.hull_budget}}},
       {"tets",
        {{"tets", r.quality.tets},
         {"vertices", r.quality.vertices},
         {"min_dihedral_deg", r.quality.min_dihedral},
         {"max_dihedral_deg", r.quality.max_dihedral},
         {"min_tet_volume", r.quality.min_volume},
+        {"min_edge", r.quality.min_edge},
+        {"mean_edge", r.quality.mean_edge},
+        {"min_edge_ratio", r.quality.mean_edge > 0 ? r.quality.min_edge / r.quality.mean_edge : 0.0},
         {"volume", r.quality.volume},
         {"volume_ratio", r.input_volume > 0 ? r.quality.volume / r.input_volume : 0.0},
         {"components", r.quality.components},
         {"faces_shared_by_more_than_two", r.quality.overshared_faces},
         {"mesh3_attempts", r.tet_stats.attempts},
         {"cell_size", r.tet_stats.cell_size},
+        {"facet_distance", r.tet_stats.facet_distance},
+        {"offset", r.tet_stats.offset},
         {"peeled_slivers", r.tet_stats.peeled_slivers}}},
       {"coverage",
        {{"inside_fraction", r.inside_fraction},

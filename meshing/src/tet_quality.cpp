@@ -6,6 +6,9 @@
 #include <cmath>
 #include <functional>
 #include <numeric>
+#include <vector>
+
+#include <tbb/parallel_for.h>
 
 namespace squeeze {
 namespace {
@@ -136,6 +139,117 @@ int peel_boundary_slivers(TetMesh& m, double min_degrees) {
   return removed;
 }
 
+int inflate_to_cover(TetMesh& m, const Eigen::MatrixX3d& P, double tolerance, double min_degrees, int iterations) {
+  int moves = 0;
+  const Eigen::Index nv = m.V.rows();
+  // Tets around each vertex (CSR).
+  std::vector<int> start(static_cast<size_t>(nv) + 1, 0), items;
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k) ++start[static_cast<size_t>(m.T(t, k)) + 1];
+  for (size_t i = 0; i < static_cast<size_t>(nv); ++i) start[i + 1] += start[i];
+  items.resize(static_cast<size_t>(start.back()));
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+      for (int k = 0; k < 4; ++k) items[static_cast<size_t>(fill[static_cast<size_t>(m.T(t, k))]++)] = static_cast<int>(t);
+  }
+  for (int round = 0; round < iterations; ++round) {
+    const FaceCensus census = face_census(m);
+    const Eigen::Index nb = census.boundary.rows();
+    if (nb == 0) break;
+    // Points outside by more than the tolerance, and their distance.
+    const TetLocator locator(m);
+    std::vector<double> dist(static_cast<size_t>(P.rows()), 0.0);
+    tbb::parallel_for(Eigen::Index(0), P.rows(), [&](Eigen::Index i) {
+      if (locator.locate(P.row(i)) < 0) locator.nearest(P.row(i), &dist[static_cast<size_t>(i)]);
+    });
+    std::vector<Eigen::Index> out;
+    for (Eigen::Index i = 0; i < P.rows(); ++i)
+      if (dist[static_cast<size_t>(i)] > tolerance) out.push_back(i);
+    if (out.empty()) break;
+    // Boundary face normals and vertex normals (area weighted).
+    std::vector<Vec3> fn(static_cast<size_t>(nb));
+    std::vector<Vec3> vn(static_cast<size_t>(nv), Vec3::Zero());
+    for (Eigen::Index f = 0; f < nb; ++f) {
+      const Vec3 a = m.V.row(census.boundary(f, 0)).transpose(), b = m.V.row(census.boundary(f, 1)).transpose(),
+                 c = m.V.row(census.boundary(f, 2)).transpose();
+      const Vec3 n = (b - a).cross(c - a);
+      for (int k = 0; k < 3; ++k) vn[static_cast<size_t>(census.boundary(f, k))] += n;
+      const double len = n.norm();
+      fn[static_cast<size_t>(f)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
+    }
+    for (auto& n : vn)
+      if (n.norm() > 0) n.normalize();
+    // Nearest boundary face of every point outside (ties to the lowest index).
+    std::vector<int> face(out.size(), 0);
+    tbb::parallel_for(size_t(0), out.size(), [&](size_t i) {
+      const Vec3 p = P.row(out[i]).transpose();
+      double best = INFINITY;
+      for (Eigen::Index f = 0; f < nb; ++f) {
+        const double d = point_triangle_distance(p, m.V.row(census.boundary(f, 0)).transpose(),
+                                                 m.V.row(census.boundary(f, 1)).transpose(),
+                                                 m.V.row(census.boundary(f, 2)).transpose());
+        if (d < best) best = d, face[i] = static_cast<int>(f);
+      }
+    });
+    std::vector<double> push(static_cast<size_t>(nv), 0.0);
+    const double push_share = 0.6;  // of the distance, per round (measured: 1.0 inflates more)
+    for (size_t i = 0; i < out.size(); ++i) {
+      const int f = face[i];
+      for (int k = 0; k < 3; ++k) {
+        const int v = census.boundary(f, k);
+        // Barycentric share: the face vertex nearest the point moves the most; later rounds
+        // finish what a short push leaves (pushing all three by the full distance inflates).
+        const double along = std::max(0.5, vn[static_cast<size_t>(v)].dot(fn[static_cast<size_t>(f)]));
+        push[static_cast<size_t>(v)] = std::max(push[static_cast<size_t>(v)], push_share * dist[static_cast<size_t>(out[i])] / along);
+      }
+    }
+    // Apply, halving (then dropping) moves that would spoil a tetrahedron.
+    std::vector<int> moved;
+    for (Eigen::Index v = 0; v < nv; ++v)
+      if (push[static_cast<size_t>(v)] > 0) moved.push_back(static_cast<int>(v));
+    if (moved.empty()) break;
+    const Eigen::MatrixX3d before = m.V;
+    std::vector<double> scale(static_cast<size_t>(nv), 1.0);
+    auto tet_ok = [&](int t) {
+      const Eigen::RowVector3d a = m.V.row(m.T(t, 0)), b = m.V.row(m.T(t, 1)), c = m.V.row(m.T(t, 2)), d = m.V.row(m.T(t, 3));
+      if (!(tet_volume(a, b, c, d) > 0)) return false;
+      const auto now = dihedral_angles(a, b, c, d);
+      const auto old = dihedral_angles(before.row(m.T(t, 0)), before.row(m.T(t, 1)), before.row(m.T(t, 2)),
+                                       before.row(m.T(t, 3)));
+      const double lo = std::min(min_degrees, *std::min_element(old.begin(), old.end()));
+      return *std::min_element(now.begin(), now.end()) >= lo;
+    };
+    bool ok = false;
+    for (int attempt = 0; attempt < 8 && !ok; ++attempt) {
+      for (int v : moved)
+        m.V.row(v) = before.row(v) + scale[static_cast<size_t>(v)] * push[static_cast<size_t>(v)] * vn[static_cast<size_t>(v)].transpose();
+      ok = true;
+      for (int v : moved) {
+        if (scale[static_cast<size_t>(v)] == 0.0) continue;
+        for (int j = start[static_cast<size_t>(v)]; j < start[static_cast<size_t>(v) + 1]; ++j) {
+          const int t = items[static_cast<size_t>(j)];
+          if (tet_ok(t)) continue;
+          ok = false;
+          for (int k = 0; k < 4; ++k) {
+            double& sc = scale[static_cast<size_t>(m.T(t, k))];
+            sc = attempt >= 3 ? 0.0 : 0.5 * sc;
+          }
+        }
+      }
+    }
+    if (!ok) {
+      m.V = before;
+      break;
+    }
+    int made = 0;
+    for (int v : moved) made += scale[static_cast<size_t>(v)] > 0;
+    moves += made;
+    if (made == 0) break;
+  }
+  return moves;
+}
+
 FaceCensus face_census(const TetMesh& m) {
   FaceCensus c;
   const auto faces = sorted_faces(m.T);
@@ -192,6 +306,22 @@ TetQuality tet_quality(const TetMesh& m) {
     q.min_dihedral = std::min(q.min_dihedral, *std::min_element(a.begin(), a.end()));
     q.max_dihedral = std::max(q.max_dihedral, *std::max_element(a.begin(), a.end()));
   }
+  // Unique edges: (min, max) vertex pairs of the six edges of every tet.
+  std::vector<std::pair<int, int>> edges;
+  edges.reserve(static_cast<size_t>(q.tets) * 6);
+  for (int t = 0; t < q.tets; ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) edges.emplace_back(std::min(m.T(t, a), m.T(t, b)), std::max(m.T(t, a), m.T(t, b)));
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  q.min_edge = INFINITY;
+  double sum = 0;
+  for (const auto& [a, b] : edges) {
+    const double l = (m.V.row(a) - m.V.row(b)).norm();
+    q.min_edge = std::min(q.min_edge, l);
+    sum += l;
+  }
+  q.mean_edge = sum / static_cast<double>(edges.size());
   Eigen::VectorXi C;
   q.components = tet_components(m, C);
   q.overshared_faces = face_census(m).overshared;

@@ -19,11 +19,14 @@ class Progress;
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 1;
+constexpr int kMeshingAlgorithmVersion = 2;
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // concavity threshold, hull budget, voxel grid
   TetrahedralizeOptions tetrahedralize; // target tet count, facet distance, sliver bound
+  double tets_per_hull = 40;            // the hull budget is also at most target_tets / this (at
+                                        // least 1): a coarse mesh cannot express many shells' facets;
+                                        // 0: decomposition.max_hulls alone
   double coverage_tolerance = 0.005;    // fraction of the bbox diagonal for the coverage figure
   bool check_self_intersection = true;  // for the report (costs about a tenth of a second per 100k faces)
 };
@@ -33,6 +36,7 @@ struct MeshResult {
   SurfaceMesh input;            // as loaded (welded), faces oriented outward per component
   SurfaceInfo info;             // counts, closedness, self-intersection, volume
   Decomposition decomposition;  // convex shells
+  int hull_budget = 0;          // max_hulls the decomposition ran with (see hull_budget())
   TetMesh tets;                 // the coarse tetrahedral mesh
   TetQuality quality;
   TetrahedralizeStats tet_stats;
@@ -43,6 +47,10 @@ struct MeshResult {
   double max_outside_distance = 0;  // worst distance of an input vertex outside the mesh (units)
   std::vector<std::pair<std::string, double>> seconds;  // per stage
 };
+
+/// The hull budget the pipeline uses: min(decomposition.max_hulls, max(1, round(target_tets /
+/// tets_per_hull))), or decomposition.max_hulls when tets_per_hull is 0.
+int hull_budget(const MeshOptions& options);
 
 /// Runs the pipeline on an already loaded surface (faces need not be consistently oriented).
 /// Throws InputError on bad options or an input that yields no volume at all.

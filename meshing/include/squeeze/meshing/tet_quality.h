@@ -31,6 +31,16 @@ void remove_unused_vertices(TetMesh& mesh);
 /// left alone. Returns how many were removed.
 int peel_boundary_slivers(TetMesh& mesh, double min_degrees);
 
+/// Moves boundary vertices outward (along their area-weighted normals) until the points P lie
+/// inside the mesh or within `tolerance` of it: every point farther out pushes the three vertices of
+/// its nearest boundary face by its distance. A move is halved, then dropped, where a tetrahedron
+/// would become inverted or get a dihedral angle below min(min_degrees, its own before). Local
+/// moves cover a coarse mesh's chords at far less volume than dilating everything. Up to
+/// `iterations` rounds; deterministic. Returns how many vertex moves were made.
+///   P  #P by 3 points (units); tolerance in units
+int inflate_to_cover(TetMesh& mesh, const Eigen::MatrixX3d& P, double tolerance, double min_degrees,
+                     int iterations = 6);
+
 /// Faces of the mesh with how many tetrahedra share them.
 struct FaceCensus {
   Eigen::MatrixX3i boundary;   // #B by 3 boundary faces, oriented outward
@@ -47,6 +57,7 @@ struct TetQuality {
   int tets = 0, vertices = 0;
   double min_volume = 0, volume = 0;         // units³
   double min_dihedral = 0, max_dihedral = 0; // degrees
+  double min_edge = 0, mean_edge = 0;         // units, over the mesh's unique edges
   int components = 0;
   int overshared_faces = 0;
 };
