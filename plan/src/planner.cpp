@@ -158,10 +158,17 @@ PlannerOptions planner_options(const fem::SceneWorld& w) {
   const fem::Body& robot = w.world.body(r);
   double mass = 0;
   for (int i = 0; i < robot.vertices(); ++i) mass += w.world.masses()(w.world.first_state_row(r) + i);
-  o.max_force = 2.0 * mass * 9.81;
   const Eigen::Vector3d lo = robot.rest.colwise().minCoeff(), hi = robot.rest.colwise().maxCoeff();
-  o.control_radius = 0.25 * (hi - lo).norm();
+  const double size = (hi - lo).norm();
+  o.control_radius = 0.25 * size;
   const json& j = scene.planner;
+  // Enough to lift the robot against its own gravity twice over, and to move it
+  // within t_max from rest about half its own size (½ a t² = d / 2).
+  const double g = scene.objects[r].gravity ? scene.gravity.norm() : 0.0;
+  const double t_max = !j.is_null() && j.contains("t_max") && j["t_max"].is_number() && j["t_max"].get<double>() > 0
+                           ? j["t_max"].get<double>()
+                           : o.t_max;
+  o.max_force = mass * std::max(2.0 * g, size / (t_max * t_max));
   if (!j.is_null()) {
     c.keys(j, "planner", {"iterations", "seed", "goal_bias", "t_min", "t_max", "max_force", "control_radius",
                           "max_volume_change", "weights", "interpolation_omega", "settle", "batch"});

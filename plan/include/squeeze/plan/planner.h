@@ -49,7 +49,7 @@ struct PlannerOptions {
   double goal_bias = 0.05;         // probability that x is the goal position
   double t_min = 0.05;             // s, shortest expansion
   double t_max = 0.5;              // s, longest expansion
-  double max_force = 0;            // N; scene default: 2 × the robot's weight (mass × 9.81 m/s²)
+  double max_force = 0;            // N; scene default: robot mass × max(2 |g|, d / t_max²), d its bbox diagonal
   double control_radius = 0;       // m; scene default: ¼ of the robot's bounding-box diagonal
   double max_volume_change = 0.1;  // fraction of rest volume, any deformable object
   double interpolation_omega = 0;  // 1/s, ω of the interpolation force; default 2π / t_max
