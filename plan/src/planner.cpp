@@ -24,7 +24,14 @@ namespace {
 // library implementations; a plan must replay the same everywhere).
 class Random {
  public:
-  explicit Random(std::uint64_t seed) : s_(seed * 0x9E3779B97F4A7C15ULL + 0xD1B54A32D192ED03ULL) {}
+  // The seed is mixed first: splitmix64 walks one Weyl sequence, and seeds k and k + 1 used directly
+  // would start one draw apart on it (correlated streams).
+  explicit Random(std::uint64_t seed) : s_(mix(seed + 0xD1B54A32D192ED03ULL)) {}
+  static std::uint64_t mix(std::uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+  }
   std::uint64_t next() {  // splitmix64
     std::uint64_t z = (s_ += 0x9E3779B97F4A7C15ULL);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
