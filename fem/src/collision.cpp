@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <optional>
+#include <new>
 
 #include "squeeze/common/error.h"
 
@@ -168,76 +168,108 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
     entry_[b.head + slot] = {X(v, 0), X(v, 1), X(v, 2), vkey_[v], v, interior ? -1 - g : g};
   }
   for (std::uint32_t h : touched_) bk[h].count = ifill_[h];
-  const std::array<std::int64_t, 3> all_lo_cell{cell_of(all_lo[0], inv), cell_of(all_lo[1], inv), cell_of(all_lo[2], inv)},
-      all_hi_cell{cell_of(all_hi[0], inv), cell_of(all_hi[1], inv), cell_of(all_hi[2], inv)},
-      def_lo_cell{cell_of(def_lo[0], inv), cell_of(def_lo[1], inv), cell_of(def_lo[2], inv)},
+  const std::array<std::int64_t, 3> def_lo_cell{cell_of(def_lo[0], inv), cell_of(def_lo[1], inv), cell_of(def_lo[2], inv)},
       def_hi_cell{cell_of(def_hi[0], inv), cell_of(def_hi[1], inv), cell_of(def_hi[2], inv)};
   // Pass 2: tets look up the cells of their AABB.
   const int nblocks = (nt + kBlock - 1) / kBlock;
   if (blocks_.size() < static_cast<size_t>(nblocks)) blocks_.resize(static_cast<size_t>(nblocks));
+  if (cands_.size() < static_cast<size_t>(nblocks)) cands_.resize(static_cast<size_t>(nblocks));
   const std::uint32_t now = now_;
   const VertexEntry* const entries = entry_.data();
+  // Boxes of the objects that have interior vertices (the others never need their entries' tails).
+  struct IBox {
+    int g;
+    double lo[3], hi[3];
+  };
+  std::vector<IBox> iboxes;
+  for (int g = 0; g < ngroups; ++g)
+    if (ilo[g][0] <= ihi[g][0]) iboxes.push_back({g, {ilo[g][0], ilo[g][1], ilo[g][2]}, {ihi[g][0], ihi[g][1], ihi[g][2]}});
+  const double* const xp = X.data();
+  const std::ptrdiff_t xs = X.outerStride();
+  const int* const tcol = T.data();  // column-major: T(t, k) = tcol[t + k·nt]
+  const bool self = filter.self_collision;
   auto block = [&](int blk) {
     auto& res = blocks_[blk];
     res.clear();
-    // Cell-mates found for the last scanned cell range: consecutive tets of a mesh often share
-    // their range (the 6 tets of a Kuhn cube share their AABB), so the lookups are reused.
-    std::vector<const VertexEntry*> cand;
+    // Cell-mates found for the last scanned cell range (a per-block buffer, reused between
+    // queries): consecutive tets of a mesh often share their range (the 6 tets of a Kuhn cube
+    // share their AABB), so the lookups are reused.
+    std::vector<const VertexEntry*>& cand = cands_[blk];
     std::array<std::int64_t, 7> cached{};
     bool have_cached = false;
     const int t1 = std::min(nt, (blk + 1) * kBlock);
     for (int t = blk * kBlock; t < t1; ++t) {
-      const int c[4] = {T(t, 0), T(t, 1), T(t, 2), T(t, 3)};
-      Eigen::Vector3d lo = X.row(c[0]).transpose(), hi = lo;
-      for (int q = 1; q < 4; ++q) {
-        lo = lo.cwiseMin(X.row(c[q]).transpose());
-        hi = hi.cwiseMax(X.row(c[q]).transpose());
-      }
-      if (!lo.allFinite() || !hi.allFinite()) continue;
+      const int c[4] = {tcol[t], tcol[t + nt], tcol[t + 2 * nt], tcol[t + 3 * nt]};
+      const double* const p0 = xp + xs * c[0];
+      const double* const p1 = xp + xs * c[1];
+      const double* const p2 = xp + xs * c[2];
+      const double* const p3 = xp + xs * c[3];
+      using CMap = Eigen::Map<const Eigen::Vector3d>;
+      Eigen::Vector3d lo = CMap(p0), hi = lo;
+      lo = lo.cwiseMin(CMap(p1)), hi = hi.cwiseMax(CMap(p1));
+      lo = lo.cwiseMin(CMap(p2)), hi = hi.cwiseMax(CMap(p2));
+      lo = lo.cwiseMin(CMap(p3)), hi = hi.cwiseMax(CMap(p3));
+      // All finite: x − x is 0 for a finite x, NaN otherwise.
+      if (!((lo - lo).sum() + (hi - hi).sum() == 0.0)) continue;
       const int tg = filter.tet_group[t];
       const bool tet_rigid = filter.group_rigid[tg] != 0;
-      const Eigen::Vector3d clo = lo.cwiseMax(tet_rigid ? def_lo : all_lo), chi = hi.cwiseMin(tet_rigid ? def_hi : all_hi);
-      if ((clo.array() > chi.array()).any()) continue;
+      // A deformable tet's corners are among all vertices, so its AABB lies in theirs: only rigid
+      // tets (which meet deformable vertices only) are clipped, to the deformable vertices' box.
+      if (tet_rigid && ((lo.array() > def_hi.array()).any() || (def_lo.array() > hi.array()).any() ||
+                        (def_lo.array() > def_hi.array()).any()))
+        continue;
       // Interior vertices only meet tets of other objects: scan them only near such vertices.
       bool need_interior = false;
-      for (int g = 0; g < ngroups && !need_interior; ++g)
-        need_interior = g != tg && (ilo[g].array() <= hi.array()).all() && (ihi[g].array() >= lo.array()).all();
+      for (const IBox& b : iboxes)
+        if (b.g != tg && b.lo[0] <= hi[0] && b.lo[1] <= hi[1] && b.lo[2] <= hi[2] && b.hi[0] >= lo[0] &&
+            b.hi[1] >= lo[1] && b.hi[2] >= lo[2]) {
+          need_interior = true;
+          break;
+        }
       const size_t first = res.size();
-      std::optional<TetFrame> frame;  // built at the first candidate
-      const bool self = filter.self_collision;
-      // The AABB test inline in the scan loops; the rest (rarely reached) in accept().
+      alignas(TetFrame) unsigned char frame_buf[sizeof(TetFrame)];
+      const TetFrame* frame = nullptr;  // built at the first candidate
       const double lx = lo[0], ly = lo[1], lz = lo[2], hx = hi[0], hy = hi[1], hz = hi[2];
       auto in_box = [&](const VertexEntry& en) {
         return !(en.x < lx || en.x > hx || en.y < ly || en.y > hy || en.z < lz || en.z > hz);
       };
-      auto accept = [&](const VertexEntry& en) {
-        const int v = en.vertex;
-        if (v == c[0] || v == c[1] || v == c[2] || v == c[3]) return;
-        const int vg = en.group >= 0 ? en.group : -1 - en.group;
-        if (vg == tg ? (!self || en.group < 0) : (tet_rigid && filter.group_rigid[vg])) return;
+      auto accept = [&](double x, double y, double z, int v, int group) {
+        if ((v == c[0]) | (v == c[1]) | (v == c[2]) | (v == c[3])) return;
+        const int vg = group >= 0 ? group : -1 - group;
+        if (vg == tg ? (!self || group < 0) : (tet_rigid && filter.group_rigid[vg])) return;
         if (!frame)
-          frame.emplace(X.row(c[0]).transpose(), X.row(c[1]).transpose(), X.row(c[2]).transpose(),
-                        X.row(c[3]).transpose());
+          frame = new (frame_buf) TetFrame(Eigen::Vector3d(p0[0], p0[1], p0[2]), Eigen::Vector3d(p1[0], p1[1], p1[2]),
+                                           Eigen::Vector3d(p2[0], p2[1], p2[2]), Eigen::Vector3d(p3[0], p3[1], p3[2]));
         Contact ct;
-        if (frame->contains(Eigen::Vector3d(en.x, en.y, en.z), &ct.bary)) {
+        if (frame->contains(Eigen::Vector3d(x, y, z), &ct.bary)) {
           ct.vertex = v;
           ct.tet = t;
           res.push_back(ct);
         }
       };
-      // Cells of the clipped AABB: floor is monotone, so the cell of a min / max of coordinates is
-      // the min / max of the cells (the corners' cells come from pass 1).
-      const auto &C0 = vcell_[c[0]], &C1 = vcell_[c[1]], &C2 = vcell_[c[2]], &C3 = vcell_[c[3]];
-      const auto& clip_lo = tet_rigid ? def_lo_cell : all_lo_cell;
-      const auto& clip_hi = tet_rigid ? def_hi_cell : all_hi_cell;
-      auto cmin = [&](int a) { return std::max(std::min(std::min(C0[a], C1[a]), std::min(C2[a], C3[a])), clip_lo[a]); };
-      auto cmax = [&](int a) { return std::min(std::max(std::max(C0[a], C1[a]), std::max(C2[a], C3[a])), clip_hi[a]); };
-      const std::int64_t i0 = cmin(0), i1 = cmax(0), j0 = cmin(1), j1 = cmax(1), k0 = cmin(2), k1 = cmax(2);
-      const double cells = double(i1 - i0 + 1) * double(j1 - j0 + 1) * double(k1 - k0 + 1);
-      const std::int64_t span = std::max({i1 - i0, j1 - j0, k1 - k0});
-      if (cells > nv || span >= (1 << 20)) {  // a huge tet (far larger than a cell): test every vertex
+      // Cells of the (clipped) AABB: floor is monotone, so the cell of a min / max of coordinates
+      // is the min / max of the cells (the corners' cells come from pass 1).
+      const std::int64_t *C0 = vcell_[c[0]].data(), *C1 = vcell_[c[1]].data(), *C2 = vcell_[c[2]].data(),
+                         *C3 = vcell_[c[3]].data();
+      std::int64_t r[6];
+      for (int a = 0; a < 3; ++a) {
+        const std::int64_t m01 = C1[a] < C0[a] ? C1[a] : C0[a], m23 = C3[a] < C2[a] ? C3[a] : C2[a];
+        const std::int64_t M01 = C0[a] < C1[a] ? C1[a] : C0[a], M23 = C2[a] < C3[a] ? C3[a] : C2[a];
+        r[2 * a] = m23 < m01 ? m23 : m01;
+        r[2 * a + 1] = M01 < M23 ? M23 : M01;
+      }
+      if (tet_rigid)
+        for (int a = 0; a < 3; ++a) {
+          r[2 * a] = std::max(r[2 * a], def_lo_cell[a]);
+          r[2 * a + 1] = std::min(r[2 * a + 1], def_hi_cell[a]);
+        }
+      const std::int64_t i0 = r[0], i1 = r[1], j0 = r[2], j1 = r[3], k0 = r[4], k1 = r[5];
+      const std::int64_t di = i1 - i0, dj = j1 - j0, dk = k1 - k0;
+      if ((di | dj | dk) >= (1 << 20) || (di + 1) * (dj + 1) * (dk + 1) > nv) {
+        // a huge tet (far larger than a cell): test every vertex
         for (int e = 0; e < nv; ++e)
-          if (in_box(entries[e])) accept(entries[e]);
+          if (in_box(entries[e]))
+            accept(entries[e].x, entries[e].y, entries[e].z, entries[e].vertex, entries[e].group);
       } else {
         const std::array<std::int64_t, 7> range{i0, i1, j0, j1, k0, k1, need_interior ? 1 : 0};
         if (!have_cached || range != cached) {
@@ -264,7 +296,7 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
           }
         }
         for (const VertexEntry* en : cand)
-          if (in_box(*en)) accept(*en);
+          if (in_box(*en)) accept(en->x, en->y, en->z, en->vertex, en->group);
       }
       if (res.size() - first > 1)
         std::sort(res.begin() + static_cast<std::ptrdiff_t>(first), res.end(),

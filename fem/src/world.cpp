@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <Eigen/LU>
 #include <algorithm>
@@ -350,8 +351,10 @@ void World::step(State& s, const RowMatrixX3d* external) {
                      std::to_string(rows_));
   if (!prepared_) prepare();
   damp_deformation(s);
-  collect_contact_forces(s);
-  element_forces(s);
+  // Collision detection and response (partly sequential: the hash's counting sort, the
+  // penetration depths) run alongside the element pass; both read the state only and write
+  // disjoint data, so the results do not depend on the threads.
+  tbb::parallel_invoke([&] { collect_contact_forces(s); }, [&] { element_forces(s); });
   const Vec3 g = options_.gravity;
   const bool floor = options_.floor;
   const double fy = options_.floor_height;

@@ -104,6 +104,7 @@ class SpatialHash {
   }
   std::vector<VertexEntry> entry_;  // vertices grouped by hash entry (counting sort)
   std::vector<std::vector<Contact>> blocks_;  // per block of tets (reused between queries)
+  std::vector<std::vector<const VertexEntry*>> cands_;  // per block of tets: cell-mates of the last cell range (reused)
 };
 
 /// The same pairs as SpatialHash::find by testing every vertex against every tet, O(#X·#T):
