@@ -302,7 +302,9 @@ PlanResult plan(const fem::Scene& scene, const PlannerOptions& options, Progress
   };
   std::vector<Job> jobs(options.batch);
   fem::State scratch = s0;
-  if (progress) progress->stage("planning", options.iterations);
+  // With a time limit far below what the iterations would take, a percentage of iterations means
+  // nothing: show the elapsed time only.
+  if (progress) progress->stage("planning", options.time_limit > 0 && options.iterations >= 1000000 ? 0 : options.iterations);
   while (solved_node < 0 && result.stats.iterations < options.iterations) {
     if (options.time_limit > 0 &&
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= options.time_limit)
