@@ -13,6 +13,6 @@ mkdir -p "$(dirname "$out")"
 rc=0
 "$build/squeeze" run "$scene" -o "$out" --seed 1 || rc=$?
 if [ "$rc" -ne 0 ] && [ "$rc" -ne 3 ]; then exit "$rc"; fi
-echo "squeeze: see $out/frames/frame_00060.png (a frame), $out/volume.png (volume change along the path)," \
+echo "squeeze: see $out/frames/frame_00040.png (a frame), $out/volume.png (volume change along the path)," \
      "$out/summary.json, $out/plan.json, $out/metrics.csv, $out/export/" >&2
 exit "$rc"
