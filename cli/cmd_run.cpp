@@ -106,19 +106,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     // Plan.
     t = clock_type::now();
     const plan::PlanResult r = plan::plan(scene, options, &progress);
-    plan::PlanFile f;
-    f.scene = fs::absolute(scene.file).lexically_normal().string();
-    f.status = r.status;
-    f.options = options;
-    f.stats = r.stats;
-    f.time_step = r.time_step;
-    f.path = r.path;
-    {
-      plan::SimulationPropagator p(scene, {});
-      f.settle = plan::settle_control(p, options);
-    }
-    f.settle_steps = static_cast<int>(std::lround(options.settle / r.time_step));
-    f.final_state_hash = r.final_state_hash;
+    const plan::PlanFile f = plan::make_plan_file(scene, options, r);
     plan::save_plan(out / "plan.json", f);
     seconds.emplace_back("planning", since(t));
 

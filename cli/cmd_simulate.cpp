@@ -15,6 +15,7 @@
 #include "trajectory_writer.h"
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
+#include "squeeze/common/json_check.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/fem/scene.h"
 #include "squeeze/meshing/tet_io.h"
@@ -29,12 +30,6 @@ struct SimulateArgs {
   double duration = 0, fps = 30;
 };
 
-std::string fmt(double x) {
-  if (x == 0) return "0";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.9g", x);
-  return buf;
-}
 
 }  // namespace
 
@@ -83,7 +78,7 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
           diverged = !(s.v.size() == 0 || s.v.cwiseAbs().maxCoeff() < 1e3);
         }
       if (diverged || !s.x.allFinite() || !s.v.allFinite())
-        throw InputError(a.scene + ": the simulation diverged before t = " + fmt(f * interval) +
+        throw InputError(a.scene + ": the simulation diverged before t = " + format_number(f * interval) +
                          " s: lower time_step or the material stiffness");
       writer.add_frame(s, f * interval);
       progress.update(f + 1);

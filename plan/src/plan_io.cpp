@@ -1,6 +1,7 @@
 #include "squeeze/plan/plan_io.h"
 
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -51,6 +52,21 @@ Control read_control(const JsonChecker& c, const json& j, const std::string& pat
 }
 
 }  // namespace
+
+PlanFile make_plan_file(const fem::Scene& scene, const PlannerOptions& options, const PlanResult& r) {
+  PlanFile f;
+  f.scene = std::filesystem::absolute(scene.file).lexically_normal().string();
+  f.status = r.status;
+  f.options = options;
+  f.stats = r.stats;
+  f.time_step = r.time_step;
+  f.path = r.path;
+  const SimulationPropagator p(scene, {});
+  f.settle = settle_control(p, options);
+  f.settle_steps = static_cast<int>(std::lround(options.settle / r.time_step));
+  f.final_state_hash = r.final_state_hash;
+  return f;
+}
 
 void save_plan(const std::filesystem::path& file, const PlanFile& p) {
   json j;

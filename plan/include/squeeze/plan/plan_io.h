@@ -26,6 +26,10 @@ struct PlanFile {
   std::uint64_t final_state_hash = 0;
 };
 
+/// The plan file of a planner result: the scene's absolute path, status, options, statistics,
+/// path, the settle phase (interpolation to the goal for options.settle seconds) and the hash.
+PlanFile make_plan_file(const fem::Scene& scene, const PlannerOptions& options, const PlanResult& result);
+
 /// Writes atomically (temporary name, rename). Throws InputError on I/O errors.
 void save_plan(const std::filesystem::path& file, const PlanFile& plan);
 /// Reads and validates; throws InputError "FILE: KEY: problem".
