@@ -88,10 +88,7 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
   return [args, &global]() -> int {
     const BenchArgs& a = *args;
     const fs::path out = a.output;
-    std::error_code ec;
-    if (fs::exists(out, ec) && !fs::is_directory(out, ec)) throw InputError(a.output + ": exists and is not a directory");
-    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-    if (!fs::is_directory(parent, ec)) throw InputError(a.output + ": parent directory " + parent.string() + " does not exist");
+    check_output_folder(out);
     std::vector<const PaperRow*> rows;
     for (const PaperRow& r : kTable1)
       if (a.only.empty() || std::string(r.file).find(a.only) != std::string::npos ||
@@ -100,6 +97,7 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
         rows.push_back(&r);
       }
     if (rows.empty()) throw InputError("--only " + a.only + ": no bundled scene matches");
+    std::error_code ec;
     fs::create_directories(out, ec);
     if (ec) throw InputError(a.output + ": cannot create the directory: " + ec.message());
 

@@ -46,7 +46,7 @@ std::string hex64(std::uint64_t h) {
 
 ReplayOutput write_replay(const fem::Scene& scene, const plan::PlanFile& f, const std::string& plan_name,
                           const std::string& output, double fps, int settle_steps, Progress& progress) {
-  check_output_dir(output);
+  check_output_folder(output);
   plan::PropagatorOptions po;
   po.stop_when_invalid = false;
   plan::SimulationPropagator p(scene, po);
@@ -185,7 +185,7 @@ Runner add_replay_command(CLI::App& app, const Global& global) {
   return [args, &global]() -> int {
     const ReplayArgs& a = *args;
     if (!(a.fps > 0) || !std::isfinite(a.fps)) throw InputError("--fps must be > 0");
-    check_output_dir(a.output);
+    check_output_folder(a.output);
     Progress progress(!global.quiet);
     const fem::Scene scene = fem::load_scene(a.scene);
     const plan::PlanFile f = plan::load_plan(a.plan);

@@ -67,7 +67,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     const RunArgs& a = *args;
     const auto t_all = clock_type::now();
     // Every input check before the long work.
-    check_output_dir(a.output);
+    check_output_folder(a.output);
     render::RenderOptions ro;
     ro.gl = render::parse_gl_backend(a.gl);
     if (a.exports != "none") {

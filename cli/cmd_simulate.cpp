@@ -54,7 +54,7 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
     const double frames_d = std::floor(a.duration * a.fps + 1e-9);
     if (frames_d > 1e7) throw InputError("--duration × --fps: too many frames (at most 10 million)");
     const int frames = static_cast<int>(frames_d) + 1;  // t = 0, 1/fps, ..., <= duration
-    check_output_dir(a.output);
+    check_output_folder(a.output);
 
     // All input checks (scene, meshes, bodies) before anything is written.
     Progress progress(!global.quiet);

@@ -23,18 +23,9 @@ std::string fmt(double x) {
 }
 }  // namespace
 
-void check_output_dir(const std::string& output) {
-  const fs::path out = output;
-  std::error_code ec;
-  if (fs::exists(out, ec) && !fs::is_directory(out, ec)) throw InputError(output + ": exists and is not a directory");
-  const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-  if (!fs::is_directory(parent, ec))
-    throw InputError(output + ": parent directory " + parent.string() + " does not exist");
-}
-
 TrajectoryWriter::TrajectoryWriter(fem::SceneWorld& w, const std::string& output, double fps, double h, int frames)
     : w_(w), out_(output), frames_(frames), fps_(fps), h_(h) {
-  check_output_dir(output);
+  check_output_folder(output);
   std::error_code ec;
   created_ = !fs::exists(out_, ec);
   fs::create_directories(out_, ec);

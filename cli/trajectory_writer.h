@@ -36,8 +36,4 @@ class TrajectoryWriter {
   std::string index_;
 };
 
-/// Checks that OUTPUT can be a directory to write into: an existing directory, or a missing one
-/// whose parent exists. Throws InputError naming it otherwise.
-void check_output_dir(const std::string& output);
-
 }  // namespace squeeze::cli

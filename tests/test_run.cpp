@@ -140,3 +140,17 @@ TEST(RunCli, BadScenesGetOneLineNamingFileAndKey) {
     EXPECT_FALSE(fs::exists(d / "out" / "plan.json"));
   }
 }
+
+TEST(BenchTable1Cli, BadArgumentsGetOneLineAndWriteNothing) {
+  const fs::path d = temp_dir("table1");
+  std::string err;
+  EXPECT_EQ(run("bench table1 -o " + (d / "missing" / "out").string(), &err), 1);
+  EXPECT_NE(err.find("parent directory"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  std::ofstream(d / "file") << "x";
+  EXPECT_EQ(run("bench table1 -o " + (d / "file").string(), &err), 1);
+  EXPECT_NE(err.find("exists and is not a directory"), std::string::npos) << err;
+  EXPECT_EQ(run("bench table1 --only nosuchscene -o " + (d / "out").string(), &err), 1);
+  EXPECT_NE(err.find("--only nosuchscene: no bundled scene matches"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(d / "out"));
+}

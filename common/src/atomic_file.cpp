@@ -27,6 +27,15 @@ void check_output_directory(const fs::path& target) {
     throw InputError(target.string() + ": output directory " + dir.string() + " is not writable");
 }
 
+void check_output_folder(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw InputError(dir.string() + ": exists and is not a directory");
+  const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+  if (!fs::is_directory(parent, ec))
+    throw InputError(dir.string() + ": parent directory " + parent.string() + " does not exist");
+}
+
 void write_atomically(const fs::path& target, const std::function<void(const fs::path&)>& write) {
   check_output_directory(target);
   std::error_code ec;

@@ -244,14 +244,7 @@ RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
 
   // Output folder: created if missing (its parent must exist), then checked for writing.
   const fs::path out = o.output;
-  std::error_code ec;
-  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
-    throw InputError(out.string() + ": exists and is not a directory");
-  if (!fs::exists(out, ec)) {
-    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-    if (!fs::is_directory(parent, ec))
-      throw InputError(out.string() + ": parent directory " + parent.string() + " does not exist");
-  }
+  check_output_folder(out);
   const bool plots = o.plots;
   if (plots && !plot_drivers_available())
     throw InputError("volume.png: PLplot's cairo drivers are missing (Debian: install plplot-driver-cairo)");
@@ -358,6 +351,7 @@ RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
   }
 
   // Output folder and export streams (after every check).
+  std::error_code ec;
   const bool created = !fs::exists(out, ec);
   fs::create_directories(out, ec);
   if (ec) throw InputError(out.string() + ": cannot create the directory: " + ec.message());

@@ -18,6 +18,11 @@ void write_atomically(const std::filesystem::path& target,
 /// work, so that a bad output path fails fast.
 void check_output_directory(const std::filesystem::path& target);
 
+/// The same for a folder a command will create and fill: throws InputError
+/// ("DIR: exists and is not a directory" / "DIR: parent directory P does not exist") unless `dir`
+/// is an existing directory or a missing one whose parent exists.
+void check_output_folder(const std::filesystem::path& dir);
+
 /// A temporary path next to `target` that keeps its extension (writers choose the format by it),
 /// e.g. out.mesh -> out.tmp-1234-1.mesh.
 std::filesystem::path temporary_sibling(const std::filesystem::path& target);
