@@ -15,7 +15,7 @@
 #include "squeeze/fem/scene.h"
 #include "squeeze/plan/plan_io.h"
 #include "squeeze/plan/planner.h"
-#include "replay_output.h"
+#include "plan_shared.h"
 #include "trajectory_writer.h"
 
 namespace squeeze::cli {
@@ -42,6 +42,17 @@ std::string hex64(std::uint64_t h) {
   char buf[17];
   std::snprintf(buf, sizeof buf, "%016" PRIx64, h);
   return buf;
+}
+
+plan::PlannerOptions prepare_planning(const fem::Scene& scene, const PlanOverrides& o, Progress& progress) {
+  plan::robot_index(scene);  // errors about the robot before meshing
+  const fem::SceneWorld w = fem::build_scene(scene, &progress);  // meshes (cached)
+  plan::check_planning_inputs(w);
+  plan::PlannerOptions options = plan::planner_options(w);
+  if (o.seed >= 0) options.seed = static_cast<std::uint64_t>(o.seed);
+  if (o.iterations > 0) options.iterations = static_cast<int>(std::min<long long>(o.iterations, 100000000));
+  options.time_limit = o.time_limit;
+  return options;
 }
 
 ReplayOutput write_replay(const fem::Scene& scene, const plan::PlanFile& f, const std::string& plan_name,
@@ -81,11 +92,10 @@ ReplayOutput write_replay(const fem::Scene& scene, const plan::PlanFile& f, cons
   progress.stage("replaying", static_cast<double>(total));
   p.on_step = [&](const fem::State& s, int) {
     ++step;
-    for (int b = 0; b < w.bodies(); ++b)
-      if (!w.body(b).rigid) {
-        const double c = std::abs(w.body_volume(s, b) / p.world().rest_volume[b] - 1.0);
-        if (!(c <= out.max_volume_change[b])) out.max_volume_change[b] = c;
-      }
+    for (int b = 0; b < w.bodies(); ++b) {
+      const double c = p.volume_change(s, b);
+      if (!(c <= out.max_volume_change[b])) out.max_volume_change[b] = c;
+    }
     if (step == total) settled = s;
     while (next < out.frames && frame_step(next) <= step) writer.add_frame(s, next++ / fps);
     progress.update(static_cast<double>(step));
@@ -130,17 +140,7 @@ Runner add_plan_command(CLI::App& app, const Global& global) {
     check_output_directory(a.output);
     Progress progress(!global.quiet);
     const fem::Scene scene = fem::load_scene(a.scene);
-    plan::robot_index(scene);  // errors about the robot before meshing
-    if (!scene.goal) throw InputError(a.scene + ": goal: missing (the planner needs \"goal\": {\"position\": [x, y, z]})");
-    plan::PlannerOptions options;
-    {
-      const fem::SceneWorld w = fem::build_scene(scene, &progress);  // meshes (cached) and checks
-      options = plan::planner_options(w);
-      if (!w.bounds.contains(scene.goal->position)) throw InputError(a.scene + ": goal.position: outside the bounds");
-    }
-    if (a.seed >= 0) options.seed = static_cast<std::uint64_t>(a.seed);
-    if (a.iterations > 0) options.iterations = static_cast<int>(std::min<long long>(a.iterations, 100000000));
-    options.time_limit = a.time_limit;
+    const plan::PlannerOptions options = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
     const plan::PlanResult r = plan::plan(scene, options, &progress);
 
     const plan::PlanFile f = plan::make_plan_file(scene, options, r);
@@ -185,7 +185,6 @@ Runner add_replay_command(CLI::App& app, const Global& global) {
   return [args, &global]() -> int {
     const ReplayArgs& a = *args;
     if (!(a.fps > 0) || !std::isfinite(a.fps)) throw InputError("--fps must be > 0");
-    check_output_folder(a.output);
     Progress progress(!global.quiet);
     const fem::Scene scene = fem::load_scene(a.scene);
     const plan::PlanFile f = plan::load_plan(a.plan);

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "replay_output.h"
+#include "plan_shared.h"
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
@@ -85,19 +85,8 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     auto t = clock_type::now();
     const fem::Scene scene = fem::load_scene(a.scene);
     const render::RenderSettings rs = render::parse_render_settings(scene.render, scene.file.string());
-    plan::robot_index(scene);
-    if (!scene.goal) throw InputError(a.scene + ": goal: missing (the planner needs \"goal\": {\"position\": [x, y, z]})");
-    plan::PlannerOptions options;
-    {
-      const fem::SceneWorld w = fem::build_scene(scene, &progress);
-      plan::check_robot_start(w);
-      options = plan::planner_options(w);
-      if (!w.bounds.contains(scene.goal->position)) throw InputError(a.scene + ": goal.position: outside the bounds");
-    }
+    const plan::PlannerOptions options = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
     seconds.emplace_back("meshing", since(t));
-    if (a.seed >= 0) options.seed = static_cast<std::uint64_t>(a.seed);
-    if (a.iterations > 0) options.iterations = static_cast<int>(std::min<long long>(a.iterations, 100000000));
-    options.time_limit = a.time_limit;
     const fs::path out = a.output;
     std::error_code ec;
     fs::create_directories(out, ec);
@@ -143,10 +132,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       render::RenderOptions rest = ro;
       rest.output = out;
       rest.png = false;
-      render::render_trajectory(rest, &progress);
-      if (ro.pc2 || ro.obj || ro.ply || ro.vtu) {
-        // The exports land in OUT/export/ (render's layout); nothing else to move.
-      }
+      render::render_trajectory(rest, &progress);  // exports land in OUT/export/
       seconds.emplace_back("plots and exports", since(t));
     }
 

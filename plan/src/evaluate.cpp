@@ -21,13 +21,11 @@ PlanEvaluation evaluate_plan(const fem::Scene& scene, const PlannerOptions& opti
   e.max_volume_change.assign(bodies.size(), 0.0);
   p.on_step = [&](const fem::State& s, int) {
     for (size_t k = 0; k < bodies.size(); ++k) {
-      const double c = std::abs(w.body_volume(s, bodies[k]) / p.world().rest_volume[bodies[k]] - 1.0);
+      const double c = p.volume_change(s, bodies[k]);
       if (!(c <= e.max_volume_change[k])) e.max_volume_change[k] = c;
     }
   };
-  const Control settle = settle_control(p, options);
-  const int settle_steps = static_cast<int>(std::lround(options.settle / e.result.time_step));
-  const std::vector<fem::State> ends = replay(p, e.result.path, settle, settle_steps);
+  const std::vector<fem::State> ends = replay(p, e.result.path, e.result.settle, e.result.settle_steps);
   e.replay_matches = ends.size() == e.result.path_states.size();
   for (size_t i = 0; e.replay_matches && i < ends.size(); ++i) {
     const fem::State& a = ends[i];

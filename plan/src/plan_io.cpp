@@ -61,9 +61,8 @@ PlanFile make_plan_file(const fem::Scene& scene, const PlannerOptions& options, 
   f.stats = r.stats;
   f.time_step = r.time_step;
   f.path = r.path;
-  const SimulationPropagator p(scene, {});
-  f.settle = settle_control(p, options);
-  f.settle_steps = static_cast<int>(std::lround(options.settle / r.time_step));
+  f.settle = r.settle;
+  f.settle_steps = r.settle_steps;
   f.final_state_hash = r.final_state_hash;
   return f;
 }

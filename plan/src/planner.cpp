@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <nanoflann.hpp>
 #include <sstream>
 
@@ -32,12 +33,7 @@ class Random {
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
     return z ^ (z >> 31);
   }
-  std::uint64_t next() {  // splitmix64
-    std::uint64_t z = (s_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
+  std::uint64_t next() { return mix(s_ += 0x9E3779B97F4A7C15ULL); }  // splitmix64
   double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
   int index(int n) { return static_cast<int>(uniform() * n); }  // [0, n)
@@ -168,14 +164,8 @@ PlannerOptions planner_options(const fem::SceneWorld& w) {
   const Eigen::Vector3d lo = robot.rest.colwise().minCoeff(), hi = robot.rest.colwise().maxCoeff();
   const double size = (hi - lo).norm();
   o.control_radius = 0.25 * size;
+  std::optional<double> max_force;
   const json& j = scene.planner;
-  // Enough to lift the robot against its own gravity twice over, and to move it
-  // within t_max from rest about half its own size (½ a t² = d / 2).
-  const double g = scene.objects[r].gravity ? scene.gravity.norm() : 0.0;
-  const double t_max = !j.is_null() && j.contains("t_max") && j["t_max"].is_number() && j["t_max"].get<double>() > 0
-                           ? j["t_max"].get<double>()
-                           : o.t_max;
-  o.max_force = mass * std::max(2.0 * g, size / (t_max * t_max));
   if (!j.is_null()) {
     c.keys(j, "planner", {"iterations", "seed", "goal_bias", "t_min", "t_max", "max_force", "control_radius",
                           "max_volume_change", "weights", "interpolation_omega", "settle", "batch"});
@@ -187,7 +177,7 @@ PlannerOptions planner_options(const fem::SceneWorld& w) {
     }
     if (j.contains("t_min")) o.t_min = c.positive(j["t_min"], "planner.t_min");
     if (j.contains("t_max")) o.t_max = c.positive(j["t_max"], "planner.t_max");
-    if (j.contains("max_force")) o.max_force = c.positive(j["max_force"], "planner.max_force");
+    if (j.contains("max_force")) max_force = c.positive(j["max_force"], "planner.max_force");
     if (j.contains("control_radius")) o.control_radius = c.positive(j["control_radius"], "planner.control_radius");
     if (j.contains("max_volume_change")) o.max_volume_change = c.positive(j["max_volume_change"], "planner.max_volume_change");
     if (j.contains("interpolation_omega")) o.interpolation_omega = c.positive(j["interpolation_omega"], "planner.interpolation_omega");
@@ -206,6 +196,10 @@ PlannerOptions planner_options(const fem::SceneWorld& w) {
       c.fail("planner.t_min", "must be <= planner.t_max (" + format_number(o.t_max) + "), got " + format_number(o.t_min));
   }
   if (!(o.interpolation_omega > 0)) o.interpolation_omega = 2 * M_PI / o.t_max;
+  // Default: enough to lift the robot against its own gravity twice over, and to move it about
+  // half its own size within t_max from rest (½ a t² = d / 2).
+  const double g = scene.objects[r].gravity ? scene.gravity.norm() : 0.0;
+  o.max_force = max_force ? *max_force : mass * std::max(2.0 * g, size / (o.t_max * o.t_max));
   return o;
 }
 
@@ -238,11 +232,17 @@ Control settle_control(const SimulationPropagator& p, const PlannerOptions& o) {
   return c;
 }
 
+void check_planning_inputs(const fem::SceneWorld& w) {
+  const std::string file = w.scene.file.string();
+  if (!w.scene.goal) throw InputError(file + ": goal: missing (the planner needs \"goal\": {\"position\": [x, y, z]})");
+  if (!w.bounds.contains(w.scene.goal->position))
+    throw InputError(file + ": goal.position: outside the bounds of the scene");
+  check_robot_start(w);
+}
+
 PlanResult plan(const fem::Scene& scene, const PlannerOptions& options, Progress* progress) {
   const auto t0 = std::chrono::steady_clock::now();
-  const std::string file = scene.file.string();
-  check_options(options, file);
-  if (!scene.goal) throw InputError(file + ": goal: missing (the planner needs \"goal\": {\"position\": [x, y, z]})");
+  check_options(options, scene.file.string());
   PropagatorOptions popt;
   popt.max_volume_change = options.max_volume_change;
   // One propagator (world) per expansion of a batch; they run in parallel.
@@ -250,10 +250,8 @@ PlanResult plan(const fem::Scene& scene, const PlannerOptions& options, Progress
   workers.push_back(std::make_unique<SimulationPropagator>(scene, popt));
   const SimulationPropagator& main = *workers[0];
   const fem::SceneWorld& w = main.world();
+  check_planning_inputs(w);
   const Eigen::Vector3d goal = scene.goal->position;
-  if (!w.bounds.contains(goal))
-    throw InputError(file + ": goal.position: outside the bounds of the scene");
-  check_robot_start(w);
   for (int k = 1; k < options.batch; ++k) workers.push_back(std::make_unique<SimulationPropagator>(scene, popt));
 
   const double h = w.h;
@@ -273,6 +271,8 @@ PlanResult plan(const fem::Scene& scene, const PlannerOptions& options, Progress
 
   PlanResult result;
   result.time_step = h;
+  result.settle = settle_control(main, options);
+  result.settle_steps = static_cast<int>(std::lround(options.settle / h));
   std::vector<Node> nodes;
   nodes.reserve(1024);
   StateStore store(w.world);
@@ -392,11 +392,7 @@ PlanResult plan(const fem::Scene& scene, const PlannerOptions& options, Progress
     store.restore(nodes[id], s);
     result.path_states.push_back(std::move(s));
   }
-  {
-    fem::State s = s0;
-    store.restore(nodes[last], s);
-    result.final_state_hash = state_hash(s);
-  }
+  result.final_state_hash = state_hash(result.path_states.empty() ? s0 : result.path_states.back());
   PlanStatistics& st = result.stats;
   st.nodes = static_cast<int>(nodes.size());
   for (const auto& wk : workers) st.simulation_steps += wk->steps_done();

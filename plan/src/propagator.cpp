@@ -94,12 +94,17 @@ SimulationPropagator::SimulationPropagator(const fem::Scene& scene, const Propag
 
 Eigen::Vector3d SimulationPropagator::goal_com(const fem::State& s) const { return goal_.com(s); }
 
+double SimulationPropagator::volume_change(const fem::State& s, int b) const {
+  if (world_.world.body(b).rigid) return 0.0;
+  return std::abs(world_.world.body_volume(s, b) / world_.rest_volume[b] - 1.0);
+}
+
 double SimulationPropagator::max_volume_change(const fem::State& s, int* object) const {
   double worst = 0;
   if (object) *object = -1;
   for (int b = 0; b < world_.world.bodies(); ++b) {
     if (world_.world.body(b).rigid) continue;
-    const double change = std::abs(world_.world.body_volume(s, b) / world_.rest_volume[b] - 1.0);
+    const double change = volume_change(s, b);
     if (!(change <= worst)) {  // NaN counts as the worst
       worst = change;
       if (object) *object = b;

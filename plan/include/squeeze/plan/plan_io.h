@@ -27,7 +27,7 @@ struct PlanFile {
 };
 
 /// The plan file of a planner result: the scene's absolute path, status, options, statistics,
-/// path, the settle phase (interpolation to the goal for options.settle seconds) and the hash.
+/// path, the settle phase (PlanResult::settle) and the hash.
 PlanFile make_plan_file(const fem::Scene& scene, const PlannerOptions& options, const PlanResult& result);
 
 /// Writes atomically (temporary name, rename). Throws InputError on I/O errors.

@@ -92,8 +92,15 @@ struct PlanResult {
   double time_step = 0;              // s, h used
   std::vector<PathSegment> path;     // from the start state to the final node
   std::vector<fem::State> path_states;  // state at the end of every segment (path.size())
+  Control settle;                       // the replay's final interpolation phase (settle_control)
+  int settle_steps = 0;                 // its time steps: options.settle / h
   std::uint64_t final_state_hash = 0;   // state_hash of the final node's state
 };
+
+/// Throws InputError "FILE: KEY: problem" unless the world can be planned in: a goal inside the
+/// bounds, and the robot starting clear of every other object, above the floor and inside the
+/// bounds (check_robot_start). plan() calls it; commands call it early, before other work.
+void check_planning_inputs(const fem::SceneWorld& world);
 
 /// FNV-1a 64 of the bytes of s.x and s.v (to check a replay against the tree).
 std::uint64_t state_hash(const fem::State& s);

@@ -47,6 +47,8 @@ class SimulationPropagator : public Propagator {
   int goal_object() const { return goal_object_; }
   /// Centre of mass of the goal object in state s (m).
   Eigen::Vector3d goal_com(const fem::State& s) const;
+  /// |V/V0 − 1| of object b in s (0 for a rigid object; NaN if s is not finite).
+  double volume_change(const fem::State& s, int b) const;
   /// Largest |V/V0 − 1| over the deformable objects in s, and the object (or −1).
   double max_volume_change(const fem::State& s, int* object = nullptr) const;
   long long steps_done() const { return steps_done_; }  // all propagations so far

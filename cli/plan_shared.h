@@ -1,5 +1,5 @@
-// Replaying a plan into an output folder (metrics.csv + trajectory/): shared by `squeeze replay`
-// and `squeeze run`. Defined in cmd_plan.cpp.
+// What `squeeze plan`, `squeeze replay` and `squeeze run` share: preparing a scene for planning,
+// and replaying a plan into an output folder (metrics.csv + trajectory/). Defined in cmd_plan.cpp.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -13,6 +13,17 @@ class Progress;
 }
 
 namespace squeeze::cli {
+
+/// Command-line overrides of the scene's planner block (negative / zero: keep the scene's).
+struct PlanOverrides {
+  long long seed = -1, iterations = -1;
+  double time_limit = 0;  // s, 0: none
+};
+
+/// Checks the scene for planning (robot first, before meshing; then, on the built world, the goal,
+/// the bounds and the robot's start: plan::check_planning_inputs), meshes it (cached) and returns the
+/// planner options with the overrides applied. Throws InputError "FILE: KEY: problem".
+plan::PlannerOptions prepare_planning(const fem::Scene& scene, const PlanOverrides& overrides, Progress& progress);
 
 struct ReplayOutput {
   int frames = 0;
