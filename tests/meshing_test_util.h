@@ -95,6 +95,13 @@ inline RunResult run_squeeze(const std::vector<std::string>& args, const fs::pat
   return r;
 }
 
+/// The same for checks of the exit code and stderr only: returns the exit code, stderr into *err.
+inline int run_squeeze(const std::vector<std::string>& args, const fs::path& cwd, std::string* err, int seconds = 600) {
+  RunResult r = run_squeeze(args, cwd, seconds);
+  if (err) *err = std::move(r.err);
+  return r.code;
+}
+
 /// Lines of `s` (a trailing newline does not start a new line).
 inline std::vector<std::string> lines(const std::string& s) {
   std::vector<std::string> v;

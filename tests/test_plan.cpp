@@ -12,6 +12,7 @@
 #include <set>
 #include <string>
 
+#include "meshing_test_util.h"
 #include "squeeze/common/error.h"
 #include "squeeze/plan/evaluate.h"
 #include "squeeze/plan/plan_io.h"
@@ -25,12 +26,6 @@ namespace {
 
 const std::string kAssets = std::string(SQUEEZE_SOURCE_DIR) + "/scenes/assets/";
 
-fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("squeeze_test_plan_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
 
 // A small corridor: a soft cube robot, one soft plate pinned to the z = −0.6 wall leaving a gap
 // at z > 0.2, the goal behind it. `extra` is merged into the top level (e.g. a planner block).
@@ -63,14 +58,9 @@ bool same_state(const fem::State& a, const fem::State& b) {
          std::memcmp(a.v.data(), b.v.data(), sizeof(double) * a.v.size()) == 0;
 }
 
-int run(const std::string& args, std::string* err = nullptr) {
-  const std::string log = (fs::temp_directory_path() / ("squeeze_test_plan_log_" + std::to_string(::getpid()))).string();
-  const int rc = std::system((std::string(SQUEEZE_BINARY) + " " + args + " 2>" + log).c_str());
-  if (err) {
-    std::ifstream in(log);
-    err->assign(std::istreambuf_iterator<char>(in), {});
-  }
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+// squeeze ARGS run in the test's folder d, under a time limit: the exit code, stderr into *err.
+int run(const fs::path& d, const std::vector<std::string>& args, std::string* err = nullptr) {
+  return sqt::run_squeeze(args, d, err);
 }
 
 }  // namespace
@@ -78,7 +68,8 @@ int run(const std::string& args, std::string* err = nullptr) {
 // --- manipulation forces ---
 
 TEST(PlanForces, BodyForceIsTheRequestedTotalTowardTheSample) {
-  const fs::path d = temp_dir("body");
+  const sqt::TempDir tmp("plan-body");
+  const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
   SimulationPropagator p(scene, {});
   const fem::State s = p.world().initial_state();
@@ -104,7 +95,8 @@ TEST(PlanForces, BodyForceIsTheRequestedTotalTowardTheSample) {
 }
 
 TEST(PlanForces, ControlPointForceActsWithinTheRadiusOnly) {
-  const fs::path d = temp_dir("cp");
+  const sqt::TempDir tmp("plan-cp");
+  const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
   SimulationPropagator p(scene, {});
   const fem::State s = p.world().initial_state();
@@ -130,7 +122,8 @@ TEST(PlanForces, ControlPointForceActsWithinTheRadiusOnly) {
 }
 
 TEST(PlanForces, InterpolationForceVanishesAtTheGoalConfiguration) {
-  const fs::path d = temp_dir("interp");
+  const sqt::TempDir tmp("plan-interp");
+  const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
   SimulationPropagator p(scene, {});
   fem::State s = p.world().initial_state();
@@ -159,7 +152,8 @@ TEST(PlanForces, InterpolationForceVanishesAtTheGoalConfiguration) {
 // --- the planner ---
 
 TEST(Planner, SameSeedSamePlanWithOneAndTwoThreads) {
-  const fs::path d = temp_dir("det");
+  const sqt::TempDir tmp("plan-det");
+  const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
   PlannerOptions o = options_of(scene);
   o.iterations = 24;
@@ -194,7 +188,8 @@ TEST(Planner, SameSeedSamePlanWithOneAndTwoThreads) {
 
 TEST(Planner, NeighbouringSeedsGiveUnrelatedTrees) {
   // Seeds k and k + 1 must not share their random stream (a shifted one gave equal plans).
-  const fs::path d = temp_dir("seeds");
+  const sqt::TempDir tmp("plan-seeds");
+  const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
   PlannerOptions o = options_of(scene);
   o.iterations = 8;
@@ -208,7 +203,8 @@ TEST(Planner, NeighbouringSeedsGiveUnrelatedTrees) {
 }
 
 TEST(Planner, ReplayReproducesTheTreeStatesBitForBit) {
-  const fs::path d = temp_dir("replay");
+  const sqt::TempDir tmp("plan-replay");
+  const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
   PlannerOptions o = options_of(scene);
   o.iterations = 40;
@@ -226,7 +222,8 @@ TEST(Planner, ReplayReproducesTheTreeStatesBitForBit) {
 }
 
 TEST(Planner, SolvesTheMiniCorridorWithinLimitsOfVolume) {
-  const fs::path d = temp_dir("solve");
+  const sqt::TempDir tmp("plan-solve");
+  const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
   PlannerOptions o = options_of(scene);
   o.iterations = 600;
@@ -246,7 +243,8 @@ TEST(Planner, SolvesTheMiniCorridorWithinLimitsOfVolume) {
 
 TEST(Planner, UnreachableGoalEndsApproximate) {
   // A rigid wall across the whole corridor: the goal behind it cannot be reached.
-  const fs::path d = temp_dir("unreach");
+  const sqt::TempDir tmp("plan-unreach");
+  const fs::path& d = tmp.path();
   nlohmann::json j = mini_scene({{"planner", {{"iterations", 60}}}});
   j["objects"][1] = {{"name", "wall"}, {"mesh", kAssets + "box_3x3x3.mesh"}, {"kind", "rigid"},
                      {"transform", {{"scale", {0.2, 1.4, 1.6}}, {"translate", {0.0, 0.55, 0.0}}}}};
@@ -257,14 +255,15 @@ TEST(Planner, UnreachableGoalEndsApproximate) {
   EXPECT_GT(r.stats.final_distance, 0.5);  // still on the near side of the wall
   // The CLI: exit 3, an approximate plan written.
   const fs::path plan_file = d / "plan.json";
-  EXPECT_EQ(run("-q plan " + (d / "scene.json").string() + " -o " + plan_file.string()), 3);
+  EXPECT_EQ(run(d, {"-q", "plan", (d / "scene.json").string(), "-o", plan_file.string()}), 3);
   const PlanFile f = load_plan(plan_file);
   EXPECT_EQ(f.status, PlanStatus::approximate);
   EXPECT_FALSE(f.path.empty());
 }
 
 TEST(Planner, BadPlannerParametersNameTheKey) {
-  const fs::path d = temp_dir("bad");
+  const sqt::TempDir tmp("plan-bad");
+  const fs::path& d = tmp.path();
   struct Case {
     nlohmann::json planner;
     std::string expect;
@@ -281,7 +280,7 @@ TEST(Planner, BadPlannerParametersNameTheKey) {
   for (const Case& c : cases) {
     const fs::path scene = write_scene(d, mini_scene({{"planner", c.planner}}));
     std::string err;
-    EXPECT_EQ(run("plan " + scene.string() + " -o " + (d / "p.json").string(), &err), 1) << c.planner.dump();
+    EXPECT_EQ(run(d, {"plan", scene.string(), "-o", (d / "p.json").string()}, &err), 1) << c.planner.dump();
     EXPECT_NE(err.find(c.expect), std::string::npos) << err;
     EXPECT_NE(err.find("scene.json"), std::string::npos) << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
@@ -290,38 +289,40 @@ TEST(Planner, BadPlannerParametersNameTheKey) {
 }
 
 TEST(Planner, ScenesWithoutARobotOrGoalAreRejected) {
-  const fs::path d = temp_dir("norobot");
+  const sqt::TempDir tmp("plan-norobot");
+  const fs::path& d = tmp.path();
   std::string err;
   nlohmann::json j = mini_scene();
   j["objects"][0]["role"] = "obstacle";
   j["goal"]["object"] = "robot";  // else the scene loader already asks which object the goal is for
-  EXPECT_EQ(run("plan " + write_scene(d, j).string() + " -o " + (d / "p.json").string(), &err), 1);
+  EXPECT_EQ(run(d, {"plan", write_scene(d, j).string(), "-o", (d / "p.json").string()}, &err), 1);
   EXPECT_NE(err.find("no object has \"role\": \"robot\""), std::string::npos) << err;
   j = mini_scene();
   j["objects"][1]["role"] = "robot";
   j["goal"]["object"] = "robot";
-  EXPECT_EQ(run("plan " + write_scene(d, j).string() + " -o " + (d / "p.json").string(), &err), 1);
+  EXPECT_EQ(run(d, {"plan", write_scene(d, j).string(), "-o", (d / "p.json").string()}, &err), 1);
   EXPECT_NE(err.find("a second robot"), std::string::npos) << err;
   j = mini_scene();
   j.erase("goal");
-  EXPECT_EQ(run("plan " + write_scene(d, j).string() + " -o " + (d / "p.json").string(), &err), 1);
+  EXPECT_EQ(run(d, {"plan", write_scene(d, j).string(), "-o", (d / "p.json").string()}, &err), 1);
   EXPECT_NE(err.find("goal: missing"), std::string::npos) << err;
   j = mini_scene();
   j["goal"]["position"] = {5, 0, 0};
-  EXPECT_EQ(run("plan " + write_scene(d, j).string() + " -o " + (d / "p.json").string(), &err), 1);
+  EXPECT_EQ(run(d, {"plan", write_scene(d, j).string(), "-o", (d / "p.json").string()}, &err), 1);
   EXPECT_NE(err.find("goal.position: outside the bounds"), std::string::npos) << err;
   j = mini_scene();
   j["objects"][0]["transform"]["translate"] = {0.0, 0.5, -0.3};  // in the plate
-  EXPECT_EQ(run("plan " + write_scene(d, j).string() + " -o " + (d / "p.json").string(), &err), 1);
+  EXPECT_EQ(run(d, {"plan", write_scene(d, j).string(), "-o", (d / "p.json").string()}, &err), 1);
   EXPECT_NE(err.find("objects[0].transform: the robot starts inside \"plate\""), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(d / "p.json"));
 }
 
 TEST(PlanCli, PlanThenReplayWritesMetricsAndTrajectory) {
-  const fs::path d = temp_dir("cli");
+  const sqt::TempDir tmp("plan-cli");
+  const fs::path& d = tmp.path();
   const fs::path scene = write_scene(d, mini_scene({{"planner", {{"iterations", 30}}}}));
   const fs::path plan_file = d / "plan.json", out = d / "out";
-  const int rc = run("-q plan " + scene.string() + " -o " + plan_file.string() + " --seed 3 --threads 2");
+  const int rc = run(d, {"-q", "plan", scene.string(), "-o", plan_file.string(), "--seed", "3", "--threads", "2"});
   EXPECT_TRUE(rc == 0 || rc == 3) << rc;
   std::ifstream in(plan_file);
   const nlohmann::json j = nlohmann::json::parse(in);
@@ -333,7 +334,7 @@ TEST(PlanCli, PlanThenReplayWritesMetricsAndTrajectory) {
                         "bytes_per_node"})
     EXPECT_TRUE(j["statistics"].contains(k)) << k;
   std::string err;
-  ASSERT_EQ(run("replay " + scene.string() + " " + plan_file.string() + " -o " + out.string() + " --fps 20", &err), 0)
+  ASSERT_EQ(run(d, {"replay", scene.string(), plan_file.string(), "-o", out.string(), "--fps", "20"}, &err), 0)
       << err;
   // Frames: duration × fps + 1.
   long long steps = j["settle"]["steps"].get<long long>();
@@ -354,9 +355,9 @@ TEST(PlanCli, PlanThenReplayWritesMetricsAndTrajectory) {
   nlohmann::json bad = j;
   bad["path"][0]["steps"] = bad["path"][0]["steps"].get<int>() + 1;  // tampered: no longer the tree's path
   std::ofstream(d / "bad.json") << bad.dump();
-  EXPECT_EQ(run("-q replay " + other.string() + " " + (d / "bad.json").string() + " -o " + (d / "o2").string(), &err), 1);
+  EXPECT_EQ(run(d, {"-q", "replay", other.string(), (d / "bad.json").string(), "-o", (d / "o2").string()}, &err), 1);
   EXPECT_NE(err.find("does not reproduce the planner's final state"), std::string::npos) << err;
-  EXPECT_EQ(run("replay " + scene.string() + " " + (d / "missing.json").string() + " -o " + (d / "o3").string(), &err), 1);
+  EXPECT_EQ(run(d, {"replay", scene.string(), (d / "missing.json").string(), "-o", (d / "o3").string()}, &err), 1);
   EXPECT_NE(err.find("missing.json: cannot be read"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(d / "o3"));
 }

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "meshing_test_util.h"
 #include "squeeze/fem/scene.h"
 #include "squeeze/plan/planner.h"
 #include "squeeze/plan/propagator.h"
@@ -20,21 +21,10 @@ namespace {
 
 const std::string kScenes = std::string(SQUEEZE_SOURCE_DIR) + "/scenes/";
 
-fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("squeeze_test_run_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
 
-int run(const std::string& args, std::string* err = nullptr) {
-  const std::string log = (fs::temp_directory_path() / ("squeeze_test_run_log_" + std::to_string(::getpid()))).string();
-  const int rc = std::system((std::string(SQUEEZE_BINARY) + " " + args + " 2>" + log).c_str());
-  if (err) {
-    std::ifstream in(log);
-    err->assign(std::istreambuf_iterator<char>(in), {});
-  }
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+// squeeze ARGS run in the test's folder d, under a time limit: the exit code, stderr into *err.
+int run(const fs::path& d, const std::vector<std::string>& args, std::string* err = nullptr) {
+  return sqt::run_squeeze(args, d, err);
 }
 
 nlohmann::json read_json(const fs::path& p) {
@@ -73,11 +63,13 @@ TEST(BundledScenes, LoadBuildAndPassTheStartChecks) {
 }
 
 TEST(RunCli, WholePipelineOnBarriers1) {
-  const fs::path d = temp_dir("b1");
+  const sqt::TempDir tmp("run-b1");
+  const fs::path& d = tmp.path();
   const fs::path out = d / "out";
   std::string err;
-  const int rc = run("-q run " + kScenes + "barriers1.json -o " + out.string() +
-                         " --seed 2 --width 320 --height 180 --fps 10 --export pc2",
+  const int rc = run(d,
+                     {"-q", "run", kScenes + "barriers1.json", "-o", out.string(), "--seed", "2", "--width", "320",
+                      "--height", "180", "--fps", "10", "--export", "pc2"},
                      &err);
   ASSERT_TRUE(rc == 0 || rc == 3) << rc << err;
   for (const char* f : {"plan.json", "metrics.csv", "trajectory/index.json", "volume.png", "volume.svg", "summary.json",
@@ -102,7 +94,8 @@ TEST(RunCli, WholePipelineOnBarriers1) {
 }
 
 TEST(RunCli, BadScenesGetOneLineNamingFileAndKey) {
-  const fs::path d = temp_dir("bad");
+  const sqt::TempDir tmp("run-bad");
+  const fs::path& d = tmp.path();
   struct Case {
     std::string what, expect;
     std::function<void(nlohmann::json&)> edit;
@@ -133,7 +126,7 @@ TEST(RunCli, BadScenesGetOneLineNamingFileAndKey) {
     const fs::path scene = d / "scene.json";
     std::ofstream(scene) << j.dump(2);
     std::string err;
-    EXPECT_EQ(run("run " + scene.string() + " -o " + (d / "out").string(), &err), 1);
+    EXPECT_EQ(run(d, {"run", scene.string(), "-o", (d / "out").string()}, &err), 1);
     EXPECT_NE(err.find(c.expect), std::string::npos) << err;
     EXPECT_NE(err.find("scene.json"), std::string::npos) << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
@@ -142,15 +135,16 @@ TEST(RunCli, BadScenesGetOneLineNamingFileAndKey) {
 }
 
 TEST(BenchTable1Cli, BadArgumentsGetOneLineAndWriteNothing) {
-  const fs::path d = temp_dir("table1");
+  const sqt::TempDir tmp("run-table1");
+  const fs::path& d = tmp.path();
   std::string err;
-  EXPECT_EQ(run("bench table1 -o " + (d / "missing" / "out").string(), &err), 1);
+  EXPECT_EQ(run(d, {"bench", "table1", "-o", (d / "missing" / "out").string()}, &err), 1);
   EXPECT_NE(err.find("parent directory"), std::string::npos) << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   std::ofstream(d / "file") << "x";
-  EXPECT_EQ(run("bench table1 -o " + (d / "file").string(), &err), 1);
+  EXPECT_EQ(run(d, {"bench", "table1", "-o", (d / "file").string()}, &err), 1);
   EXPECT_NE(err.find("exists and is not a directory"), std::string::npos) << err;
-  EXPECT_EQ(run("bench table1 --only nosuchscene -o " + (d / "out").string(), &err), 1);
+  EXPECT_EQ(run(d, {"bench", "table1", "--only", "nosuchscene", "-o", (d / "out").string()}, &err), 1);
   EXPECT_NE(err.find("--only nosuchscene: no bundled scene matches"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(d / "out"));
 }
