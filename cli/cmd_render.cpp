@@ -1,11 +1,8 @@
 // `squeeze render SCENE TRAJECTORY_DIR -o OUT [--width W --height H --frames A-B --coarse
 //  --export pc2,obj,ply,vtu --gl osmesa|egl]`: offscreen frames of the deformed high-resolution
 // meshes, the volume plot and exports (docs/render.md).
-#include <unistd.h>
 
-#include <chrono>
 #include <cstdio>
-#include <sstream>
 
 #include "commands.h"
 #include "squeeze/common/error.h"
@@ -21,34 +18,6 @@ struct RenderArgs {
   int width = 0, height = 0, samples = 4;
   bool coarse = false, no_plots = false, no_png = false;
   CLI::Option *width_opt = nullptr, *height_opt = nullptr;
-};
-
-// "frames 120/301 [#####.....] 12.3 frames/s, 14 s left" on a terminal (redrawn at most 10×/s);
-// in a log, one line every 10 s.
-class FrameBar {
- public:
-  explicit FrameBar(bool enabled) : enabled_(enabled), tty_(::isatty(STDERR_FILENO) != 0) {}
-  void update(const render::FrameProgress& p) {
-    if (!enabled_) return;
-    const auto now = std::chrono::steady_clock::now();
-    const bool last = p.done == p.total;
-    const double since = std::chrono::duration<double>(now - last_).count();
-    if (!last && (p.seconds < 1.0 || since < (tty_ ? 0.1 : 10.0))) return;
-    last_ = now;
-    const double rate = p.seconds > 0 ? p.done / p.seconds : 0;
-    const double left = rate > 0 ? (p.total - p.done) / rate : 0;
-    constexpr int kWidth = 30;
-    const int filled = p.total > 0 ? kWidth * p.done / p.total : 0;
-    const std::string bar = std::string(static_cast<size_t>(filled), '#') + std::string(static_cast<size_t>(kWidth - filled), '.');
-    std::fprintf(stderr, "%ssqueeze: rendering frames %d/%d [%s] %.1f frames/s, %.0f s left%s", tty_ ? "\r\033[K" : "",
-                 p.done, p.total, bar.c_str(), rate, left, tty_ && !last ? "" : "\n");
-    std::fflush(stderr);
-    shown_ = true;
-  }
-
- private:
-  bool enabled_, tty_, shown_ = false;
-  std::chrono::steady_clock::time_point last_{};
 };
 
 }  // namespace
@@ -98,21 +67,14 @@ Runner add_render_command(CLI::App& app, const Global& global) {
     o.gl = render::parse_gl_backend(a.gl);
     if (a.samples < 1 || a.samples > 64) throw InputError("--samples " + std::to_string(a.samples) + ": must be in [1, 64]");
     o.samples = a.samples;
-    if (!a.exports.empty()) {
-      std::stringstream s(a.exports);
-      std::string item;
-      while (std::getline(s, item, ',')) {
-        if (item == "pc2") o.pc2 = true;
-        else if (item == "obj") o.obj = true;
-        else if (item == "ply") o.ply = true;
-        else if (item == "vtu") o.vtu = true;
-        else throw InputError("--export " + a.exports + ": unknown export '" + item + "' (pc2, obj, ply, vtu)");
-      }
-    }
+    render::parse_exports(a.exports, o);
     Progress progress(!global.quiet);
-    FrameBar bar(!global.quiet);
-    o.on_frame = [&bar](const render::FrameProgress& p) { bar.update(p); };
+    o.on_frame = [&progress](const render::FrameProgress& p) {
+      if (p.done == 1) progress.stage("rendering frames", p.total);
+      progress.update(p.done);
+    };
     const render::RenderStats s = render::render_trajectory(o, &progress);
+    progress.finish();
     if (!global.quiet)
       std::fprintf(stderr, "squeeze: %s: %d of %d frames at %dx%d (%d samples, %.1f frames/s), wrote %s\n",
                    a.scene.c_str(), s.rendered, s.total_frames, s.width, s.height, s.samples,

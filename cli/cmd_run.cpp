@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -70,16 +69,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     check_output_folder(a.output);
     render::RenderOptions ro;
     ro.gl = render::parse_gl_backend(a.gl);
-    if (a.exports != "none") {
-      std::stringstream ss(a.exports);
-      for (std::string e; std::getline(ss, e, ',');) {
-        if (e == "pc2") ro.pc2 = true;
-        else if (e == "obj") ro.obj = true;
-        else if (e == "ply") ro.ply = true;
-        else if (e == "vtu") ro.vtu = true;
-        else throw InputError("--export: unknown export \"" + e + "\" (pc2, obj, ply, vtu or none)");
-      }
-    }
+    render::parse_exports(a.exports, ro);
     Progress progress(!global.quiet);
     std::vector<std::pair<std::string, double>> seconds;
     auto t = clock_type::now();
@@ -122,7 +112,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       frames.plots = false;
       frames.pc2 = frames.obj = frames.ply = frames.vtu = false;
       frames.on_frame = [&](const render::FrameProgress& p) {
-        if (p.done == 1) progress.stage("rendering", p.total);
+        if (p.done == 1) progress.stage("rendering frames", p.total);
         progress.update(p.done);
       };
       st = render::render_trajectory(frames, &progress);

@@ -30,6 +30,18 @@ namespace squeeze::render {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
+void parse_exports(const std::string& list, RenderOptions& o) {
+  if (list.empty() || list == "none") return;
+  std::stringstream s(list);
+  for (std::string item; std::getline(s, item, ',');) {
+    if (item == "pc2") o.pc2 = true;
+    else if (item == "obj") o.obj = true;
+    else if (item == "ply") o.ply = true;
+    else if (item == "vtu") o.vtu = true;
+    else throw InputError("--export " + list + ": unknown export '" + item + "' (pc2, obj, ply, vtu, or none)");
+  }
+}
+
 std::pair<int, int> parse_frame_range(const std::string& text) {
   const auto bad = [&](const std::string& why) { return InputError("--frames " + text + ": " + why); };
   const auto parse_int = [&](const std::string& s) {

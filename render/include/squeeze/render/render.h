@@ -60,6 +60,10 @@ struct RenderStats {
 /// Parses "A-B" (inclusive, 0 <= A <= B) or "A" into a range. Throws InputError ("--frames x: ...").
 std::pair<int, int> parse_frame_range(const std::string& text);
 
+/// Sets the export flags of `options` from a comma-separated list of pc2, obj, ply, vtu ("" or
+/// "none": no export). Throws InputError ("--export LIST: unknown export 'x' (pc2, obj, ply, vtu)").
+void parse_exports(const std::string& list, RenderOptions& options);
+
 /// Renders a trajectory of a scene. Every input is checked before anything is written: scene and
 /// render block, trajectory (index, same objects and coarse meshes as the scene), image size
 /// (kMinImageSide..kMaxImageSide and the GL limit), frame range (within 0..total-1), output folder
