@@ -8,6 +8,9 @@
 #include <cmath>
 #include <limits>
 #include <new>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "squeeze/common/error.h"
 
@@ -33,38 +36,42 @@ std::int64_t cell_of(double x, double inv) {
   return static_cast<double>(c) > y ? c - 1 : c;
 }
 
+// Indices q < n (in increasing order) of the points (x[q], y[q], z[q]) in the closed box
+// [lo, hi], written to hit; their count is returned. A NaN coordinate passes (as the scalar test
+// !(x < lo || x > hi) does; the containment test rejects it). x, y, z hold n rounded up to even
+// values. Branch-free: the candidates of a cell range are tested by every tet that shares it,
+// and the outcome is hard to predict.
+int box_hits(const double* x, const double* y, const double* z, int n, const Eigen::Vector3d& lo,
+             const Eigen::Vector3d& hi, std::vector<int>& hit) {
+  if (hit.size() < static_cast<size_t>(n) + 2) hit.resize(static_cast<size_t>(n) + 2);
+  int* out = hit.data();
+  int m = 0;
+#if defined(__SSE2__)
+  const __m128d lx = _mm_set1_pd(lo[0]), ly = _mm_set1_pd(lo[1]), lz = _mm_set1_pd(lo[2]);
+  const __m128d hx = _mm_set1_pd(hi[0]), hy = _mm_set1_pd(hi[1]), hz = _mm_set1_pd(hi[2]);
+  for (int q = 0; q < n; q += 2) {
+    const __m128d px = _mm_loadu_pd(x + q), py = _mm_loadu_pd(y + q), pz = _mm_loadu_pd(z + q);
+    const __m128d in = _mm_and_pd(
+        _mm_and_pd(_mm_and_pd(_mm_cmpnlt_pd(px, lx), _mm_cmpngt_pd(px, hx)),
+                   _mm_and_pd(_mm_cmpnlt_pd(py, ly), _mm_cmpngt_pd(py, hy))),
+        _mm_and_pd(_mm_cmpnlt_pd(pz, lz), _mm_cmpngt_pd(pz, hz)));
+    const int bits = _mm_movemask_pd(in);
+    out[m] = q;
+    m += bits & 1;
+    out[m] = q + 1;
+    m += bits >> 1;
+  }
+  if (m > 0 && out[m - 1] >= n) --m;  // the padding slot (infinite x) cannot pass, but be exact
+#else
+  for (int q = 0; q < n; ++q) {
+    out[m] = q;
+    m += !(x[q] < lo[0] || x[q] > hi[0] || y[q] < lo[1] || y[q] > hi[1] || z[q] < lo[2] || z[q] > hi[2]);
+  }
+#endif
+  return m;
+}
+
 }  // namespace
-
-TetFrame::TetFrame(const Eigen::Vector3d& a_, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                   const Eigen::Vector3d& d)
-    : a(a_) {
-  // M = [b−a, c−a, d−a]; inverse = adj(M) / det(M) with the determinant expanded along the
-  // first column of the same cofactors (Eigen's 3×3 formula, computed once).
-  const Eigen::Vector3d u = b - a, v = c - a, w = d - a;  // columns of M
-  // cof(r, k): cofactor of M(r, k).
-  const double c00 = v[1] * w[2] - w[1] * v[2], c10 = v[2] * w[0] - w[2] * v[0], c20 = v[0] * w[1] - w[0] * v[1];
-  const double det = c00 * u[0] + c10 * u[1] + c20 * u[2];
-  valid = std::isfinite(det) && det != 0.0;
-  if (!valid) return;
-  const double id = 1.0 / det;
-  const double c01 = w[1] * u[2] - u[1] * w[2], c11 = w[2] * u[0] - u[2] * w[0], c21 = w[0] * u[1] - u[0] * w[1];
-  const double c02 = u[1] * v[2] - v[1] * u[2], c12 = u[2] * v[0] - v[2] * u[0], c22 = u[0] * v[1] - v[0] * u[1];
-  inverse << c00 * id, c10 * id, c20 * id,  //
-      c01 * id, c11 * id, c21 * id,         //
-      c02 * id, c12 * id, c22 * id;
-}
-
-Eigen::Vector4d TetFrame::barycentric(const Eigen::Vector3d& p) const {
-  const Eigen::Vector3d l = inverse * (p - a);
-  return {1.0 - l[0] - l[1] - l[2], l[0], l[1], l[2]};
-}
-
-bool TetFrame::contains(const Eigen::Vector3d& p, Eigen::Vector4d* bary) const {
-  if (!valid) return false;
-  const Eigen::Vector4d b = barycentric(p);
-  if (bary) *bary = b;
-  return b.minCoeff() >= 0.0;
-}
 
 SpatialHash::SpatialHash(double cell, int table_size) : cell_(cell) {
   if (!(cell > 0) || !std::isfinite(cell)) throw InputError("spatial hash: cell size must be > 0");
@@ -194,7 +201,7 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
     // Cell-mates found for the last scanned cell range (a per-block buffer, reused between
     // queries): consecutive tets of a mesh often share their range (the 6 tets of a Kuhn cube
     // share their AABB), so the lookups are reused.
-    std::vector<const VertexEntry*>& cand = cands_[blk];
+    Candidates& cand = cands_[blk];
     std::array<std::int64_t, 7> cached{};
     bool have_cached = false;
     const int t1 = std::min(nt, (blk + 1) * kBlock);
@@ -275,7 +282,7 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
         if (!have_cached || range != cached) {
           cached = range;
           have_cached = true;
-          cand.clear();
+          cand.x.clear(), cand.y.clear(), cand.z.clear(), cand.entry.clear();
           // hash() and key_of() with their per-axis terms hoisted out of the inner loops.
           constexpr std::uint32_t shift = 1u << 20;
           constexpr std::int64_t m21 = (1 << 21) - 1;
@@ -290,13 +297,24 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
                 const std::int64_t key = ((i & m21) << 42) | kjk;
                 const VertexEntry* en = entries + b.head;
                 for (const VertexEntry* end = en + (need_interior ? b.count : b.scount); en != end; ++en)
-                  if (en->key == key) cand.push_back(en);  // else another cell with the same hash
+                  if (en->key == key) {  // else another cell with the same hash
+                    cand.x.push_back(en->x), cand.y.push_back(en->y), cand.z.push_back(en->z);
+                    cand.entry.push_back(en);
+                  }
               }
             }
           }
         }
-        for (const VertexEntry* en : cand)
-          if (in_box(*en)) accept(en->x, en->y, en->z, en->vertex, en->group);
+        const int nc = static_cast<int>(cand.entry.size());
+        if (cand.x.size() % 2) {  // padding: an even count for the pairwise test (never a hit)
+          cand.x.push_back(std::numeric_limits<double>::infinity());
+          cand.y.push_back(0.0), cand.z.push_back(0.0);
+        }
+        const int nhit = box_hits(cand.x.data(), cand.y.data(), cand.z.data(), nc, lo, hi, cand.hit);
+        for (int q = 0; q < nhit; ++q) {
+          const VertexEntry* en = cand.entry[cand.hit[q]];
+          accept(en->x, en->y, en->z, en->vertex, en->group);
+        }
       }
       if (res.size() - first > 1)
         std::sort(res.begin() + static_cast<std::ptrdiff_t>(first), res.end(),
@@ -414,9 +432,8 @@ std::vector<Penetration> penetration_depths(const CollisionScene& scene, const E
   std::vector<int> vbody(res.size());
   for (size_t r = 0; r < res.size(); ++r) vbody[r] = body_of_vertex(res[r].vertex);
 
-  // 2. Border vertices.
-  std::vector<int> frontier;
-  for (size_t r = 0; r < res.size(); ++r) {
+  // 2. Border vertices: each from its own edges only, so in parallel (same result).
+  auto border = [&](size_t r) {
     Penetration& pen = res[r];
     const int a = vbody[r];
     const Body& A = *scene.bodies[a];
@@ -443,9 +460,19 @@ std::vector<Penetration> penetration_depths(const CollisionScene& scene, const E
       pen.depth = sd / sw;
       pen.direction = sn.normalized();
       pen.layer = 0;
-      frontier.push_back(static_cast<int>(r));
     }
+  };
+  constexpr size_t kSerialBorder = 32;  // fewer colliding vertices: waking a worker costs more
+  if (res.size() < kSerialBorder) {
+    for (size_t r = 0; r < res.size(); ++r) border(r);
+  } else {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, res.size(), 8), [&](const tbb::blocked_range<size_t>& b) {
+      for (size_t r = b.begin(); r != b.end(); ++r) border(r);
+    });
   }
+  std::vector<int> frontier;
+  for (size_t r = 0; r < res.size(); ++r)
+    if (res[r].layer == 0) frontier.push_back(static_cast<int>(r));
 
   // 3. Breadth-first propagation into the colliding region (same penetrated object).
   std::vector<char> queued(res.size(), 0);

@@ -15,6 +15,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -34,6 +35,38 @@ struct TetFrame {
   /// All four barycentric coordinates >= 0 (boundary included).
   bool contains(const Eigen::Vector3d& p, Eigen::Vector4d* bary = nullptr) const;
 };
+
+// Inline: the spatial hash calls these for every candidate vertex.
+inline TetFrame::TetFrame(const Eigen::Vector3d& a_, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                  const Eigen::Vector3d& d)
+    : a(a_) {
+  // M = [b−a, c−a, d−a]; inverse = adj(M) / det(M) with the determinant expanded along the
+  // first column of the same cofactors (Eigen's 3×3 formula, computed once).
+  const Eigen::Vector3d u = b - a, v = c - a, w = d - a;  // columns of M
+  // cof(r, k): cofactor of M(r, k).
+  const double c00 = v[1] * w[2] - w[1] * v[2], c10 = v[2] * w[0] - w[2] * v[0], c20 = v[0] * w[1] - w[0] * v[1];
+  const double det = c00 * u[0] + c10 * u[1] + c20 * u[2];
+  valid = std::isfinite(det) && det != 0.0;
+  if (!valid) return;
+  const double id = 1.0 / det;
+  const double c01 = w[1] * u[2] - u[1] * w[2], c11 = w[2] * u[0] - u[2] * w[0], c21 = w[0] * u[1] - u[0] * w[1];
+  const double c02 = u[1] * v[2] - v[1] * u[2], c12 = u[2] * v[0] - v[2] * u[0], c22 = u[0] * v[1] - v[0] * u[1];
+  inverse << c00 * id, c10 * id, c20 * id,  //
+      c01 * id, c11 * id, c21 * id,         //
+      c02 * id, c12 * id, c22 * id;
+}
+
+inline Eigen::Vector4d TetFrame::barycentric(const Eigen::Vector3d& p) const {
+  const Eigen::Vector3d l = inverse * (p - a);
+  return {1.0 - l[0] - l[1] - l[2], l[0], l[1], l[2]};
+}
+
+inline bool TetFrame::contains(const Eigen::Vector3d& p, Eigen::Vector4d* bary) const {
+  if (!valid) return false;
+  const Eigen::Vector4d b = barycentric(p);
+  if (bary) *bary = b;
+  return b.minCoeff() >= 0.0;
+}
 
 /// A vertex found inside a tetrahedron (indices into the query's X and T).
 struct Contact {
@@ -104,7 +137,14 @@ class SpatialHash {
   }
   std::vector<VertexEntry> entry_;  // vertices grouped by hash entry (counting sort)
   std::vector<std::vector<Contact>> blocks_;  // per block of tets (reused between queries)
-  std::vector<std::vector<const VertexEntry*>> cands_;  // per block of tets: cell-mates of the last cell range (reused)
+  /// Cell-mates of the last scanned cell range, their coordinates apart (structure of arrays,
+  /// padded to an even count) for the branch-free box test of every tet sharing the range.
+  struct Candidates {
+    std::vector<double> x, y, z;
+    std::vector<const VertexEntry*> entry;
+    std::vector<int> hit;  // scratch: indices that pass a tet's box test
+  };
+  std::vector<Candidates> cands_;  // per block of tets (reused between queries)
 };
 
 /// The same pairs as SpatialHash::find by testing every vertex against every tet, O(#X·#T):
