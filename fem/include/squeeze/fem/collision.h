@@ -14,6 +14,7 @@
 // breadth-first propagation into the colliding region (weights 1/|p_j − p|²).
 #pragma once
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -140,9 +141,16 @@ class SpatialHash {
   /// Cell-mates of the last scanned cell range, their coordinates apart (structure of arrays,
   /// padded to an even count) for the branch-free box test of every tet sharing the range.
   struct Candidates {
+    int n = 0;                               // candidates: the first n slots (slot n: padding)
     std::vector<double> x, y, z;
+    std::vector<int> id;                     // vertex
     std::vector<const VertexEntry*> entry;
-    std::vector<int> hit;  // scratch: indices that pass a tet's box test
+    std::vector<int> hit;                    // scratch: indices that pass a tet's box test
+    int capacity() const { return static_cast<int>(x.size()); }
+    void grow(int at_least) {
+      const size_t c = static_cast<size_t>(std::max(2 * capacity(), at_least));
+      x.resize(c), y.resize(c), z.resize(c), id.resize(c), entry.resize(c);
+    }
   };
   std::vector<Candidates> cands_;  // per block of tets (reused between queries)
 };
