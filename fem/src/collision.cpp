@@ -47,8 +47,9 @@ int box_hits(const double* x, const double* y, const double* z, const int* id, i
   if (hit.size() < static_cast<size_t>(n) + 2) hit.resize(static_cast<size_t>(n) + 2);
   int* out = hit.data();
   int m = 0;
-  auto not_corner = [&](int v) { return static_cast<int>((v != c[0]) & (v != c[1]) & (v != c[2]) & (v != c[3])); };
 #if defined(__SSE2__)
+  const __m128i c0 = _mm_set1_epi32(c[0]), c1 = _mm_set1_epi32(c[1]), c2 = _mm_set1_epi32(c[2]),
+                c3 = _mm_set1_epi32(c[3]);
   const __m128d lx = _mm_set1_pd(lo[0]), ly = _mm_set1_pd(lo[1]), lz = _mm_set1_pd(lo[2]);
   const __m128d hx = _mm_set1_pd(hi[0]), hy = _mm_set1_pd(hi[1]), hz = _mm_set1_pd(hi[2]);
   for (int q = 0; q < n; q += 2) {
@@ -57,18 +58,22 @@ int box_hits(const double* x, const double* y, const double* z, const int* id, i
         _mm_and_pd(_mm_and_pd(_mm_cmpnlt_pd(px, lx), _mm_cmpngt_pd(px, hx)),
                    _mm_and_pd(_mm_cmpnlt_pd(py, ly), _mm_cmpngt_pd(py, hy))),
         _mm_and_pd(_mm_cmpnlt_pd(pz, lz), _mm_cmpngt_pd(pz, hz)));
-    const int bits = _mm_movemask_pd(in);
+    // the two ids in the low 32-bit lanes: lanes equal to a corner
+    const __m128i v = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(id + q));
+    const __m128i corner = _mm_or_si128(_mm_or_si128(_mm_cmpeq_epi32(v, c0), _mm_cmpeq_epi32(v, c1)),
+                                        _mm_or_si128(_mm_cmpeq_epi32(v, c2), _mm_cmpeq_epi32(v, c3)));
+    const int bits = _mm_movemask_pd(in) & ~_mm_movemask_ps(_mm_castsi128_ps(corner));
     out[m] = q;
-    m += bits & not_corner(id[q]);
+    m += bits & 1;
     out[m] = q + 1;
-    m += (bits >> 1) & not_corner(id[q + 1]);
+    m += bits >> 1;
   }
   // (The padding slot cannot pass: x = +inf and hi is finite.)
 #else
   for (int q = 0; q < n; ++q) {
     out[m] = q;
     m += !(x[q] < lo[0] || x[q] > hi[0] || y[q] < lo[1] || y[q] > hi[1] || z[q] < lo[2] || z[q] > hi[2]) &
-         not_corner(id[q]);
+         (id[q] != c[0]) & (id[q] != c[1]) & (id[q] != c[2]) & (id[q] != c[3]);
   }
 #endif
   return m;
