@@ -170,7 +170,11 @@ ConvexHull convex_hull(const Eigen::MatrixX3d& P) {
     Eigen::Vector3d nrm = (p1 - p0).cross(p2 - p0);
     hull.volume += (p0 - c.transpose()).dot((p1 - c.transpose()).cross(p2 - c.transpose())) / 6.0;
     const double len = nrm.norm();
-    if (len > 0) {
+    // A (nearly) zero-area facet, e.g. over three (nearly) collinear points (clip points along
+    // the line where two cutting planes meet), is no facet of the polytope, and its normal is
+    // rounding noise: as a plane it would cut the hull. The other facets' planes bound the hull.
+    const double longest2 = std::max({(p1 - p0).squaredNorm(), (p2 - p1).squaredNorm(), (p0 - p2).squaredNorm()});
+    if (len > 1e-10 * longest2) {
       nrm /= len;
       planes.emplace_back(nrm(0), nrm(1), nrm(2), nrm.dot(p0));
     }

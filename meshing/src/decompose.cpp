@@ -91,7 +91,7 @@ void sample_triangle(const Vec3& a, const Vec3& b, const Vec3& c, double h, Fn f
     }
 }
 
-Grid build_grid(const SurfaceMesh& mesh, int resolution, Progress* progress) {
+Grid build_grid(const SurfaceMesh& mesh, const FastWindingNumber& wn, int resolution, Progress* progress) {
   Grid g;
   const Vec3 lo = mesh.V.colwise().minCoeff().transpose(), hi = mesh.V.colwise().maxCoeff().transpose();
   const double longest = std::max((hi - lo).maxCoeff(), 1e-300);
@@ -122,7 +122,6 @@ Grid build_grid(const SurfaceMesh& mesh, int resolution, Progress* progress) {
   // Regions of non-surface voxels (6-connected); classify each by the winding number at a few of
   // its voxels, or voxel by voxel where those disagree (a hole lets inside and outside touch).
   if (progress) progress->stage("inside/outside (winding number)");
-  const FastWindingNumber wn(mesh.V, mesh.F);
   std::vector<int> region(g.size(), -1);
   std::vector<int> members, stack;
   for (int seed = 0; seed < static_cast<int>(g.size()); ++seed) {
@@ -182,30 +181,88 @@ struct Piece {
   Vec3 deepest = Vec3::Zero();
 };
 
+// Whether every corner of `poly` is within eps of the plane n·x = d.
+bool lies_in_plane(const Polygon& poly, const Vec3& n, double d, double eps) {
+  return std::all_of(poly.p.begin(), poly.p.end(), [&](const Vec3& q) { return std::abs(n.dot(q) - d) <= eps; });
+}
+
 // Volume of a piece of a closed, outward-oriented surface clipped to a convex cell, by the
 // divergence theorem: the clipped polygons' fan terms about an origin O, plus one term per cut
-// plane c for its cap, (d_c - n_c·O) A_c / 3. The cap's area comes from its boundary, which is the
-// clipped polygons' edges lying on plane c traversed backwards: A_c n_c = -1/2 Σ (a × b).
-double piece_volume(const std::vector<Polygon>& polys, const std::vector<Eigen::Vector4d>& planes, double eps) {
+// plane c for its cap, (d_c - n_c·O) A_c / 3. The cap's area comes from its boundary traversed
+// counter-clockwise about n_c: the clipped polygons' edges lying on plane c, backwards, and,
+// where the cap meets the cap of another plane j inside the solid, segments of the line
+// L_cj = c ∩ j, in direction n_c × n_j. Their total length on L_cj is measured along the line
+// within the cell: the surface crosses L_cj only at polygon vertices lying on both planes, and
+// each interval between those is in the solid or not (winding number at its midpoint).
+// A_c n_c = -1/2 Σ_edges (a - O) × (b - O) + 1/2 Σ_j length_cj (p_cj - O) × u_cj, p_cj on L_cj.
+double piece_volume(const std::vector<Polygon>& polys, const std::vector<Eigen::Vector4d>& planes,
+                    const FastWindingNumber& wn, double eps) {
   if (polys.empty()) return 0.0;
   const Vec3 o = polys.front().p.front();
+  const size_t m = planes.size();
   double six_v = 0.0;
-  std::vector<Vec3> cap(planes.size(), Vec3::Zero());
+  std::vector<Vec3> cap(m, Vec3::Zero());
+  std::vector<std::vector<Vec3>> on_two(m * m);  // polygon vertices on planes c and j (c < j)
   for (const Polygon& poly : polys) {
-    const size_t m = poly.p.size();
-    for (size_t i = 1; i + 1 < m; ++i) six_v += (poly.p[0] - o).dot((poly.p[i] - o).cross(poly.p[i + 1] - o));
-    for (size_t c = 0; c < planes.size(); ++c) {
+    const size_t k = poly.p.size();
+    for (size_t i = 1; i + 1 < k; ++i) six_v += (poly.p[0] - o).dot((poly.p[i] - o).cross(poly.p[i + 1] - o));
+    for (size_t c = 0; c < m; ++c) {
       const Vec3 n = planes[c].head<3>();
       const double d = planes[c](3);
-      for (size_t i = 0; i < m; ++i) {
+      for (size_t i = 0; i < k; ++i) {
         const Vec3& a = poly.p[i];
-        const Vec3& b = poly.p[(i + 1) % m];
+        const Vec3& b = poly.p[(i + 1) % k];
         if (std::abs(n.dot(a) - d) <= eps && std::abs(n.dot(b) - d) <= eps) cap[c] -= 0.5 * (a - o).cross(b - o);
       }
     }
+    if (m < 2) continue;
+    for (const Vec3& a : poly.p)
+      for (size_t c = 0; c < m; ++c) {
+        if (std::abs(planes[c].head<3>().dot(a) - planes[c](3)) > eps) continue;
+        for (size_t j = c + 1; j < m; ++j)
+          if (std::abs(planes[j].head<3>().dot(a) - planes[j](3)) <= eps) on_two[c * m + j].push_back(a);
+      }
   }
+  for (size_t c = 0; c < m; ++c)
+    for (size_t j = c + 1; j < m; ++j) {
+      const Vec3 nc = planes[c].head<3>(), nj = planes[j].head<3>();
+      const Vec3 w = nc.cross(nj);
+      if (w.norm() < 1e-9) continue;  // parallel planes do not meet
+      const Vec3 u = w.normalized();
+      Eigen::Matrix3d A;
+      A << nc.transpose(), nj.transpose(), u.transpose();
+      const Vec3 p = A.partialPivLu().solve(Vec3(planes[c](3), planes[j](3), u.dot(o)));
+      // The line within the cell: t in [t0, t1] for p + t u.
+      double t0 = -INFINITY, t1 = INFINITY;
+      for (size_t l = 0; l < m; ++l) {
+        if (l == c || l == j) continue;
+        const double nu = planes[l].head<3>().dot(u), gap = planes[l](3) - planes[l].head<3>().dot(p);
+        if (std::abs(nu) < 1e-12) {
+          if (gap < -eps) t0 = INFINITY;  // the line is outside this half-space
+        } else if (nu > 0) {
+          t1 = std::min(t1, gap / nu);
+        } else {
+          t0 = std::max(t0, gap / nu);
+        }
+      }
+      std::vector<double> t;
+      for (const Vec3& a : on_two[c * m + j]) t.push_back(u.dot(a - p));
+      if (!(t0 < t1)) continue;
+      // (The solid is bounded: an unbounded interval is outside it.)
+      t.push_back(t0);
+      t.push_back(t1);
+      std::sort(t.begin(), t.end());
+      double length = 0.0;
+      for (size_t i = 0; i + 1 < t.size(); ++i) {
+        const double a = std::max(t[i], t0), b = std::min(t[i + 1], t1);
+        if (!(b - a > eps) || !std::isfinite(a) || !std::isfinite(b)) continue;
+        if (wn((p + 0.5 * (a + b) * u).transpose()) > 0.5) length += b - a;
+      }
+      cap[c] += 0.5 * length * (p - o).cross(u);  // along n_c × n_j on cap c
+      cap[j] -= 0.5 * length * (p - o).cross(u);  // and the other way on cap j
+    }
   double v = six_v / 6.0;
-  for (size_t c = 0; c < planes.size(); ++c) {
+  for (size_t c = 0; c < m; ++c) {
     const Vec3 n = planes[c].head<3>();
     v += (planes[c](3) - n.dot(o)) * cap[c].dot(n) / 3.0;
   }
@@ -248,12 +305,43 @@ void thicken_if_flat(Eigen::MatrixX3d& pts, ConvexHull& hull, double thickness) 
   hull = convex_hull(pts);
 }
 
-void evaluate_piece(Piece& piece, double flat_thickness, double sample_spacing) {
-  // Polygon corners, each once (neighbouring polygons share them); outer wins over inner.
-  struct Corner { double x, y, z; char outer; char sample; };
+// Corners of the piece's cell (three cutting planes meeting, within all the others) that lie
+// inside the solid. Where three cuts meet inside the solid, the piece has a corner that is on no
+// input triangle: without it the hull of the clipped triangles would miss the piece's corner and
+// the shells would leave a gap inside the solid.
+std::vector<Vec3> cell_corners_inside(const std::vector<Eigen::Vector4d>& planes, const FastWindingNumber& wn,
+                                      double plane_eps) {
+  std::vector<Vec3> out;
+  const size_t m = planes.size();
+  for (size_t a = 0; a < m; ++a)
+    for (size_t b = a + 1; b < m; ++b)
+      for (size_t c = b + 1; c < m; ++c) {
+        Eigen::Matrix3d A;
+        A << planes[a].head<3>().transpose(), planes[b].head<3>().transpose(), planes[c].head<3>().transpose();
+        if (std::abs(A.determinant()) < 1e-9) continue;  // (nearly) parallel planes: no corner
+        const Vec3 x = A.partialPivLu().solve(Vec3(planes[a](3), planes[b](3), planes[c](3)));
+        bool in_cell = true;
+        for (const Eigen::Vector4d& q : planes) in_cell = in_cell && q.head<3>().dot(x) <= q(3) + plane_eps;
+        if (in_cell && wn(x.transpose()) > 0.5) out.push_back(x);
+      }
+  return out;
+}
+
+void evaluate_piece(Piece& piece, const FastWindingNumber& wn, double flat_thickness, double sample_spacing,
+                    double plane_eps) {
+  // Polygon corners, each once (neighbouring polygons share them). Kinds: 0 inner surface (not
+  // ∂S, does not count), 1 outer, 2 on a cap: a polygon lying in one of the cell's cutting planes
+  // (a cut through a face, e.g. the floor of a notch) is part of the piece's cap, which is a facet
+  // of conv(P), so its points are on the hull and count zero (measured against the bridges alone
+  // they would look as deep as the piece is wide). Cap wins over outer, outer over inner.
+  struct Corner { double x, y, z; char kind; char sample; };
   std::vector<Corner> corners;
   for (const auto& poly : piece.polys) {
-    for (const Vec3& p : poly.p) corners.push_back({p(0), p(1), p(2), static_cast<char>(poly.outer), 0});
+    const bool cap = std::any_of(piece.planes.begin(), piece.planes.end(), [&](const Eigen::Vector4d& c) {
+      return lies_in_plane(poly, c.head<3>(), c(3), plane_eps);
+    });
+    const char kind = cap ? 2 : poly.outer ? 1 : 0;
+    for (const Vec3& p : poly.p) corners.push_back({p(0), p(1), p(2), kind, 0});
     // Large polygons are sampled too (spacing about a voxel): a concave edge of a prism has its
     // end points on hull faces, the depth is along it.
     for (size_t i = 2; i < poly.p.size(); ++i) {
@@ -261,12 +349,16 @@ void evaluate_piece(Piece& piece, double flat_thickness, double sample_spacing) 
       if (std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}) <= sample_spacing * sample_spacing)
         continue;
       sample_triangle(a, b, c, 2.0 * sample_spacing, [&](const Vec3& q) {
-        corners.push_back({q(0), q(1), q(2), static_cast<char>(poly.outer), 1});
+        corners.push_back({q(0), q(1), q(2), kind, 1});
       });
     }
   }
   std::sort(corners.begin(), corners.end(), [](const Corner& a, const Corner& b) {
-    return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z != b.z ? a.z < b.z : a.outer != b.outer ? a.outer > b.outer : a.sample < b.sample;
+    return a.x != b.x         ? a.x < b.x
+           : a.y != b.y       ? a.y < b.y
+           : a.z != b.z       ? a.z < b.z
+           : a.kind != b.kind ? a.kind > b.kind
+                              : a.sample < b.sample;
   });
   corners.erase(std::unique(corners.begin(), corners.end(),
                             [](const Corner& a, const Corner& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }),
@@ -276,15 +368,20 @@ void evaluate_piece(Piece& piece, double flat_thickness, double sample_spacing) 
   std::vector<char> outer(n);
   size_t n_vertices = 0;
   for (size_t r = 0; r < n; ++r) {
-    outer[r] = corners[r].outer;
+    outer[r] = corners[r].kind == 1;
     n_vertices += !corners[r].sample;
     pts.row(static_cast<Eigen::Index>(r)) << corners[r].x, corners[r].y, corners[r].z;
   }
   // The hull of the polygon vertices (samples lie on the polygons: they add nothing but
   // near-coplanar facets); the depth is measured at vertices and samples alike.
-  Eigen::MatrixX3d hull_pts(static_cast<Eigen::Index>(n_vertices), 3);
-  for (size_t r = 0, k = 0; r < n; ++r)
+  // Plus the cell's corners inside the solid (on cutting planes, not on the surface: their depth
+  // is not measured).
+  const std::vector<Vec3> cell_corners = cell_corners_inside(piece.planes, wn, plane_eps);
+  Eigen::MatrixX3d hull_pts(static_cast<Eigen::Index>(n_vertices + cell_corners.size()), 3);
+  size_t k = 0;
+  for (size_t r = 0; r < n; ++r)
     if (!corners[r].sample) hull_pts.row(static_cast<Eigen::Index>(k++)) = pts.row(static_cast<Eigen::Index>(r));
+  for (const Vec3& x : cell_corners) hull_pts.row(static_cast<Eigen::Index>(k++)) = x.transpose();
   piece.hull = convex_hull(hull_pts);
   thicken_if_flat(hull_pts, piece.hull, flat_thickness);
   // Depth is measured below the hull's *bridges*: facets that lie on a cutting plane are caps of
@@ -325,6 +422,37 @@ void evaluate_piece(Piece& piece, double flat_thickness, double sample_spacing) 
   if (all.depth >= 0) piece.deepest = pts.row(static_cast<Eigen::Index>(all.at)).transpose();
 }
 
+// The corners of the convex hull of points lying (up to a jitter) on the plane with unit normal
+// n, in order (Andrew's monotone chain on in-plane coordinates; ties by input order, so the
+// result is a pure function of the input).
+std::vector<Vec3> section_hull(const std::vector<Vec3>& pts, const Vec3& n) {
+  if (pts.size() < 4) return pts;
+  int least;
+  n.cwiseAbs().minCoeff(&least);
+  const Vec3 u = n.cross(Vec3::Unit(least)).normalized(), v = n.cross(u);
+  std::vector<std::array<double, 2>> uv(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) uv[i] = {u.dot(pts[i]), v.dot(pts[i])};
+  std::vector<size_t> order(pts.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return uv[a] != uv[b] ? uv[a] < uv[b] : a < b; });
+  auto turn = [&](size_t o, size_t a, size_t b) {
+    return (uv[a][0] - uv[o][0]) * (uv[b][1] - uv[o][1]) - (uv[a][1] - uv[o][1]) * (uv[b][0] - uv[o][0]);
+  };
+  std::vector<size_t> chain(2 * pts.size());
+  size_t k = 0;
+  for (size_t i = 0; i < order.size(); ++i) {  // lower hull
+    while (k >= 2 && turn(chain[k - 2], chain[k - 1], order[i]) <= 0) --k;
+    chain[k++] = order[i];
+  }
+  for (size_t i = order.size() - 1, lower = k + 1; i-- > 0;) {  // upper hull
+    while (k >= lower && turn(chain[k - 2], chain[k - 1], order[i]) <= 0) --k;
+    chain[k++] = order[i];
+  }
+  std::vector<Vec3> out;
+  for (size_t i = 0; i + 1 < k; ++i) out.push_back(pts[chain[i]]);  // the last repeats the first
+  return out;
+}
+
 struct Candidate {
   Vec3 n;
   double d;
@@ -339,6 +467,8 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
   if (opt.voxel_resolution < 8 || opt.voxel_resolution > 1024)
     throw InputError("--voxel-resolution must be between 8 and 1024");
   if (opt.cut_samples < 1) throw InputError("cut_samples must be at least 1");
+  if (!(opt.notch_preference >= 0 && opt.notch_preference <= 1))
+    throw InputError("notch_preference must be between 0 and 1");
 
   const double diag = bounding_box_diagonal(mesh.V);
   Decomposition result;
@@ -346,7 +476,8 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
   const double thickness = opt.flat_thickness * diag;
 
   if (progress) progress->stage("voxelizing");
-  Grid g = build_grid(mesh, opt.voxel_resolution, progress);
+  const FastWindingNumber wn(mesh.V, mesh.F);
+  Grid g = build_grid(mesh, wn, opt.voxel_resolution, progress);
   size_t interior = 0, surface = 0;
   spdlog::debug("voxel grid {}x{}x{}, h {:.17g}", g.nx, g.ny, g.nz, g.h);
   for (unsigned char s : g.state) interior += s == kInterior, surface += s == kSurface;
@@ -394,17 +525,18 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
 
   if (progress) progress->stage("decomposing", opt.max_hulls);
   const bool closed = is_closed(mesh.F);
+  const double plane_eps = 1e-9 * diag;  // a point this close to a cutting plane lies on it
   auto measure_voxels = [&](Piece& q) {
     double n = 0;
     for (int v : q.voxels) n += g.state[v] == kInterior ? 1.0 : 0.5;
     q.voxel_volume = n * g.h * g.h * g.h;
     q.volume = q.voxel_volume;
     if (closed) {
-      const double exact = piece_volume(q.polys, q.planes, 1e-9 * diag);
+      const double exact = piece_volume(q.polys, q.planes, wn, plane_eps);
       if (exact > 0) q.volume = exact;
     }
   };
-  for (auto& piece : pieces) evaluate_piece(piece, thickness, g.h), measure_voxels(piece);
+  for (auto& piece : pieces) evaluate_piece(piece, wn, thickness, g.h, plane_eps), measure_voxels(piece);
 
   std::vector<char> alive(pieces.size(), 1);
   auto count_alive = [&] { return static_cast<int>(std::count(alive.begin(), alive.end(), 1)); };
@@ -471,8 +603,15 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     }
 
     // Score: summed hull volumes of the two sides. A side's hull is spanned by the piece's own
-    // hull vertices on that side plus the voxels in a one-voxel slab along the plane (its cross
-    // section), which is all that can be extreme after the cut.
+    // hull vertices on that side plus its cross-section, which is all that can be extreme after
+    // the cut: the side's voxels nearest the plane, projected onto it (only the corners of their
+    // 2-D hull are kept). "Nearest": within max(|n|₁ / 2, |n|∞) voxels of the plane, which holds
+    // the voxel nearest the plane of every lattice row along the normal's largest component, so
+    // each side has its cross-section whatever the plane's offset from the lattice. (With a slab
+    // of half a voxel, a plane normal to an axis had one voxel layer on one side only: the other
+    // side's hull lost its cross-section, and a useless cut, e.g. slicing a slab of the U along
+    // its thickness, looked like it removed volume.) Projected, the two sides' hulls reach the
+    // plane: a cut that removes nothing scores the piece's own hull volume.
     // Voxel centres, jittered by a millionth of a voxel (a fixed hash of the voxel index): lattice
     // points are maximally degenerate (coplanar, cospherical) and would send every hull to exact
     // arithmetic; the scores do not notice the jitter.
@@ -489,6 +628,7 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
       centres[i] = g.centre(P.voxels[i]) + 2e-6 * g.h * j;
     }
     Eigen::MatrixX3d piece_hull_pts;
+    double uncut_cost = 0.0;
     {
       // Only voxels with a 6-neighbour outside the piece can be hull corners (an inner voxel is
       // the midpoint of two neighbours, and the jitter is far too small to change that): the hull
@@ -505,21 +645,25 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
       }
       Eigen::MatrixX3d all(static_cast<Eigen::Index>(ends.size()), 3);
       for (size_t i = 0; i < ends.size(); ++i) all.row(static_cast<Eigen::Index>(i)) = centres[ends[i]].transpose();
-      piece_hull_pts = extreme_points(convex_hull(all));
+      const ConvexHull voxel_hull = convex_hull(all);
+      uncut_cost = voxel_hull.volume;
+      piece_hull_pts = extreme_points(voxel_hull);
       if (piece_hull_pts.rows() == 0) piece_hull_pts = all;
     }
     std::vector<double> cost(cand.size(), INFINITY);
     auto eval_candidate = [&](size_t c) {
       const Candidate& k = cand[c];
-      const double slab = 0.5 * g.h * k.n.cwiseAbs().sum();
-      std::vector<Vec3> side_pts[2];
+      const double slab = g.h * std::max(0.5 * k.n.cwiseAbs().sum(), k.n.cwiseAbs().maxCoeff());
+      std::vector<Vec3> side_pts[2], section[2];
       size_t counts[2] = {0, 0};
-      for (const Vec3& q : centres) {
-        const double s = k.n.dot(q) - k.d;
-        ++counts[s < 0 ? 0 : 1];
-        if (std::abs(s) <= slab) side_pts[s < 0 ? 0 : 1].push_back(q);
+      for (size_t i = 0; i < centres.size(); ++i) {
+        const int side = k.n.dot(centres[i]) < k.d ? 0 : 1;
+        ++counts[side];
+        const double s = k.n.dot(g.centre(P.voxels[i])) - k.d;  // unjittered: lands on the plane
+        if (std::abs(s) <= slab) section[side].push_back(centres[i] - s * k.n);
       }
       if (counts[0] < 4 || counts[1] < 4) return;
+      for (int side = 0; side < 2; ++side) side_pts[side] = section_hull(section[side], k.n);
       for (Eigen::Index i = 0; i < piece_hull_pts.rows(); ++i) {
         const Vec3 q = piece_hull_pts.row(i).transpose();
         side_pts[k.n.dot(q) < k.d ? 0 : 1].push_back(q);
@@ -540,6 +684,27 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     size_t best = 0;
     for (size_t c = 1; c < cand.size(); ++c)
       if (cost[c] < cost[best]) best = c;
+    // The cut through the notch along one of its faces (Lien & Amato cut through the notch;
+    // Chazelle's cuts of a polyhedron are planes through its reflex edges) wins when it removes at
+    // least (1 - notch_preference) of the best candidate's hull volume: a candidate through the
+    // deepest point on whose plane a polygon of the piece lies. The summed volume cannot tell the
+    // cuts of a U's base apart (every plane between the arms removes the same volume), nor, at the
+    // voxels' resolution, the cut along the notch's wall from one beside it that leaves a sliver of
+    // the base under an arm, a notch that takes further cuts. On curved input no polygon lies on a
+    // candidate plane, and the summed volume decides alone.
+    const double best_gain = uncut_cost - cost[best];
+    size_t notch = cand.size();
+    for (size_t c = 0; c < cand.size(); ++c) {
+      if (!cand[c].notch || !std::isfinite(cost[c]) ||
+          uncut_cost - cost[c] < (1.0 - opt.notch_preference) * best_gain ||
+          (notch < cand.size() && cost[c] >= cost[notch]))
+        continue;
+      const bool along_face = std::any_of(P.polys.begin(), P.polys.end(), [&](const Polygon& poly) {
+        return lies_in_plane(poly, cand[c].n, cand[c].d, plane_eps);
+      });
+      if (along_face) notch = c;
+    }
+    if (notch < cand.size()) best = notch;
     if (!std::isfinite(cost[best])) {
       splittable[pick] = 0;
       continue;
@@ -547,8 +712,10 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
 
     // Apply the cut.
     const Candidate k = cand[best];
-    spdlog::debug("split piece {} (concavity {:.17g}, {} voxels): candidate {}/{} cost {:.17g}", pieces[pick].order,
-                  pieces[pick].concavity, pieces[pick].voxels.size(), best, cand.size(), cost[best]);
+    spdlog::debug("split piece {} (concavity {:.17g}, {} voxels): candidate {}/{} cost {:.17g}, plane {:.17g} {:.17g} "
+                  "{:.17g} {:.17g}",
+                  pieces[pick].order, pieces[pick].concavity, pieces[pick].voxels.size(), best, cand.size(), cost[best],
+                  k.n(0), k.n(1), k.n(2), k.d);
     Piece children[2];
     std::vector<Vec3> clipped;
     for (int s = 0; s < 2; ++s) {
@@ -558,6 +725,15 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
       children[s].planes.push_back(s == 0 ? Eigen::Vector4d(k.n(0), k.n(1), k.n(2), k.d)
                                           : Eigen::Vector4d(-k.n(0), -k.n(1), -k.n(2), -k.d));
       for (const Polygon& poly : P.polys) {
+        // A polygon lying in the plane (a cut through a face, as through the floor of a notch)
+        // belongs to the side its solid is on, opposite its outward normal; clipping would keep
+        // it on both, where the other side would get a stray face (and a hull over the notch).
+        if (lies_in_plane(poly, k.n, k.d, plane_eps)) {
+          Vec3 area = Vec3::Zero();  // Newell's normal, times twice the area
+          for (size_t i = 0; i < poly.p.size(); ++i) area += poly.p[i].cross(poly.p[(i + 1) % poly.p.size()]);
+          if ((area.dot(k.n) >= 0) == (s == 0)) children[s].polys.push_back(poly);
+          continue;
+        }
         clip(poly.p, k.n, k.d, s == 0 ? 1.0 : -1.0, clipped);
         if (clipped.size() >= 3) children[s].polys.push_back({clipped, poly.outer});
       }
@@ -579,7 +755,7 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     }
     for (int s = 0; s < 2; ++s) {
       if (children[s].polys.empty()) continue;
-      evaluate_piece(children[s], thickness, g.h);
+      evaluate_piece(children[s], wn, thickness, g.h, plane_eps);
       measure_voxels(children[s]);
       pieces.push_back(std::move(children[s]));
       alive.push_back(1);

@@ -12,12 +12,19 @@
 // the bridges are the hull facets that do not lie on a cutting plane (those are the piece's own
 // caps) — the concavity of Lien & Amato's ACD (the paper's [15]: J.-M. Lien, N. M. Amato, "Approximate convex
 // decomposition of polyhedra", SPM 2007, doi:10.1145/1236246.1236265). dist to the boundary of a
-// convex polytope from inside is the minimum over its facet planes, so it is exact. Points of the
-// cutting planes lie on ∂conv(P) and do not count. The points x are the vertices of the input
+// convex polytope from inside is the minimum over its facet planes, so it is exact. Surface lying
+// in a cutting plane (a cut along a face, e.g. the floor of a notch) is part of a cap, a facet of
+// conv(P), and counts zero; where the surface crosses a cutting plane it is measured like the rest
+// (a notch the cut crosses goes on there). The points x are the vertices of the input
 // triangles clipped to C (original vertices plus edge/plane intersections); surface that lies
 // inside the solid (walls between touching parts, self-intersections) is not ∂S and is excluded,
 // as judged on the voxel grid below. Units: model units (the threshold is given as a fraction of the
 // bounding-box diagonal).
+//
+// The shell of P is the convex hull of the clipped triangles' vertices and of the corners of C
+// (three cutting planes meeting) that lie inside the solid: P's corners that are on no triangle.
+// The shells therefore cover the solid, not only the input's vertices. A triangle lying in a
+// cutting plane goes to the side its solid is on (opposite its outward normal).
 //
 // Inside/outside: voxels of a grid (voxel_resolution along the longest side) are surface voxels
 // (touched by a triangle) or classified by the generalized winding number at their centre
@@ -28,18 +35,23 @@
 // A second, volumetric criterion catches thin curved parts (a spinal cord, a tube) whose
 // concavity stays below a threshold measured against the whole diagonal: a piece is also split when
 // vol(conv(P)) > max_hull_volume_ratio × vol(P). For a closed input vol(P) is exact (divergence
-// theorem over the clipped polygons and the caps on the cut planes, whose areas come from the
-// polygons' edges on those planes); otherwise it is estimated on the voxel grid (interior voxels
-// plus half the surface voxels).
+// theorem over the clipped polygons and the caps on the cut planes, whose areas come from their
+// boundaries: the polygons' edges on those planes and, where two caps meet inside the solid, the
+// part of their common line that is in the solid); otherwise it is estimated on the voxel grid
+// (interior voxels plus half the surface voxels).
 //
 // Choosing a cut (in the family of V-HACD, K. Mamou 2009/2016, and CoACD, X. Wei et al. 2022,
 // doi:10.1145/3528223.3530103): the piece that exceeds its bounds the most (concavity over
 // threshold, or hull volume over ratio × volume) is split next. Candidate
 // planes are normal to the piece's three principal axes, at cut_samples even positions and
 // through the deepest point; each candidate is scored by the summed volume of the convex hulls of
-// the two sides (the piece's hull corners on that side plus the voxels along the plane: the
-// excess volume the shells would add), the lowest wins, ties by candidate order.
-// Everything is deterministic and independent of the number of threads.
+// the two sides (the piece's hull corners on that side plus the side's voxels nearest the plane
+// projected onto it, its cross-section: the excess volume the shells would add), the lowest wins,
+// ties by candidate order; except that a cut through the deepest point along a face of the
+// surface (the wall or floor of a notch: Lien & Amato's cut through the notch) wins when it
+// removes at least 1 - notch_preference of the best one's volume, which cannot tell it from cuts
+// beside it that leave a sliver of notch. Everything is deterministic and independent of the number
+// of threads.
 #pragma once
 #include <vector>
 
@@ -57,6 +69,9 @@ struct DecompositionOptions {
                                  // of its volume: thin curved parts, knots
   int voxel_resolution = 64;     // voxels along the longest bounding-box side
   int cut_samples = 10;          // candidate positions per principal axis per split
+  double notch_preference = 0.1; // a cut through the deepest point along a face of the surface
+                                 // wins when it removes at least (1 - this) of the best
+                                 // candidate's hull volume
   double flat_thickness = 0.004; // fraction of the diagonal given to flat (zero-volume) pieces
 };
 

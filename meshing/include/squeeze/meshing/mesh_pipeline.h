@@ -19,7 +19,7 @@ class Progress;
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 2;
+constexpr int kMeshingAlgorithmVersion = 3;
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // concavity threshold, hull budget, voxel grid
