@@ -8,9 +8,6 @@
 #include <cmath>
 #include <limits>
 #include <new>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include "squeeze/common/error.h"
 
@@ -34,49 +31,6 @@ std::int64_t cell_of(double x, double inv) {
   if (!(y < 1e15)) return 1000000000000000LL;
   const std::int64_t c = static_cast<std::int64_t>(y);  // toward zero
   return static_cast<double>(c) > y ? c - 1 : c;
-}
-
-// Indices q < n (in increasing order) of the points (x[q], y[q], z[q]) in the closed box
-// [lo, hi] whose vertex id[q] is none of the tet's corners c[0..3], written to hit; their count is
-// returned. A NaN coordinate passes the box test (as the scalar test !(x < lo || x > hi) does; the
-// containment test rejects it). x, y, z, id hold n rounded up to even values (padding: id −1,
-// x +inf). Branch-free: the candidates of a cell range are tested by every tet that shares it,
-// the outcome is hard to predict, and most of the points in the box are the tet's own corners.
-int box_hits(const double* x, const double* y, const double* z, const int* id, int n, const Eigen::Vector3d& lo,
-             const Eigen::Vector3d& hi, const int c[4], std::vector<int>& hit) {
-  if (hit.size() < static_cast<size_t>(n) + 2) hit.resize(static_cast<size_t>(n) + 2);
-  int* out = hit.data();
-  int m = 0;
-#if defined(__SSE2__)
-  const __m128i c0 = _mm_set1_epi32(c[0]), c1 = _mm_set1_epi32(c[1]), c2 = _mm_set1_epi32(c[2]),
-                c3 = _mm_set1_epi32(c[3]);
-  const __m128d lx = _mm_set1_pd(lo[0]), ly = _mm_set1_pd(lo[1]), lz = _mm_set1_pd(lo[2]);
-  const __m128d hx = _mm_set1_pd(hi[0]), hy = _mm_set1_pd(hi[1]), hz = _mm_set1_pd(hi[2]);
-  for (int q = 0; q < n; q += 2) {
-    const __m128d px = _mm_loadu_pd(x + q), py = _mm_loadu_pd(y + q), pz = _mm_loadu_pd(z + q);
-    const __m128d in = _mm_and_pd(
-        _mm_and_pd(_mm_and_pd(_mm_cmpnlt_pd(px, lx), _mm_cmpngt_pd(px, hx)),
-                   _mm_and_pd(_mm_cmpnlt_pd(py, ly), _mm_cmpngt_pd(py, hy))),
-        _mm_and_pd(_mm_cmpnlt_pd(pz, lz), _mm_cmpngt_pd(pz, hz)));
-    // the two ids in the low 32-bit lanes: lanes equal to a corner
-    const __m128i v = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(id + q));
-    const __m128i corner = _mm_or_si128(_mm_or_si128(_mm_cmpeq_epi32(v, c0), _mm_cmpeq_epi32(v, c1)),
-                                        _mm_or_si128(_mm_cmpeq_epi32(v, c2), _mm_cmpeq_epi32(v, c3)));
-    const int bits = _mm_movemask_pd(in) & ~_mm_movemask_ps(_mm_castsi128_ps(corner));
-    out[m] = q;
-    m += bits & 1;
-    out[m] = q + 1;
-    m += bits >> 1;
-  }
-  // (The padding slot cannot pass: x = +inf and hi is finite.)
-#else
-  for (int q = 0; q < n; ++q) {
-    out[m] = q;
-    m += !(x[q] < lo[0] || x[q] > hi[0] || y[q] < lo[1] || y[q] > hi[1] || z[q] < lo[2] || z[q] > hi[2]) &
-         (id[q] != c[0]) & (id[q] != c[1]) & (id[q] != c[2]) & (id[q] != c[3]);
-  }
-#endif
-  return m;
 }
 
 }  // namespace
@@ -209,7 +163,7 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
     // Cell-mates found for the last scanned cell range (a per-block buffer, reused between
     // queries): consecutive tets of a mesh often share their range (the 6 tets of a Kuhn cube
     // share their AABB), so the lookups are reused.
-    Candidates& cand = cands_[blk];
+    std::vector<const VertexEntry*>& cand = cands_[blk];
     std::array<std::int64_t, 7> cached{};
     bool have_cached = false;
     const int t1 = std::min(nt, (blk + 1) * kBlock);
@@ -287,47 +241,31 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
             accept(entries[e].x, entries[e].y, entries[e].z, entries[e].vertex, entries[e].group);
       } else {
         const std::array<std::int64_t, 7> range{i0, i1, j0, j1, k0, k1, need_interior ? 1 : 0};
-        std::int64_t differ = !have_cached;
-        for (int a = 0; a < 7; ++a) differ |= range[a] ^ cached[a];
-        if (differ) {
+        if (!have_cached || range != cached) {
           cached = range;
           have_cached = true;
-          // The cells of the range in one loop (a range is 1–2 cells per axis: three nested
-          // loops of 1–2 turns each are mispredicted at nearly every exit), each entry's
-          // cell-mates appended without a branch; hash() and key_of() computed per axis.
+          cand.clear();
+          // hash() and key_of() with their per-axis terms hoisted out of the inner loops.
           constexpr std::uint32_t shift = 1u << 20;
           constexpr std::int64_t m21 = (1 << 21) - 1;
-          const int count = static_cast<int>((di + 1) * (dj + 1) * (dk + 1));
-          int nc = 0;
-          std::int64_t i = i0, j = j0, k = k0;
-          for (int q = 0; q < count; ++q) {
-            const Bucket& b = bk[reduce(((static_cast<std::uint32_t>(i) + shift) * 73856093u) ^
-                                        ((static_cast<std::uint32_t>(j) + shift) * 19349663u) ^
-                                        ((static_cast<std::uint32_t>(k) + shift) * 83492791u))];
-            const int valid = -static_cast<int>(b.stamp == now);  // all ones or zero (no branch)
-            const int in_entry = valid & (need_interior ? b.count : b.scount);
-            const std::int64_t key = ((i & m21) << 42) | ((j & m21) << 21) | (k & m21);
-            if (cand.capacity() < nc + in_entry + 1) cand.grow(nc + in_entry + 1);
-            const VertexEntry* en = entries + (valid & b.head);
-            for (int e = 0; e < in_entry; ++e, ++en) {  // others: other cells with the same hash
-              cand.x[nc] = en->x, cand.y[nc] = en->y, cand.z[nc] = en->z;
-              cand.id[nc] = en->vertex, cand.entry[nc] = en;
-              nc += en->key == key;
+          for (std::int64_t k = k0; k <= k1; ++k) {
+            const std::uint32_t hk = (static_cast<std::uint32_t>(k) + shift) * 83492791u;
+            for (std::int64_t j = j0; j <= j1; ++j) {
+              const std::uint32_t hjk = ((static_cast<std::uint32_t>(j) + shift) * 19349663u) ^ hk;
+              const std::int64_t kjk = ((j & m21) << 21) | (k & m21);
+              for (std::int64_t i = i0; i <= i1; ++i) {
+                const Bucket& b = bk[reduce(((static_cast<std::uint32_t>(i) + shift) * 73856093u) ^ hjk)];
+                if (b.stamp != now) continue;
+                const std::int64_t key = ((i & m21) << 42) | kjk;
+                const VertexEntry* en = entries + b.head;
+                for (const VertexEntry* end = en + (need_interior ? b.count : b.scount); en != end; ++en)
+                  if (en->key == key) cand.push_back(en);  // else another cell with the same hash
+              }
             }
-            const std::int64_t wrap_i = i == i1, wrap_j = wrap_i & (j == j1);  // 0 or 1
-            i += 1 - wrap_i * (di + 1);
-            j += wrap_i - wrap_j * (dj + 1);
-            k += wrap_j;
           }
-          cand.n = nc;
-          // padding to an even count for the pairwise test (never a hit: x = +inf)
-          cand.x[nc] = std::numeric_limits<double>::infinity(), cand.y[nc] = cand.z[nc] = 0.0, cand.id[nc] = -1;
         }
-        const int nhit = box_hits(cand.x.data(), cand.y.data(), cand.z.data(), cand.id.data(), cand.n, lo, hi, c, cand.hit);
-        for (int q = 0; q < nhit; ++q) {
-          const VertexEntry* en = cand.entry[cand.hit[q]];
-          accept(en->x, en->y, en->z, en->vertex, en->group);
-        }
+        for (const VertexEntry* en : cand)
+          if (in_box(*en)) accept(en->x, en->y, en->z, en->vertex, en->group);
       }
       if (res.size() - first > 1)
         std::sort(res.begin() + static_cast<std::ptrdiff_t>(first), res.end(),

@@ -138,21 +138,7 @@ class SpatialHash {
   }
   std::vector<VertexEntry> entry_;  // vertices grouped by hash entry (counting sort)
   std::vector<std::vector<Contact>> blocks_;  // per block of tets (reused between queries)
-  /// Cell-mates of the last scanned cell range, their coordinates apart (structure of arrays,
-  /// padded to an even count) for the branch-free box test of every tet sharing the range.
-  struct Candidates {
-    int n = 0;                               // candidates: the first n slots (slot n: padding)
-    std::vector<double> x, y, z;
-    std::vector<int> id;                     // vertex
-    std::vector<const VertexEntry*> entry;
-    std::vector<int> hit;                    // scratch: indices that pass a tet's box test
-    int capacity() const { return static_cast<int>(x.size()); }
-    void grow(int at_least) {
-      const size_t c = static_cast<size_t>(std::max(2 * capacity(), at_least));
-      x.resize(c), y.resize(c), z.resize(c), id.resize(c), entry.resize(c);
-    }
-  };
-  std::vector<Candidates> cands_;  // per block of tets (reused between queries)
+  std::vector<std::vector<const VertexEntry*>> cands_;  // per block of tets: cell-mates of the last cell range (reused)
 };
 
 /// The same pairs as SpatialHash::find by testing every vertex against every tet, O(#X·#T):
