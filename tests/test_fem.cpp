@@ -82,6 +82,59 @@ TEST(FemKernels, DampingOpposesRelativeMotionOnly) {
   EXPECT_DOUBLE_EQ(fi.x(), -fj.x());
 }
 
+#if defined(__SSE2__)
+TEST(FemKernels, PairKernelsEqualScalarKernelsBitForBit) {
+  // World::step computes its elements two at a time (SSE2 lanes); the forces must be the scalar
+  // kernels' to the last bit, including a zero-length edge (zero gradient) and a flat tet.
+  struct Edge { int i, j; double D0, k, kd; };
+  struct Tet { int v[4]; double V0, k, kd; };
+  std::mt19937 g(11);
+  std::uniform_real_distribution<double> u(0.1, 3.0);
+  const int n = 40;
+  RowMatrixX3d X(n, 3), V(n, 3);
+  for (int i = 0; i < n; ++i) X.row(i) = rand_vec(g).transpose(), V.row(i) = rand_vec(g, 5.0).transpose();
+  X.row(1) = X.row(0);                                  // edge (0, 1): zero length
+  X.row(5) = 0.5 * (X.row(2) + X.row(3)), X.row(4) = X.row(2);  // tet (2, 3, 4, 5): flat
+  std::vector<Edge> edges{{0, 1, 0.3, 2.0, 0.1}};
+  std::vector<Tet> tets{{{2, 3, 4, 5}, 0.05, 3.0, 0.2}};
+  for (int e = 0; e < 200; ++e) {
+    const int i = static_cast<int>(g() % n), j = (i + 1 + static_cast<int>(g() % (n - 1))) % n;
+    edges.push_back({i, j, u(g), u(g) * 1e3, u(g)});
+  }
+  for (int t = 0; t < 200; ++t) {
+    Tet T{{0, 0, 0, 0}, u(g) * 0.01, u(g) * 1e3, u(g)};
+    for (int& c : T.v) c = static_cast<int>(g() % n);
+    tets.push_back(T);
+  }
+  const double *x = X.data(), *v = V.data();
+  auto bits_equal = [](const double* a, const double* b, int m) { return std::memcmp(a, b, sizeof(double) * m) == 0; };
+  for (size_t e = 0; e + 1 < edges.size(); ++e) {
+    double pair0[6], pair1[6];
+    distance_forces_pair(x, v, edges[e], edges[e + 1], pair0, pair1);
+    for (int q = 0; q < 2; ++q) {
+      const Edge& E = edges[e + q];
+      Vec3 fi, fj;
+      distance_forces(Vec3(x + 3 * E.i), Vec3(x + 3 * E.j), Vec3(v + 3 * E.i), Vec3(v + 3 * E.j), E.D0, E.k, E.kd, fi, fj);
+      const double scalar[6] = {fi[0], fi[1], fi[2], fj[0], fj[1], fj[2]};
+      EXPECT_TRUE(bits_equal(scalar, q == 0 ? pair0 : pair1, 6)) << "edge " << e + q;
+    }
+  }
+  for (size_t t = 0; t + 1 < tets.size(); ++t) {
+    double pair0[12], pair1[12];
+    volume_forces_pair(x, v, tets[t], tets[t + 1], pair0, pair1);
+    for (int q = 0; q < 2; ++q) {
+      const Tet& T = tets[t + q];
+      Vec3 p[4], vel[4], f[4];
+      for (int c = 0; c < 4; ++c) p[c] = Vec3(x + 3 * T.v[c]), vel[c] = Vec3(v + 3 * T.v[c]);
+      volume_forces(p, vel, T.V0, T.k, T.kd, f);
+      double scalar[12];
+      for (int c = 0; c < 4; ++c) scalar[3 * c] = f[c][0], scalar[3 * c + 1] = f[c][1], scalar[3 * c + 2] = f[c][2];
+      EXPECT_TRUE(bits_equal(scalar, q == 0 ? pair0 : pair1, 12)) << "tet " << t + q;
+    }
+  }
+}
+#endif
+
 TEST(FemBody, MassesAndRestData) {
   Material m;
   m.density = 500;

@@ -8,9 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include "squeeze/common/error.h"
 #include "squeeze/fem/constraints.h"
@@ -36,88 +33,6 @@ void parallel_rows(int n, Fn fn) {
   });
 }
 
-#if defined(__SSE2__)
-// Two elements at once, one per SSE2 lane, with the scalar kernels' operations in the scalar
-// kernels' order (IEEE add, sub, mul, div and sqrt are exact per lane and there is no fused
-// multiply-add here), so the forces are bit for bit those of distance_forces / volume_forces.
-struct Pair3 {
-  __m128d x, y, z;  // lane 0: first element, lane 1: second
-};
-inline Pair3 load_pair(const double* a, const double* b) {
-  const __m128d a01 = _mm_loadu_pd(a), b01 = _mm_loadu_pd(b);
-  return {_mm_unpacklo_pd(a01, b01), _mm_unpackhi_pd(a01, b01), _mm_set_pd(b[2], a[2])};
-}
-inline void store_pair(double* a, double* b, const Pair3& v) {
-  _mm_storeu_pd(a, _mm_unpacklo_pd(v.x, v.y));
-  _mm_storeu_pd(b, _mm_unpackhi_pd(v.x, v.y));
-  _mm_store_sd(a + 2, v.z);
-  _mm_storeh_pd(b + 2, v.z);
-}
-inline Pair3 sub(const Pair3& a, const Pair3& b) {
-  return {_mm_sub_pd(a.x, b.x), _mm_sub_pd(a.y, b.y), _mm_sub_pd(a.z, b.z)};
-}
-inline Pair3 add(const Pair3& a, const Pair3& b) {
-  return {_mm_add_pd(a.x, b.x), _mm_add_pd(a.y, b.y), _mm_add_pd(a.z, b.z)};
-}
-inline Pair3 scale(__m128d s, const Pair3& a) { return {_mm_mul_pd(s, a.x), _mm_mul_pd(s, a.y), _mm_mul_pd(s, a.z)}; }
-inline Pair3 neg(const Pair3& a) {
-  const __m128d sign = _mm_set1_pd(-0.0);
-  return {_mm_xor_pd(a.x, sign), _mm_xor_pd(a.y, sign), _mm_xor_pd(a.z, sign)};
-}
-inline __m128d dot(const Pair3& a, const Pair3& b) {  // (a.x b.x + a.y b.y) + a.z b.z, as Eigen's dot
-  return _mm_add_pd(_mm_add_pd(_mm_mul_pd(a.x, b.x), _mm_mul_pd(a.y, b.y)), _mm_mul_pd(a.z, b.z));
-}
-inline Pair3 cross(const Pair3& a, const Pair3& b) {  // as Eigen's cross
-  return {_mm_sub_pd(_mm_mul_pd(a.y, b.z), _mm_mul_pd(a.z, b.y)),
-          _mm_sub_pd(_mm_mul_pd(a.z, b.x), _mm_mul_pd(a.x, b.z)),
-          _mm_sub_pd(_mm_mul_pd(a.x, b.y), _mm_mul_pd(a.y, b.x))};
-}
-
-/// distance_forces of edges e0 and e1; out0 / out1: their 6 force slots (f_i then f_j).
-template <class Edge>
-void distance_forces_pair(const double* x, const double* v, const Edge& e0, const Edge& e1, double* out0, double* out1) {
-  const Pair3 pi = load_pair(x + 3 * e0.i, x + 3 * e1.i), pj = load_pair(x + 3 * e0.j, x + 3 * e1.j);
-  const Pair3 vi = load_pair(v + 3 * e0.i, v + 3 * e1.i), vj = load_pair(v + 3 * e0.j, v + 3 * e1.j);
-  const __m128d D0 = _mm_set_pd(e1.D0, e0.D0), k = _mm_set_pd(e1.k, e0.k), kd = _mm_set_pd(e1.kd, e0.kd);
-  const Pair3 d = sub(pj, pi);
-  const __m128d len = _mm_sqrt_pd(dot(d, d));
-  const __m128d den = _mm_mul_pd(len, D0);
-  const __m128d positive = _mm_cmpgt_pd(len, _mm_setzero_pd());  // len > 0 (false for NaN): else g = 0
-  const Pair3 g{_mm_and_pd(positive, _mm_div_pd(d.x, den)), _mm_and_pd(positive, _mm_div_pd(d.y, den)),
-                _mm_and_pd(positive, _mm_div_pd(d.z, den))};
-  const __m128d C = _mm_div_pd(_mm_sub_pd(len, D0), D0);
-  const __m128d rate = dot(g, sub(vj, vi));
-  const __m128d s = _mm_xor_pd(_mm_add_pd(_mm_mul_pd(k, C), _mm_mul_pd(kd, rate)), _mm_set1_pd(-0.0));
-  const Pair3 fj = scale(s, g), fi = neg(fj);
-  store_pair(out0, out1, fi);
-  store_pair(out0 + 3, out1 + 3, fj);
-}
-
-/// volume_forces of tets t0 and t1; out0 / out1: their 12 force slots (corners 0..3).
-template <class Tet>
-void volume_forces_pair(const double* x, const double* v, const Tet& t0, const Tet& t1, double* out0, double* out1) {
-  Pair3 p[4], vel[4];
-  for (int c = 0; c < 4; ++c) {
-    p[c] = load_pair(x + 3 * t0.v[c], x + 3 * t1.v[c]);
-    vel[c] = load_pair(v + 3 * t0.v[c], v + 3 * t1.v[c]);
-  }
-  const __m128d V0 = _mm_set_pd(t1.V0, t0.V0), k = _mm_set_pd(t1.k, t0.k), kd = _mm_set_pd(t1.kd, t0.kd);
-  const Pair3 a = sub(p[1], p[0]), b = sub(p[2], p[0]), c = sub(p[3], p[0]);
-  const Pair3 bc = cross(b, c);
-  const __m128d V = _mm_div_pd(dot(a, bc), _mm_set1_pd(6.0));
-  const __m128d s = _mm_div_pd(_mm_set1_pd(1.0), _mm_mul_pd(_mm_set1_pd(6.0), V0));
-  Pair3 g[4];
-  g[1] = scale(s, bc);
-  g[2] = scale(s, cross(c, a));
-  g[3] = scale(s, cross(a, b));
-  g[0] = neg(add(add(g[1], g[2]), g[3]));
-  const __m128d C = _mm_div_pd(_mm_sub_pd(V, V0), V0);
-  const __m128d rate =
-      _mm_add_pd(_mm_add_pd(_mm_add_pd(dot(g[0], vel[0]), dot(g[1], vel[1])), dot(g[2], vel[2])), dot(g[3], vel[3]));
-  const __m128d f = _mm_xor_pd(_mm_add_pd(_mm_mul_pd(k, C), _mm_mul_pd(kd, rate)), _mm_set1_pd(-0.0));
-  for (int q = 0; q < 4; ++q) store_pair(out0 + 3 * q, out1 + 3 * q, scale(f, g[q]));
-}
-#endif
 
 }  // namespace
 

@@ -14,7 +14,6 @@
 // breadth-first propagation into the colliding region (weights 1/|p_j − p|²).
 #pragma once
 #include <Eigen/Core>
-#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -39,7 +38,7 @@ struct TetFrame {
 
 // Inline: the spatial hash calls these for every candidate vertex.
 inline TetFrame::TetFrame(const Eigen::Vector3d& a_, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                  const Eigen::Vector3d& d)
+                          const Eigen::Vector3d& d)
     : a(a_) {
   // M = [b−a, c−a, d−a]; inverse = adj(M) / det(M) with the determinant expanded along the
   // first column of the same cofactors (Eigen's 3×3 formula, computed once).
