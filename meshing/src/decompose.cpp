@@ -181,9 +181,12 @@ struct Piece {
   Vec3 deepest = Vec3::Zero();
 };
 
+// Whether q is within eps of the plane n·x = d (n a unit normal).
+bool on_plane(const Vec3& q, const Vec3& n, double d, double eps) { return std::abs(n.dot(q) - d) <= eps; }
+
 // Whether every corner of `poly` is within eps of the plane n·x = d.
 bool lies_in_plane(const Polygon& poly, const Vec3& n, double d, double eps) {
-  return std::all_of(poly.p.begin(), poly.p.end(), [&](const Vec3& q) { return std::abs(n.dot(q) - d) <= eps; });
+  return std::all_of(poly.p.begin(), poly.p.end(), [&](const Vec3& q) { return on_plane(q, n, d, eps); });
 }
 
 // Volume of a piece of a closed, outward-oriented surface clipped to a convex cell, by the
@@ -212,15 +215,15 @@ double piece_volume(const std::vector<Polygon>& polys, const std::vector<Eigen::
       for (size_t i = 0; i < k; ++i) {
         const Vec3& a = poly.p[i];
         const Vec3& b = poly.p[(i + 1) % k];
-        if (std::abs(n.dot(a) - d) <= eps && std::abs(n.dot(b) - d) <= eps) cap[c] -= 0.5 * (a - o).cross(b - o);
+        if (on_plane(a, n, d, eps) && on_plane(b, n, d, eps)) cap[c] -= 0.5 * (a - o).cross(b - o);
       }
     }
     if (m < 2) continue;
     for (const Vec3& a : poly.p)
       for (size_t c = 0; c < m; ++c) {
-        if (std::abs(planes[c].head<3>().dot(a) - planes[c](3)) > eps) continue;
+        if (!on_plane(a, planes[c].head<3>(), planes[c](3), eps)) continue;
         for (size_t j = c + 1; j < m; ++j)
-          if (std::abs(planes[j].head<3>().dot(a) - planes[j](3)) <= eps) on_two[c * m + j].push_back(a);
+          if (on_plane(a, planes[j].head<3>(), planes[j](3), eps)) on_two[c * m + j].push_back(a);
       }
   }
   for (size_t c = 0; c < m; ++c)
