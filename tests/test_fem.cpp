@@ -42,6 +42,21 @@ double central_energy(const World& w, const State& s, const State& next) {
   return w.kinetic_energy(c) + w.elastic_energy(s) + w.gravity_energy(s);
 }
 
+// Internal forces F (#rows by 3, N) at state s: they sum to zero and exert no net torque about
+// the origin, to 1e-12 of their summed magnitude (which must be above 1 N: a real test).
+void expect_no_net_force_or_torque(const State& s, const RowMatrixX3d& F) {
+  Vector3d net = Vector3d::Zero(), torque = Vector3d::Zero();
+  double scale = 0;
+  for (int i = 0; i < F.rows(); ++i) {
+    net += F.row(i).transpose();
+    torque += Vector3d(s.x.row(i)).cross(Vector3d(F.row(i)));
+    scale += F.row(i).norm();
+  }
+  EXPECT_GT(scale, 1.0);
+  EXPECT_LT(net.norm(), 1e-12 * scale);
+  EXPECT_LT(torque.norm(), 1e-12 * scale);
+}
+
 }  // namespace
 
 TEST(FemKernels, ForcesAreMinusEnergyGradient) {
@@ -178,16 +193,7 @@ TEST(FemWorld, InternalForcesHaveNoNetForceOrTorque) {
   }
   RowMatrixX3d F;
   w.internal_forces(s, F);
-  Vector3d net = Vector3d::Zero(), torque = Vector3d::Zero();
-  double scale = 0;
-  for (int i = 0; i < F.rows(); ++i) {
-    net += F.row(i).transpose();
-    torque += Vector3d(s.x.row(i)).cross(Vector3d(F.row(i)));
-    scale += F.row(i).norm();
-  }
-  EXPECT_GT(scale, 1.0);
-  EXPECT_LT(net.norm(), 1e-12 * scale);
-  EXPECT_LT(torque.norm(), 1e-12 * scale);
+  expect_no_net_force_or_torque(s, F);
 }
 
 TEST(FemWorld, ForcesAreMinusFiniteDifferenceGradient) {
@@ -627,16 +633,7 @@ TEST(FemWorld, VolumeWeightedRestZeroForceBalanceAndGradient) {
     s.v.row(i) = rand_vec(g, 1.0).transpose();
   }
   w.internal_forces(s, F);
-  Vector3d net = Vector3d::Zero(), torque = Vector3d::Zero();
-  double scale = 0;
-  for (int i = 0; i < F.rows(); ++i) {
-    net += F.row(i).transpose();
-    torque += Vector3d(s.x.row(i)).cross(Vector3d(F.row(i)));
-    scale += F.row(i).norm();
-  }
-  EXPECT_GT(scale, 1.0);
-  EXPECT_LT(net.norm(), 1e-12 * scale);
-  EXPECT_LT(torque.norm(), 1e-12 * scale);
+  expect_no_net_force_or_torque(s, F);
   // Elastic forces are minus the gradient of elastic_energy (same weighted coefficients).
   s.v.setZero();
   w.internal_forces(s, F);
