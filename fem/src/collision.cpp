@@ -82,11 +82,10 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
   // Per object: bounding box of its interior vertices.
   std::vector<Eigen::Vector3d> ilo(static_cast<size_t>(ngroups), Eigen::Vector3d::Constant(infd));
   std::vector<Eigen::Vector3d> ihi(static_cast<size_t>(ngroups), Eigen::Vector3d::Constant(-infd));
-  // Bounding boxes of all vertices and of the deformable ones: a tet's AABB is clipped to the
-  // box of the vertices it may contain (rigid tets only meet deformable vertices), which keeps
-  // large rigid tets from scanning cells where no vertex can be.
-  Eigen::Vector3d all_lo = Eigen::Vector3d::Constant(infd), all_hi = -all_lo;
-  Eigen::Vector3d def_lo = all_lo, def_hi = all_hi;
+  // Bounding box of the deformable vertices: a rigid tet's AABB is clipped to it (rigid tets only
+  // meet deformable vertices), which keeps large rigid tets from scanning cells where no vertex
+  // can be.
+  Eigen::Vector3d def_lo = Eigen::Vector3d::Constant(infd), def_hi = -def_lo;
   Bucket* const bk = bucket_.data();
   vcell_.resize(static_cast<size_t>(nv));
   tbb::parallel_for(tbb::blocked_range<int>(0, nv, 2048), [&](const tbb::blocked_range<int>& r) {
@@ -116,8 +115,6 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
       ilo[g] = ilo[g].cwiseMin(p);
       ihi[g] = ihi[g].cwiseMax(p);
     }
-    all_lo = all_lo.cwiseMin(p);
-    all_hi = all_hi.cwiseMax(p);
     if (!filter.group_rigid[g]) {
       def_lo = def_lo.cwiseMin(p);
       def_hi = def_hi.cwiseMax(p);
