@@ -12,16 +12,27 @@
 #include <string>
 #include <vector>
 int main(int argc, char** argv) {
-  // ab n threads rounds steps lib...
+  if (argc < 6) {
+    fprintf(stderr, "usage: ab N THREADS ROUNDS STEPS LIB.so... (e.g. ab 7 2 30 300 base.so new.so)\n");
+    return 2;
+  }
   const int n = atoi(argv[1]), threads = atoi(argv[2]), rounds = atoi(argv[3]), steps = atoi(argv[4]);
+  if (n < 1 || threads < 1 || rounds < 1 || steps < 1) {
+    fprintf(stderr, "ab: N, THREADS, ROUNDS and STEPS must be positive integers\n");
+    return 2;
+  }
   tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
   struct L { std::string name; void (*setup)(int); double (*run)(int); unsigned long long (*hash)(); std::vector<double> t; };
   std::vector<L> libs;
   for (int a = 5; a < argc; ++a) {
     void* h = dlopen(argv[a], RTLD_NOW | RTLD_LOCAL);
-    if (!h) { fprintf(stderr, "%s\n", dlerror()); return 1; }
+    if (!h) { fprintf(stderr, "ab: %s\n", dlerror()); return 1; }
     libs.push_back({argv[a], (void (*)(int))dlsym(h, "setup"), (double (*)(int))dlsym(h, "run"),
                     (unsigned long long (*)())dlsym(h, "state_hash"), {}});
+    if (!libs.back().setup || !libs.back().run || !libs.back().hash) {
+      fprintf(stderr, "ab: %s: not built by mklib.sh (no setup / run / state_hash)\n", argv[a]);
+      return 1;
+    }
   }
   for (auto& l : libs) l.setup(n);
   for (int r = 0; r < rounds; ++r)
