@@ -196,6 +196,62 @@ TEST(FemWorld, InternalForcesHaveNoNetForceOrTorque) {
   expect_no_net_force_or_torque(s, F);
 }
 
+// The world sums its element forces in groups (clusters of about 128 vertices, in Morton order,
+// each with its own accumulator slots). On objects of several clusters, one of them with its
+// vertices in random order (as a mesher may leave them), every row's force is the plain sum of its
+// edges' and tets' kernel forces, to rounding.
+TEST(FemWorld, GroupedForcesEqualThePerElementSum) {
+  TetMesh ball = ball_tet_mesh(0.1, 7);  // ~300 vertices: three clusters
+  {
+    std::vector<int> perm(static_cast<size_t>(ball.V.rows()));
+    for (size_t i = 0; i < perm.size(); ++i) perm[i] = static_cast<int>(i);
+    std::shuffle(perm.begin(), perm.end(), std::mt19937(11));
+    Eigen::MatrixX3d V(ball.V.rows(), 3);
+    for (int i = 0; i < ball.V.rows(); ++i) V.row(perm[i]) = ball.V.row(i);
+    for (int t = 0; t < ball.T.rows(); ++t)
+      for (int k = 0; k < 4; ++k) ball.T(t, k) = perm[ball.T(t, k)];
+    ball.V = V;
+  }
+  Material m;
+  m.damping_distance = 0.3;
+  m.damping_volume = 0.2;
+  World w(no_gravity());
+  w.add_body(Body(ball, m));
+  w.add_body(Body(cube(0.2, 6, Vector3d(0.3, 0, 0)), m));  // 343 vertices, mesh order
+  ASSERT_GT(w.body(0).vertices(), 256);
+  State s = w.initial_state();
+  std::mt19937 g(5);
+  for (int i = 0; i < s.x.rows(); ++i) {
+    s.x.row(i) += rand_vec(g, 0.004).transpose();
+    s.v.row(i) = rand_vec(g, 1.0).transpose();
+  }
+  RowMatrixX3d F, ref = RowMatrixX3d::Zero(s.x.rows(), 3);
+  w.internal_forces(s, F);
+  for (int b = 0; b < w.bodies(); ++b) {
+    const Body& B = w.body(b);
+    const int r0 = w.first_state_row(b);
+    auto X = [&](int i) { return Vector3d(s.x.row(r0 + i)); };
+    auto V = [&](int i) { return Vector3d(s.v.row(r0 + i)); };
+    for (int e = 0; e < B.E.rows(); ++e) {
+      Vector3d fi, fj;
+      distance_forces(X(B.E(e, 0)), X(B.E(e, 1)), V(B.E(e, 0)), V(B.E(e, 1)), B.D0(e), B.k_edge(e), B.kd_edge(e), fi,
+                      fj);
+      ref.row(r0 + B.E(e, 0)) += fi.transpose();
+      ref.row(r0 + B.E(e, 1)) += fj.transpose();
+    }
+    for (int t = 0; t < B.tets(); ++t) {
+      Vector3d p[4], v[4], f[4];
+      for (int k = 0; k < 4; ++k) p[k] = X(B.T(t, k)), v[k] = V(B.T(t, k));
+      volume_forces(p, v, B.V0(t), B.k_tet(t), B.kd_tet(t), f);
+      for (int k = 0; k < 4; ++k) ref.row(r0 + B.T(t, k)) += f[k].transpose();
+    }
+  }
+  const double scale = ref.cwiseAbs().maxCoeff();
+  EXPECT_GT(scale, 1.0);
+  EXPECT_LT((F - ref).cwiseAbs().maxCoeff(), 1e-12 * scale);
+  expect_no_net_force_or_torque(s, F);
+}
+
 TEST(FemWorld, ForcesAreMinusFiniteDifferenceGradient) {
   Material m;
   m.k_distance = 20;
@@ -409,7 +465,8 @@ Vector3d centroid(const World& w, const State& s, int b) {
 double centroid_gap(const World& w, const State& s) { return (centroid(w, s, 1) - centroid(w, s, 0)).norm(); }
 
 // Two balls driven into each other over a rigid slab with gravity and a floor: a busy scene.
-World busy_world() {
+// n: cells per axis of the balls (4: one element group per ball; 7: three, forces in parallel).
+World busy_world(int n = 4) {
   WorldOptions o;
   o.h = 1e-4;
   o.floor = true;
@@ -425,16 +482,16 @@ World busy_world() {
   Eigen::Affine3d a = Eigen::Affine3d::Identity(), b = a;
   a.translation() = Vector3d(-0.12, 0, 0);
   b.translation() = Vector3d(0.12, 0.02, 0.01);
-  w.add_body(Body(ball_tet_mesh(0.1, 4), m, false, a));
-  w.add_body(Body(ball_tet_mesh(0.1, 4), m, false, b));
+  w.add_body(Body(ball_tet_mesh(0.1, n), m, false, a));
+  w.add_body(Body(ball_tet_mesh(0.1, n), m, false, b));
   w.add_body(Body(box_tet_mesh(Vector3d(-0.5, -0.2, -0.5), Vector3d(0.5, -0.1, 0.5), Eigen::Vector3i(5, 1, 5)),
                   Material{}, true));
   return w;
 }
 
-State run_busy(int threads, int steps, int* ball_contact_steps) {
+State run_busy(int threads, int steps, int* ball_contact_steps, int n = 4) {
   tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
-  World w = busy_world();
+  World w = busy_world(n);
   State s = w.initial_state();
   RowMatrixX3d ext = RowMatrixX3d::Zero(s.x.rows(), 3);
   for (int i = 0; i < w.body(0).vertices(); ++i) ext(i, 0) = 5.0 * w.masses()(i);
@@ -457,6 +514,18 @@ TEST(FemWorld, BitIdenticalWhateverTheThreadCount) {
   int touch1 = 0, touch2 = 0;
   const State a = run_busy(1, 1500, &touch1), b = run_busy(2, 1500, &touch2);
   EXPECT_GT(touch1, 50);  // the balls did collide
+  EXPECT_EQ(touch1, touch2);
+  ASSERT_EQ(a.x.size(), b.x.size());
+  EXPECT_EQ(std::memcmp(a.x.data(), b.x.data(), sizeof(double) * a.x.size()), 0);
+  EXPECT_EQ(std::memcmp(a.v.data(), b.v.data(), sizeof(double) * a.v.size()), 0);
+  EXPECT_TRUE(a.x.allFinite());
+}
+
+// Finer balls: several element groups per object, the force pass in parallel.
+TEST(FemWorld, BitIdenticalWhateverTheThreadCountWithManyElementGroups) {
+  int touch1 = 0, touch2 = 0;
+  const State a = run_busy(1, 1200, &touch1, 7), b = run_busy(2, 1200, &touch2, 7);
+  EXPECT_GT(touch1, 20);  // the balls did collide
   EXPECT_EQ(touch1, touch2);
   ASSERT_EQ(a.x.size(), b.x.size());
   EXPECT_EQ(std::memcmp(a.x.data(), b.x.data(), sizeof(double) * a.x.size()), 0);

@@ -6,6 +6,7 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <string>
 
@@ -25,6 +26,9 @@ int next_prime(int n) {
   while (!prime(n)) ++n;
   return n;
 }
+
+constexpr int kClusterRows = 128;       // vertices per cluster of an element group
+constexpr size_t kSerialElements = 2048;  // fewer elements (edges + tets): force pass on the calling thread
 
 template <class Fn>
 void parallel_rows(int n, Fn fn) {
@@ -118,40 +122,7 @@ void World::prepare() {
     contact_k_(i) = options_.contact_stiffness * contact_scale(i);
     contact_c_(i) = options_.contact_damping * contact_scale(i);
   }
-  // Elements of every deformable object in state rows, and per row its scratch slots.
-  edges_.clear();
-  tet_elems_.clear();
-  for (int b = 0; b < bodies(); ++b) {
-    const int r0 = state_row_[b];
-    if (r0 < 0) continue;
-    const Body& B = bodies_[b];
-    for (int e = 0; e < B.E.rows(); ++e)
-      edges_.push_back({r0 + B.E(e, 0), r0 + B.E(e, 1), B.D0(e), B.k_edge(e), B.kd_edge(e)});
-    for (int t = 0; t < B.tets(); ++t)
-      tet_elems_.push_back({{r0 + B.T(t, 0), r0 + B.T(t, 1), r0 + B.T(t, 2), r0 + B.T(t, 3)}, B.V0(t), B.k_tet(t),
-                            B.kd_tet(t)});
-  }
-  elem_f_.assign(6 * edges_.size() + 12 * tet_elems_.size(), 0.0);
-  gather_start_.assign(static_cast<size_t>(rows_) + 1, 0);
-  gather_.clear();
-  {
-    int e0 = 0, t0 = 0;  // first edge / tet of the body in the global lists
-    const int tet_base = 6 * static_cast<int>(edges_.size());
-    for (int b = 0; b < bodies(); ++b) {
-      const int r0 = state_row_[b];
-      if (r0 < 0) continue;
-      const Body& B = bodies_[b];
-      for (int i = 0; i < B.vertices(); ++i) {
-        gather_start_[r0 + i] = static_cast<int>(gather_.size());
-        for (int c = B.edge_start[i]; c < B.edge_start[i + 1]; ++c) gather_.push_back(3 * (2 * e0 + B.edge_code[c]));
-        for (int c = B.tet_start[i]; c < B.tet_start[i + 1]; ++c)
-          gather_.push_back(tet_base + 3 * (4 * t0 + B.tet_code[c]));
-      }
-      e0 += static_cast<int>(B.E.rows());
-      t0 += B.tets();
-    }
-    gather_start_[rows_] = static_cast<int>(gather_.size());
-  }
+  build_element_groups();
   contact_head_.assign(static_cast<size_t>(rows_), -1);
   contact_tail_.assign(static_cast<size_t>(rows_), -1);
   contact_rows_.clear();
@@ -200,59 +171,170 @@ void World::prepare() {
   prepared_ = true;
 }
 
+void World::build_element_groups() {
+  // Clusters: per deformable object, its vertices in the Morton order of their rest positions
+  // (10 bits per axis in the object's bounding box), kClusterRows at a time.
+  edges_.clear();
+  tet_elems_.clear();
+  groups_.clear();
+  std::vector<int> rank(static_cast<size_t>(rows_), 0);  // position of a row in its object's Morton order
+  struct Owned { int cluster, elem; };
+  std::vector<Owned> edge_owner, tet_owner;
+  std::vector<EdgeElem> all_edges;
+  std::vector<TetElem> all_tets;
+  int clusters = 0;
+  for (int b = 0; b < bodies(); ++b) {
+    const int r0 = state_row_[b];
+    if (r0 < 0) continue;
+    const Body& B = bodies_[b];
+    const int n = B.vertices();
+    const Eigen::Vector3d lo = B.rest.colwise().minCoeff().transpose(), hi = B.rest.colwise().maxCoeff().transpose();
+    const Eigen::Vector3d scale = (1023.0 / (hi - lo).cwiseMax(1e-300).array()).matrix();
+    std::vector<std::pair<std::uint32_t, int>> key(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      std::uint32_t code = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double q = (B.rest(i, a) - lo[a]) * scale[a];
+        const std::uint32_t c = q > 0 ? static_cast<std::uint32_t>(std::min(1023.0, q)) : 0u;
+        for (int bit = 0; bit < 10; ++bit) code |= ((c >> bit) & 1u) << (3 * bit + a);
+      }
+      key[i] = {code, i};
+    }
+    std::sort(key.begin(), key.end());
+    for (int p = 0; p < n; ++p) rank[r0 + key[p].second] = p;
+    auto cluster_of = [&](int row) { return clusters + rank[row] / kClusterRows; };
+    auto owner = [&](const int* v, int m) {
+      int best = v[0];
+      for (int c = 1; c < m; ++c)
+        if (rank[v[c]] < rank[best]) best = v[c];
+      return cluster_of(best);
+    };
+    for (int e = 0; e < B.E.rows(); ++e) {
+      const int v[2] = {r0 + B.E(e, 0), r0 + B.E(e, 1)};
+      edge_owner.push_back({owner(v, 2), static_cast<int>(all_edges.size())});
+      all_edges.push_back({v[0], v[1], B.D0(e), B.k_edge(e), B.kd_edge(e), 0, 0});
+    }
+    for (int t = 0; t < B.tets(); ++t) {
+      const int v[4] = {r0 + B.T(t, 0), r0 + B.T(t, 1), r0 + B.T(t, 2), r0 + B.T(t, 3)};
+      tet_owner.push_back({owner(v, 4), static_cast<int>(all_tets.size())});
+      all_tets.push_back({{v[0], v[1], v[2], v[3]}, B.V0(t), B.k_tet(t), B.kd_tet(t), {0, 0, 0, 0}});
+    }
+    clusters += (n + kClusterRows - 1) / kClusterRows;
+  }
+  auto by_cluster = [](const Owned& a, const Owned& b) { return a.cluster != b.cluster ? a.cluster < b.cluster : a.elem < b.elem; };
+  std::sort(edge_owner.begin(), edge_owner.end(), by_cluster);
+  std::sort(tet_owner.begin(), tet_owner.end(), by_cluster);
+  // Groups in cluster order; each group's slots: the rows its elements touch, ascending.
+  std::vector<int> slot(static_cast<size_t>(rows_), -1);  // row → slot of the current group
+  std::vector<int> rows_of;                               // the current group's rows
+  std::vector<std::pair<int, int>> row_slot;              // (row, slot offset), group order
+  size_t ie = 0, it = 0;
+  int nslots = 0;
+  for (int c = 0; c < clusters; ++c) {
+    ElemGroup g{};
+    g.e0 = static_cast<int>(edges_.size());
+    g.t0 = static_cast<int>(tet_elems_.size());
+    rows_of.clear();
+    auto touch = [&](int row) {
+      if (slot[row] < 0) slot[row] = 0, rows_of.push_back(row);
+    };
+    const size_t ie0 = ie, it0 = it;
+    for (; ie < edge_owner.size() && edge_owner[ie].cluster == c; ++ie) {
+      const EdgeElem& E = all_edges[edge_owner[ie].elem];
+      touch(E.i), touch(E.j);
+    }
+    for (; it < tet_owner.size() && tet_owner[it].cluster == c; ++it)
+      for (int k = 0; k < 4; ++k) touch(all_tets[tet_owner[it].elem].v[k]);
+    std::sort(rows_of.begin(), rows_of.end());
+    g.a0 = 3 * nslots;
+    for (int row : rows_of) {
+      slot[row] = 3 * nslots++;
+      row_slot.push_back({row, slot[row]});
+    }
+    g.a1 = 3 * nslots;
+    for (size_t q = ie0; q < ie; ++q) {
+      EdgeElem E = all_edges[edge_owner[q].elem];
+      E.si = slot[E.i], E.sj = slot[E.j];
+      edges_.push_back(E);
+    }
+    for (size_t q = it0; q < it; ++q) {
+      TetElem T = all_tets[tet_owner[q].elem];
+      for (int k = 0; k < 4; ++k) T.s[k] = slot[T.v[k]];
+      tet_elems_.push_back(T);
+    }
+    for (int row : rows_of) slot[row] = -1;
+    g.e1 = static_cast<int>(edges_.size());
+    g.t1 = static_cast<int>(tet_elems_.size());
+    if (g.e1 > g.e0 || g.t1 > g.t0) groups_.push_back(g);
+  }
+  acc_.assign(3 * static_cast<size_t>(nslots), 0.0);
+  // Per row, its slots in group order (counting sort of row_slot by row, stable).
+  gather_start_.assign(static_cast<size_t>(rows_) + 1, 0);
+  for (const auto& rs : row_slot) ++gather_start_[rs.first + 1];
+  for (int r = 0; r < rows_; ++r) gather_start_[r + 1] += gather_start_[r];
+  gather_.assign(row_slot.size(), 0);
+  std::vector<int> fill(gather_start_.begin(), gather_start_.end() - 1);
+  for (const auto& rs : row_slot) gather_[fill[rs.first]++] = rs.second;
+}
+
 void World::element_forces(const State& s) const {
   const double* x = s.x.data();
   const double* v = s.v.data();
-  double* out = elem_f_.data();
-  const int ne = static_cast<int>(edges_.size()), nt = static_cast<int>(tet_elems_.size());
-  // One pass over edges then tets, in chunks (each element writes only its own slots).
-  constexpr int kEdgeChunk = 1024, kTetChunk = 512;
-  const int ce = (ne + kEdgeChunk - 1) / kEdgeChunk, ct = (nt + kTetChunk - 1) / kTetChunk;
-  // Small scenes (a single chunk of each kind) run on the calling thread.
-  tbb::parallel_for(tbb::blocked_range<int>(0, ce + ct, ce <= 1 && ct <= 1 ? 2 : 1), [&](const tbb::blocked_range<int>& r) {
-    for (int c = r.begin(); c != r.end(); ++c) {
-      if (c < ce) {
-        const int e1 = std::min(ne, (c + 1) * kEdgeChunk);
-        int e = c * kEdgeChunk;
+  double* acc = acc_.data();
+  auto add3 = [](double* a, const double* f) { a[0] += f[0], a[1] += f[1], a[2] += f[2]; };
+  auto group = [&](const ElemGroup& G) {
+    std::fill(acc + G.a0, acc + G.a1, 0.0);
+    int e = G.e0;
 #if defined(__SSE2__)
-        for (; e + 1 < e1; e += 2) distance_forces_pair(x, v, edges_[e], edges_[e + 1], out + 6 * e, out + 6 * (e + 1));
-#endif
-        for (; e < e1; ++e) {
-          const EdgeElem& E = edges_[e];
-          Vec3 fi, fj;
-          distance_forces(Vec3(x + 3 * E.i), Vec3(x + 3 * E.j), Vec3(v + 3 * E.i), Vec3(v + 3 * E.j), E.D0, E.k, E.kd,
-                          fi, fj);
-          double* o = out + 6 * e;
-          o[0] = fi[0], o[1] = fi[1], o[2] = fi[2], o[3] = fj[0], o[4] = fj[1], o[5] = fj[2];
-        }
-      } else {
-        const int tc = c - ce;
-        const int t1 = std::min(nt, (tc + 1) * kTetChunk);
-        double* base = out + 6 * static_cast<size_t>(ne);
-        int t = tc * kTetChunk;
-#if defined(__SSE2__)
-        for (; t + 1 < t1; t += 2)
-          volume_forces_pair(x, v, tet_elems_[t], tet_elems_[t + 1], base + 12 * t, base + 12 * (t + 1));
-#endif
-        for (; t < t1; ++t) {
-          const TetElem& T = tet_elems_[t];
-          Vec3 p[4], vel[4], f[4];
-          for (int k = 0; k < 4; ++k) {
-            p[k] = Vec3(x + 3 * T.v[k]);
-            vel[k] = Vec3(v + 3 * T.v[k]);
-          }
-          volume_forces(p, vel, T.V0, T.k, T.kd, f);
-          double* o = base + 12 * t;
-          for (int k = 0; k < 4; ++k) o[3 * k] = f[k][0], o[3 * k + 1] = f[k][1], o[3 * k + 2] = f[k][2];
-        }
-      }
+    for (; e + 1 < G.e1; e += 2) {  // edge e, then edge e + 1 (they may share a vertex)
+      const EdgeElem &E0 = edges_[e], &E1 = edges_[e + 1];
+      const simd::Pair3 fj = distance_forces_pair(x, v, E0, E1), fi = simd::neg(fj);
+      simd::add_lane0(acc + E0.si, fi), simd::add_lane0(acc + E0.sj, fj);
+      simd::add_lane1(acc + E1.si, fi), simd::add_lane1(acc + E1.sj, fj);
     }
-  });
+#endif
+    for (; e < G.e1; ++e) {
+      const EdgeElem& E = edges_[e];
+      Vec3 fi, fj;
+      distance_forces(Vec3(x + 3 * E.i), Vec3(x + 3 * E.j), Vec3(v + 3 * E.i), Vec3(v + 3 * E.j), E.D0, E.k, E.kd, fi,
+                      fj);
+      add3(acc + E.si, fi.data()), add3(acc + E.sj, fj.data());
+    }
+    int t = G.t0;
+#if defined(__SSE2__)
+    for (; t + 1 < G.t1; t += 2) {  // tet t, then tet t + 1
+      const TetElem &T0 = tet_elems_[t], &T1 = tet_elems_[t + 1];
+      simd::Pair3 f[4];
+      volume_forces_pair(x, v, T0, T1, f);
+      for (int k = 0; k < 4; ++k) simd::add_lane0(acc + T0.s[k], f[k]);
+      for (int k = 0; k < 4; ++k) simd::add_lane1(acc + T1.s[k], f[k]);
+    }
+#endif
+    for (; t < G.t1; ++t) {
+      const TetElem& T = tet_elems_[t];
+      Vec3 p[4], vel[4], f[4];
+      for (int k = 0; k < 4; ++k) {
+        p[k] = Vec3(x + 3 * T.v[k]);
+        vel[k] = Vec3(v + 3 * T.v[k]);
+      }
+      volume_forces(p, vel, T.V0, T.k, T.kd, f);
+      for (int k = 0; k < 4; ++k) add3(acc + T.s[k], f[k].data());
+    }
+  };
+  const int ng = static_cast<int>(groups_.size());
+  // Small scenes (fewer than two groups' worth of elements) run on the calling thread.
+  if (edges_.size() + tet_elems_.size() < kSerialElements) {
+    for (const ElemGroup& G : groups_) group(G);
+  } else {
+    tbb::parallel_for(tbb::blocked_range<int>(0, ng, 1), [&](const tbb::blocked_range<int>& r) {
+      for (int g = r.begin(); g != r.end(); ++g) group(groups_[g]);
+    });
+  }
 }
 
 Eigen::Vector3d World::gathered(int row) const {
   Vec3 f = Vec3::Zero();
-  const double* src = elem_f_.data();
+  const double* src = acc_.data();
   for (int c = gather_start_[row]; c < gather_start_[row + 1]; ++c) f += Vec3(src + gather_[c]);
   return f;
 }

@@ -92,6 +92,11 @@ inline void volume_forces(const Vec3 p[4], const Vec3 v[4], double V0, double k,
 // multiply-add here), so the forces are bit for bit those of distance_forces / volume_forces
 // (test FemKernels.PairKernelsEqualScalarKernelsBitForBit). World::step computes its elements
 // with them.
+#if defined(__GNUC__)
+#define SQUEEZE_FEM_INLINE inline __attribute__((always_inline))
+#else
+#define SQUEEZE_FEM_INLINE inline
+#endif
 namespace simd {
 struct Pair3 {
   __m128d x, y, z;  // lane 0: first element, lane 1: second
@@ -105,6 +110,15 @@ inline void store_pair(double* a, double* b, const Pair3& v) {
   _mm_storeu_pd(b, _mm_unpackhi_pd(v.x, v.y));
   _mm_store_sd(a + 2, v.z);
   _mm_storeh_pd(b + 2, v.z);
+}
+/// a += lane 0 of v (a: 3 doubles); add_lane1: lane 1. The same IEEE additions as a scalar a += f.
+inline void add_lane0(double* a, const Pair3& v) {
+  _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), _mm_unpacklo_pd(v.x, v.y)));
+  _mm_store_sd(a + 2, _mm_add_sd(_mm_load_sd(a + 2), v.z));
+}
+inline void add_lane1(double* a, const Pair3& v) {
+  _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), _mm_unpackhi_pd(v.x, v.y)));
+  _mm_store_sd(a + 2, _mm_add_sd(_mm_load_sd(a + 2), _mm_unpackhi_pd(v.z, v.z)));
 }
 inline Pair3 sub(const Pair3& a, const Pair3& b) {
   return {_mm_sub_pd(a.x, b.x), _mm_sub_pd(a.y, b.y), _mm_sub_pd(a.z, b.z)};
@@ -127,14 +141,13 @@ inline Pair3 cross(const Pair3& a, const Pair3& b) {  // as Eigen's cross
 }
 }  // namespace simd
 
-/// distance_forces of two edges at once, bit for bit.
+/// distance_forces of two edges at once, bit for bit: fj of both (lane 0: e0, lane 1: e1);
+/// f_i = −f_j.
 ///   x, v    row-major #rows by 3 positions (m) and velocities (m/s)
 ///   e0, e1  edges: any type with rows `int i, j`, rest length `double D0` (m), stiffness `k` (J)
 ///           and damping `kd` (J·s)
-///   out0, out1  the edges' 6 forces (N): f_i then f_j
 template <class Edge>
-void distance_forces_pair(const double* x, const double* v, const Edge& e0, const Edge& e1, double* out0,
-                          double* out1) {
+SQUEEZE_FEM_INLINE simd::Pair3 distance_forces_pair(const double* x, const double* v, const Edge& e0, const Edge& e1) {
   using namespace simd;
   const Pair3 pi = load_pair(x + 3 * e0.i, x + 3 * e1.i), pj = load_pair(x + 3 * e0.j, x + 3 * e1.j);
   const Pair3 vi = load_pair(v + 3 * e0.i, v + 3 * e1.i), vj = load_pair(v + 3 * e0.j, v + 3 * e1.j);
@@ -148,18 +161,27 @@ void distance_forces_pair(const double* x, const double* v, const Edge& e0, cons
   const __m128d C = _mm_div_pd(_mm_sub_pd(len, D0), D0);
   const __m128d rate = dot(g, sub(vj, vi));
   const __m128d s = _mm_xor_pd(_mm_add_pd(_mm_mul_pd(k, C), _mm_mul_pd(kd, rate)), _mm_set1_pd(-0.0));
-  const Pair3 fj = scale(s, g), fi = neg(fj);
+  return scale(s, g);
+}
+
+/// The same, stored: out0, out1  the edges' 6 forces (N): f_i then f_j.
+template <class Edge>
+void distance_forces_pair(const double* x, const double* v, const Edge& e0, const Edge& e1, double* out0,
+                          double* out1) {
+  using namespace simd;
+  const Pair3 fj = distance_forces_pair(x, v, e0, e1), fi = neg(fj);
   store_pair(out0, out1, fi);
   store_pair(out0 + 3, out1 + 3, fj);
 }
 
-/// volume_forces of two tetrahedra at once, bit for bit.
+/// volume_forces of two tetrahedra at once, bit for bit: f[q] the forces (N) on corner q of
+/// both (lane 0: t0, lane 1: t1).
 ///   x, v    row-major #rows by 3 positions (m) and velocities (m/s)
 ///   t0, t1  tetrahedra: any type with rows `int v[4]`, rest volume `double V0` (m³), stiffness
 ///           `k` (J) and damping `kd` (J·s)
-///   out0, out1  the tets' 12 forces (N): corners 0..3
 template <class Tet>
-void volume_forces_pair(const double* x, const double* v, const Tet& t0, const Tet& t1, double* out0, double* out1) {
+SQUEEZE_FEM_INLINE void volume_forces_pair(const double* x, const double* v, const Tet& t0, const Tet& t1,
+                                           simd::Pair3 out[4]) {
   using namespace simd;
   Pair3 p[4], vel[4];
   for (int c = 0; c < 4; ++c) {
@@ -180,7 +202,15 @@ void volume_forces_pair(const double* x, const double* v, const Tet& t0, const T
   const __m128d rate =
       _mm_add_pd(_mm_add_pd(_mm_add_pd(dot(g[0], vel[0]), dot(g[1], vel[1])), dot(g[2], vel[2])), dot(g[3], vel[3]));
   const __m128d f = _mm_xor_pd(_mm_add_pd(_mm_mul_pd(k, C), _mm_mul_pd(kd, rate)), _mm_set1_pd(-0.0));
-  for (int q = 0; q < 4; ++q) store_pair(out0 + 3 * q, out1 + 3 * q, scale(f, g[q]));
+  for (int q = 0; q < 4; ++q) out[q] = scale(f, g[q]);
+}
+
+/// The same, stored: out0, out1  the tets' 12 forces (N): corners 0..3.
+template <class Tet>
+void volume_forces_pair(const double* x, const double* v, const Tet& t0, const Tet& t1, double* out0, double* out1) {
+  simd::Pair3 f[4];
+  volume_forces_pair(x, v, t0, t1, f);
+  for (int q = 0; q < 4; ++q) simd::store_pair(out0 + 3 * q, out1 + 3 * q, f[q]);
 }
 #endif
 

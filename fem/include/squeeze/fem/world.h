@@ -13,7 +13,7 @@
 // Pinned vertices never move. Rigid objects never move; a rigid vertex inside a deformable
 // tetrahedron pushes back on that tetrahedron's vertices (−k_c d r spread by barycentric weights).
 //
-// Determinism: every force is gathered per vertex from per-element results in a fixed order, the
+// Determinism: every force is summed per vertex from per-group results in a fixed order, the
 // collision lists are concatenated in tetrahedron order, and the contact forces are summed in a
 // fixed order: the same state and forces give bit-identical results whatever the number of TBB
 // threads.
@@ -115,6 +115,7 @@ class World {
 
  private:
   void prepare();  // global numbering, hash
+  void build_element_groups();  // edges_, tet_elems_, groups_, acc_, gather_ (prepare)
   void add_contact_forces(const State& s, RowMatrixX3d& F);
   void damp_deformation(State& s) const;  // Material::deformation_damping, per object, fixed order
 
@@ -135,17 +136,26 @@ class World {
   Eigen::MatrixX4i T_all_;
   RowMatrixX3d X_all_;
   std::unique_ptr<SpatialHash> hash_;
-  // Elements of all deformable objects in one numbering (state rows), laid out for the force pass.
-  struct EdgeElem { int i, j; double D0, k, kd; };
-  struct TetElem { int v[4]; double V0, k, kd; };
+  // Elements of all deformable objects in groups, for the force pass. A group is the edges and
+  // tets owned by a cluster of about kClusterRows vertices of one object that are neighbours in
+  // space (consecutive in the Morton order of the rest positions; an element belongs to the
+  // cluster of its corner first in that order). A group adds its elements' forces, element after
+  // element, into its own accumulator slots, one per vertex it touches; a row's force is then
+  // the sum of its slots, group after group. Fixed groups, fixed orders: the sums do not depend on
+  // the threads, and a row is summed from about two slots instead of ~30 element results, so
+  // little data crosses between the cores (docs/fem.md, sixth session).
+  struct EdgeElem { int i, j; double D0, k, kd; int si, sj; };  // rows; slots (offsets in doubles into acc_)
+  struct TetElem { int v[4]; double V0, k, kd; int s[4]; };
+  struct ElemGroup { int e0, e1, t0, t1, a0, a1; };  // edges [e0, e1), tets [t0, t1), slots acc_[a0, a1)
   std::vector<EdgeElem> edges_;
   std::vector<TetElem> tet_elems_;
-  mutable std::vector<double> elem_f_;   // per-element force scratch: 2 × 3 per edge, then 4 × 3 per tet
-  // Per state row: its scratch force slots (edges then tets, increasing element order) are
-  // gather_[gather_start_[r] .. gather_start_[r + 1]), offsets in doubles into elem_f_.
+  std::vector<ElemGroup> groups_;
+  mutable std::vector<double> acc_;  // the groups' accumulator slots, 3 doubles each
+  // Per state row: its slots, group order: gather_[gather_start_[r] .. gather_start_[r + 1]),
+  // offsets in doubles into acc_.
   std::vector<int> gather_start_, gather_;
-  void element_forces(const State& s) const;        // fills elem_f_ (parallel)
-  Eigen::Vector3d gathered(int row) const;          // Σ of the row's element forces, fixed order
+  void element_forces(const State& s) const;        // fills acc_ (parallel over groups)
+  Eigen::Vector3d gathered(int row) const;          // Σ of the row's slots, fixed order
   // Contact forces of the step, applied in the order found: per row a singly linked list.
   std::vector<int> contact_head_, contact_tail_;    // per state row, −1: none
   std::vector<int> contact_next_;
