@@ -1,9 +1,15 @@
 // squeeze::fem — cost of World::step in nanoseconds per tetrahedron per time step, collision
 // detection and response included, on the scene of fem_bench_scene.h (always in contact: steps
-// 300 to 600, replayed). Args: voxel balls' cells per axis n (about 2π n³ tets, plus 150 rigid),
-// threads.
+// 300 to 600, replayed). BM_FemStep: args voxel balls' cells per axis n (about 2π n³ tets, plus
+// 150 rigid), threads. BM_FemSpeedup: the 2-thread speed-up measured in interleaved rounds.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <thread>
+#include <vector>
 
 #include "fem_bench_scene.h"
 
@@ -39,7 +45,69 @@ void BM_FemStep(benchmark::State& st) {
       benchmark::Counter(tets, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
+// Seconds for `steps` steps of `sc` from `start`, after an untimed warm-up of `warm` steps from
+// there (warm caches, threads awake: the previous window ran in another configuration).
+double run_window(Scene& sc, const State& start, int steps, int warm = 100) {
+  sc.state = start;
+  for (int k = 0; k < warm; ++k) sc.world.step(sc.state, &sc.ext);
+  sc.state = start;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < steps; ++k) sc.world.step(sc.state, &sc.ext);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// The 2-thread speed-up, measured so that the host's drift cancels: rounds alternate a window of
+// the scene on 1 thread, the same window on 2 threads, and two independent copies of the scene
+// stepping side by side on 1 thread each (no data shared: the most two threads of this host can
+// give a step at that moment; on a virtual machine whose two vCPUs share one physical core, or
+// whose core is shared with other guests, well below 2). Per round ratios, medians over rounds.
+void BM_FemSpeedup(benchmark::State& st) {
+  const int n = static_cast<int>(st.range(0)), rounds = static_cast<int>(st.range(1));
+  Scene a = make_scene(n), b = make_scene(n);
+  for (int k = 0; k < kInContactStep; ++k) a.world.step(a.state, &a.ext);  // b only replays a's window
+  const State start = a.state;
+  tbb::task_arena one(1), two(2);
+  std::vector<double> t1, t2, speedup, ceiling;
+  for (auto _ : st) {
+    for (int r = 0; r < rounds; ++r) {
+      double s1 = 0, s2 = 0, sa = 0, sb = 0;
+      one.execute([&] { s1 = run_window(a, start, kReplaySteps); });
+      two.execute([&] { s2 = run_window(a, start, kReplaySteps); });
+      {  // side by side: each thread steps its own scene in its own 1-thread arena
+        std::thread other([&] { tbb::task_arena own(1); own.execute([&] { sb = run_window(b, start, kReplaySteps); }); });
+        tbb::task_arena own(1);
+        own.execute([&] { sa = run_window(a, start, kReplaySteps); });
+        other.join();
+      }
+      t1.push_back(s1);
+      t2.push_back(s2);
+      speedup.push_back(s1 / s2);
+      ceiling.push_back(2 * s1 / std::max(sa, sb));  // two windows done in max(sa, sb)
+    }
+  }
+  const double per = 1e9 / (double(kReplaySteps) * a.world.tets());
+  st.counters["tets"] = a.world.tets();
+  st.counters["ns_1thread"] = median(t1) * per;
+  st.counters["ns_2threads"] = median(t2) * per;
+  st.counters["speedup"] = median(speedup);
+  st.counters["ceiling"] = median(ceiling);
+}
+
 }  // namespace
+
+BENCHMARK(BM_FemSpeedup)
+    ->ArgNames({"n", "rounds"})
+    ->Args({3, 20})
+    ->Args({7, 20})
+    ->Args({18, 5})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
 
 BENCHMARK(BM_FemStep)
     ->ArgNames({"n", "threads"})

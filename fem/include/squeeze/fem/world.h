@@ -142,8 +142,8 @@ class World {
   // cluster of its corner first in that order). A group adds its elements' forces, element after
   // element, into its own accumulator slots, one per vertex it touches; a row's force is then
   // the sum of its slots, group after group. Fixed groups, fixed orders: the sums do not depend on
-  // the threads, and a row is summed from about two slots instead of ~30 element results, so
-  // little data crosses between the cores (docs/fem.md, sixth session).
+  // the threads, and a row is summed from 1–2 slots instead of ~24 element results, so little
+  // data crosses between the cores (docs/fem.md, Determinism).
   struct EdgeElem { int i, j; double D0, k, kd; int si, sj; };  // rows; slots (offsets in doubles into acc_)
   struct TetElem { int v[4]; double V0, k, kd; int s[4]; };
   struct ElemGroup { int e0, e1, t0, t1, a0, a1; };  // edges [e0, e1), tets [t0, t1), slots acc_[a0, a1)
