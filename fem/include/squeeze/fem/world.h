@@ -137,7 +137,7 @@ class World {
   RowMatrixX3d X_all_;
   std::unique_ptr<SpatialHash> hash_;
   // Elements of all deformable objects in groups, for the force pass. A group is the edges and
-  // tets owned by a cluster of about kClusterRows vertices of one object that are neighbours in
+  // tets owned by a cluster of 128 vertices (kClusterRows, world.cpp) of one object, neighbours in
   // space (consecutive in the Morton order of the rest positions; an element belongs to the
   // cluster of its corner first in that order). A group adds its elements' forces, element after
   // element, into its own accumulator slots, one per vertex it touches; a row's force is then
