@@ -125,7 +125,9 @@ TEST(FemKernels, PairKernelsEqualScalarKernelsBitForBit) {
   auto bits_equal = [](const double* a, const double* b, int m) { return std::memcmp(a, b, sizeof(double) * m) == 0; };
   for (size_t e = 0; e + 1 < edges.size(); ++e) {
     double pair0[6], pair1[6];
-    distance_forces_pair(x, v, edges[e], edges[e + 1], pair0, pair1);
+    const simd::Pair3 fj = distance_forces_pair(x, v, edges[e], edges[e + 1]);
+    simd::store_pair(pair0, pair1, simd::neg(fj));
+    simd::store_pair(pair0 + 3, pair1 + 3, fj);
     for (int q = 0; q < 2; ++q) {
       const Edge& E = edges[e + q];
       Vec3 fi, fj;
@@ -136,7 +138,9 @@ TEST(FemKernels, PairKernelsEqualScalarKernelsBitForBit) {
   }
   for (size_t t = 0; t + 1 < tets.size(); ++t) {
     double pair0[12], pair1[12];
-    volume_forces_pair(x, v, tets[t], tets[t + 1], pair0, pair1);
+    simd::Pair3 f4[4];
+    volume_forces_pair(x, v, tets[t], tets[t + 1], f4);
+    for (int c = 0; c < 4; ++c) simd::store_pair(pair0 + 3 * c, pair1 + 3 * c, f4[c]);
     for (int q = 0; q < 2; ++q) {
       const Tet& T = tets[t + q];
       Vec3 p[4], vel[4], f[4];
@@ -508,12 +512,12 @@ State run_busy(int threads, int steps, int* ball_contact_steps, int n = 4) {
   return s;
 }
 
-}  // namespace
-
-TEST(FemWorld, BitIdenticalWhateverTheThreadCount) {
+// The busy scene stepped `steps` steps with 1 and with 2 threads: the balls (n cells per axis)
+// collide at least `min_touch` steps, and the states are equal bit for bit.
+void expect_bit_identical_with_1_and_2_threads(int n, int steps, int min_touch) {
   int touch1 = 0, touch2 = 0;
-  const State a = run_busy(1, 1500, &touch1), b = run_busy(2, 1500, &touch2);
-  EXPECT_GT(touch1, 50);  // the balls did collide
+  const State a = run_busy(1, steps, &touch1, n), b = run_busy(2, steps, &touch2, n);
+  EXPECT_GT(touch1, min_touch);  // the balls did collide
   EXPECT_EQ(touch1, touch2);
   ASSERT_EQ(a.x.size(), b.x.size());
   EXPECT_EQ(std::memcmp(a.x.data(), b.x.data(), sizeof(double) * a.x.size()), 0);
@@ -521,16 +525,13 @@ TEST(FemWorld, BitIdenticalWhateverTheThreadCount) {
   EXPECT_TRUE(a.x.allFinite());
 }
 
+}  // namespace
+
+TEST(FemWorld, BitIdenticalWhateverTheThreadCount) { expect_bit_identical_with_1_and_2_threads(4, 1500, 50); }
+
 // Finer balls: several element groups per object, the force pass in parallel.
 TEST(FemWorld, BitIdenticalWhateverTheThreadCountWithManyElementGroups) {
-  int touch1 = 0, touch2 = 0;
-  const State a = run_busy(1, 1200, &touch1, 7), b = run_busy(2, 1200, &touch2, 7);
-  EXPECT_GT(touch1, 20);  // the balls did collide
-  EXPECT_EQ(touch1, touch2);
-  ASSERT_EQ(a.x.size(), b.x.size());
-  EXPECT_EQ(std::memcmp(a.x.data(), b.x.data(), sizeof(double) * a.x.size()), 0);
-  EXPECT_EQ(std::memcmp(a.v.data(), b.v.data(), sizeof(double) * a.v.size()), 0);
-  EXPECT_TRUE(a.x.allFinite());
+  expect_bit_identical_with_1_and_2_threads(7, 1200, 20);
 }
 
 TEST(FemPhysics, CubeDroppedOnRigidFloorComesToRest) {

@@ -89,7 +89,7 @@ Body::Body(const TetMesh& mesh, const Material& mat, bool is_rigid, const Eigen:
       edge_volume(it - e.begin()) += V0(t) / 6.0;
     }
 
-  // Incidence lists.
+  // Incidence list (vertex → edges).
   std::vector<std::pair<int, int>> inc;
   inc.reserve(e.size() * 2);
   for (int k = 0; k < E.rows(); ++k) {
@@ -98,11 +98,6 @@ Body::Body(const TetMesh& mesh, const Material& mat, bool is_rigid, const Eigen:
   }
   std::stable_sort(inc.begin(), inc.end(), [](auto& a, auto& b) { return a.first < b.first; });
   build_csr(nv, inc, edge_start, edge_code);
-  inc.clear();
-  for (int t = 0; t < nt; ++t)
-    for (int k = 0; k < 4; ++k) inc.emplace_back(T(t, k), 4 * t + k);
-  std::stable_sort(inc.begin(), inc.end(), [](auto& a, auto& b) { return a.first < b.first; });
-  build_csr(nv, inc, tet_start, tet_code);
 
   // Face adjacency and boundary.
   struct FaceRef {

@@ -37,7 +37,6 @@ void parallel_rows(int n, Fn fn) {
   });
 }
 
-
 }  // namespace
 
 World::World(const WorldOptions& options) : options_(options) {
@@ -322,7 +321,7 @@ void World::element_forces(const State& s) const {
     }
   };
   const int ng = static_cast<int>(groups_.size());
-  // Small scenes (fewer than two groups' worth of elements) run on the calling thread.
+  // Small scenes (fewer than kSerialElements edges and tets) run on the calling thread.
   if (edges_.size() + tet_elems_.size() < kSerialElements) {
     for (const ElemGroup& G : groups_) group(G);
   } else {

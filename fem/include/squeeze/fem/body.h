@@ -94,10 +94,9 @@ class Body {
   Eigen::MatrixX4i boundary_face;  // #T by 4: row of F for the face opposite vertex k, or -1
   Eigen::MatrixX3i F;       // #F by 3 boundary triangles, oriented outward
   std::vector<char> on_boundary;  // #V: vertex lies on a boundary triangle
-  // CSR incidence lists (vertex → elements), in increasing element order:
+  // CSR incidence list (vertex → edges), in increasing edge order:
   //   edges of vertex i: edge_code[edge_start[i] .. edge_start[i+1]), code = 2·edge + local (0/1)
-  //   tets of vertex i:  tet_code[tet_start[i] .. tet_start[i+1]),    code = 4·tet + local (0..3)
-  std::vector<int> edge_start, edge_code, tet_start, tet_code;
+  std::vector<int> edge_start, edge_code;
 
   int vertices() const { return static_cast<int>(rest.rows()); }
   int tets() const { return static_cast<int>(T.rows()); }

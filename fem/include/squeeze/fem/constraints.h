@@ -92,6 +92,8 @@ inline void volume_forces(const Vec3 p[4], const Vec3 v[4], double V0, double k,
 // multiply-add here), so the forces are bit for bit those of distance_forces / volume_forces
 // (test FemKernels.PairKernelsEqualScalarKernelsBitForBit). World::step computes its elements
 // with them.
+// The pair kernels are forced inline: called through the stack, GCC stopped inlining the tet
+// kernel and its 24 doubles of results went through memory.
 #if defined(__GNUC__)
 #define SQUEEZE_FEM_INLINE inline __attribute__((always_inline))
 #else
@@ -164,16 +166,6 @@ SQUEEZE_FEM_INLINE simd::Pair3 distance_forces_pair(const double* x, const doubl
   return scale(s, g);
 }
 
-/// The same, stored: out0, out1  the edges' 6 forces (N): f_i then f_j.
-template <class Edge>
-void distance_forces_pair(const double* x, const double* v, const Edge& e0, const Edge& e1, double* out0,
-                          double* out1) {
-  using namespace simd;
-  const Pair3 fj = distance_forces_pair(x, v, e0, e1), fi = neg(fj);
-  store_pair(out0, out1, fi);
-  store_pair(out0 + 3, out1 + 3, fj);
-}
-
 /// volume_forces of two tetrahedra at once, bit for bit: f[q] the forces (N) on corner q of
 /// both (lane 0: t0, lane 1: t1).
 ///   x, v    row-major #rows by 3 positions (m) and velocities (m/s)
@@ -203,14 +195,6 @@ SQUEEZE_FEM_INLINE void volume_forces_pair(const double* x, const double* v, con
       _mm_add_pd(_mm_add_pd(_mm_add_pd(dot(g[0], vel[0]), dot(g[1], vel[1])), dot(g[2], vel[2])), dot(g[3], vel[3]));
   const __m128d f = _mm_xor_pd(_mm_add_pd(_mm_mul_pd(k, C), _mm_mul_pd(kd, rate)), _mm_set1_pd(-0.0));
   for (int q = 0; q < 4; ++q) out[q] = scale(f, g[q]);
-}
-
-/// The same, stored: out0, out1  the tets' 12 forces (N): corners 0..3.
-template <class Tet>
-void volume_forces_pair(const double* x, const double* v, const Tet& t0, const Tet& t1, double* out0, double* out1) {
-  simd::Pair3 f[4];
-  volume_forces_pair(x, v, t0, t1, f);
-  for (int q = 0; q < 4; ++q) simd::store_pair(out0 + 3 * q, out1 + 3 * q, f[q]);
 }
 #endif
 
