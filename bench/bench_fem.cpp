@@ -7,7 +7,6 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <chrono>
 #include <thread>
 #include <vector>
 
@@ -22,6 +21,8 @@ using bench::Scene;
 using bench::make_scene;
 using bench::kInContactStep;
 using bench::kReplaySteps;
+using bench::run_window;
+constexpr int kWarmSteps = 100;  // untimed steps before each BM_FemSpeedup window
 
 void BM_FemStep(benchmark::State& st) {
   const int n = static_cast<int>(st.range(0)), threads = static_cast<int>(st.range(1));
@@ -45,17 +46,6 @@ void BM_FemStep(benchmark::State& st) {
       benchmark::Counter(tets, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
-// Seconds for `steps` steps of `sc` from `start`, after an untimed warm-up of `warm` steps from
-// there (warm caches, threads awake: the previous window ran in another configuration).
-double run_window(Scene& sc, const State& start, int steps, int warm = 100) {
-  sc.state = start;
-  for (int k = 0; k < warm; ++k) sc.world.step(sc.state, &sc.ext);
-  sc.state = start;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < steps; ++k) sc.world.step(sc.state, &sc.ext);
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
@@ -76,12 +66,12 @@ void BM_FemSpeedup(benchmark::State& st) {
   for (auto _ : st) {
     for (int r = 0; r < rounds; ++r) {
       double s1 = 0, s2 = 0, sa = 0, sb = 0;
-      one.execute([&] { s1 = run_window(a, start, kReplaySteps); });
-      two.execute([&] { s2 = run_window(a, start, kReplaySteps); });
+      one.execute([&] { s1 = run_window(a, start, kReplaySteps, kWarmSteps); });
+      two.execute([&] { s2 = run_window(a, start, kReplaySteps, kWarmSteps); });
       {  // side by side: each thread steps its own scene in its own 1-thread arena
-        std::thread other([&] { tbb::task_arena own(1); own.execute([&] { sb = run_window(b, start, kReplaySteps); }); });
+        std::thread other([&] { tbb::task_arena own(1); own.execute([&] { sb = run_window(b, start, kReplaySteps, kWarmSteps); }); });
         tbb::task_arena own(1);
-        own.execute([&] { sa = run_window(a, start, kReplaySteps); });
+        own.execute([&] { sa = run_window(a, start, kReplaySteps, kWarmSteps); });
         other.join();
       }
       t1.push_back(s1);

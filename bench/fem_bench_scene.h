@@ -1,11 +1,12 @@
 // The scene of bench_fem (and of bench/ab): two deformable voxel balls of radius 0.1 m, n cells
-// per axis (about 2π n³ tets each), pushed into each other by external forces of ±10 m/s² × mass
+// per axis (about π n³ tets each), pushed into each other by external forces of ±10 m/s² × mass
 // along x, on a rigid slab of 150 tets, gravity on. In contact from about step 300
 // (kInContactStep) for kReplaySteps steps; the benchmarks replay that window (the balls bounce
-// apart after ~1 s simulated, so a free run would time a contact-free scene). Knobs for tuning: SQUEEZE_FEM_CELL
-// (hash cell in grid spacings) and SQUEEZE_FEM_TABLE (hash table size) override the World's
-// automatic choices.
+// apart after ~1 s simulated, so a free run would time a contact-free scene). Knobs for tuning:
+// SQUEEZE_FEM_CELL (hash cell in grid spacings) and SQUEEZE_FEM_TABLE (hash table size) override
+// the World's automatic choices.
 #pragma once
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 
@@ -49,6 +50,17 @@ inline Scene make_scene(int n) {
   RowMatrixX3d ext = RowMatrixX3d::Zero(s.x.rows(), 3);
   for (int i = 0; i < s.x.rows(); ++i) ext(i, 0) = (i < w.body(0).vertices() ? 10.0 : -10.0) * w.masses()(i);
   return {std::move(w), std::move(s), std::move(ext)};
+}
+
+// Seconds for `steps` steps of `sc` from `start`, after an untimed warm-up of `warm` steps from
+// there (warm caches, threads awake when the previous window ran in another configuration).
+inline double run_window(Scene& sc, const State& start, int steps, int warm = 0) {
+  sc.state = start;
+  for (int k = 0; k < warm; ++k) sc.world.step(sc.state, &sc.ext);
+  sc.state = start;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < steps; ++k) sc.world.step(sc.state, &sc.ext);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace squeeze::fem::bench
