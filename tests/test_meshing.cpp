@@ -2,6 +2,7 @@
 // winding numbers, orientation, surface and tetrahedral I/O. Geometry is built in the tests.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 
 #include "meshing_test_util.h"
@@ -272,6 +273,11 @@ TEST(MeshingDecompose, ImpossibleOptionsThrow) {
   o = {};
   o.voxel_resolution = 2;
   EXPECT_THROW(squeeze::decompose(m, o), InputError);
+  for (double bad : {-0.1, 1.5, std::nan("")}) {
+    o = {};
+    o.notch_preference = bad;
+    EXPECT_THROW(squeeze::decompose(m, o), InputError) << "notch_preference " << bad;
+  }
   squeeze::TetrahedralizeOptions t;
   t.target_tets = 0;
   const auto d = squeeze::decompose(m);
