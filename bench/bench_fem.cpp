@@ -13,6 +13,7 @@
 #include "fem_bench_scene.h"
 
 using namespace squeeze;
+using namespace squeeze::meshing;
 using namespace squeeze::fem;
 
 namespace {

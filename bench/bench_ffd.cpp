@@ -28,6 +28,8 @@
 namespace {
 
 using namespace squeeze;
+using namespace squeeze::meshing;
+using namespace squeeze::ffd;
 
 constexpr double kBytesPerVertex = 4 + 32 + 24;
 

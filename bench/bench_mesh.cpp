@@ -33,8 +33,8 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 // The options of `squeeze mesh` without --target-tets (cli/cmd_mesh.cpp): max_hulls shells, a
 // boundary within 0.7% of the diagonal, slivers perturbed up to 6 degrees.
-squeeze::MeshOptions boundary_first_options() {
-  squeeze::MeshOptions o;
+squeeze::meshing::MeshOptions boundary_first_options() {
+  squeeze::meshing::MeshOptions o;
   o.tets_per_hull = 0;
   o.tetrahedralize.facet_distance = 0.007;
   o.tetrahedralize.sliver_bound = 6.0;
@@ -43,11 +43,11 @@ squeeze::MeshOptions boundary_first_options() {
 
 // The whole pipeline, as `squeeze mesh MODEL -o out.mesh` runs it (without writing the file).
 void BM_Mesh(benchmark::State& state, const std::string& model) {
-  const squeeze::MeshOptions options = boundary_first_options();  // the command line's defaults
+  const squeeze::meshing::MeshOptions options = boundary_first_options();  // the command line's defaults
   std::map<std::string, double> stage_sum;
   double tets = 0, hulls = 0, volume_ratio = 0;
   for (auto _ : state) {
-    const squeeze::MeshResult r = squeeze::mesh_file(data(model), options);
+    const squeeze::meshing::MeshResult r = squeeze::meshing::mesh_file(data(model), options);
     for (const auto& [name, s] : r.seconds) stage_sum[name] += s;
     tets = r.quality.tets;
     hulls = static_cast<double>(r.decomposition.shells.size());
@@ -73,11 +73,11 @@ BENCHMARK_CAPTURE(BM_Mesh, elephant, std::string("elephant.off"))
 // `squeeze mesh MODEL --target-tets N`: the count and the quality figures of goal "small coarse
 // meshes for the scenes" (the Falling Objects scene: bunny + dragon + plate in about 400 tets).
 void BM_MeshTarget(benchmark::State& state, const std::string& model, int target) {
-  squeeze::MeshOptions options;
+  squeeze::meshing::MeshOptions options;
   options.tetrahedralize.target_tets = target;
-  squeeze::MeshResult r;
+  squeeze::meshing::MeshResult r;
   for (auto _ : state) {
-    r = squeeze::mesh_file(data(model), options);
+    r = squeeze::meshing::mesh_file(data(model), options);
     benchmark::DoNotOptimize(r.tets.T.data());
   }
   state.counters["target"] = target;
@@ -104,7 +104,7 @@ BENCHMARK_CAPTURE(BM_MeshTarget, heart_300, std::string("organs/heart.off"), 300
     ->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 // One convex shell as an OFF file (TetGen 1.5 reads .off with -p).
-void write_shell_off(const fs::path& p, const squeeze::ConvexHull& h) {
+void write_shell_off(const fs::path& p, const squeeze::meshing::ConvexHull& h) {
   std::ofstream out(p);
   out.precision(17);
   out << "OFF\n" << h.V.rows() << ' ' << h.F.rows() << " 0\n";
@@ -127,10 +127,10 @@ void BM_TetrahedralizeVsTetgen(benchmark::State& state) {
     return;
   }
   // Decompose once, outside the timing.
-  const squeeze::MeshOptions options = boundary_first_options();
-  const squeeze::SurfaceMesh bunny = squeeze::load_surface(data("bunny00.off"));
-  squeeze::SurfaceMesh oriented{bunny.V, squeeze::orient_outward(bunny.V, bunny.F)};
-  const squeeze::Decomposition d = squeeze::decompose(oriented, options.decomposition);
+  const squeeze::meshing::MeshOptions options = boundary_first_options();
+  const squeeze::meshing::SurfaceMesh bunny = squeeze::meshing::load_surface(data("bunny00.off"));
+  squeeze::meshing::SurfaceMesh oriented{bunny.V, squeeze::meshing::orient_outward(bunny.V, bunny.F)};
+  const squeeze::meshing::Decomposition d = squeeze::meshing::decompose(oriented, options.decomposition);
   const fs::path dir = fs::temp_directory_path() / ("squeeze-bench-tetgen-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::vector<fs::path> files;
@@ -143,8 +143,8 @@ void BM_TetrahedralizeVsTetgen(benchmark::State& state) {
   int failures = 0;
   for (auto _ : state) {
     auto t0 = Clock::now();
-    squeeze::TetrahedralizeStats stats;
-    const squeeze::TetMesh m = squeeze::tetrahedralize(d.shells, options.tetrahedralize, &stats);
+    squeeze::meshing::TetrahedralizeStats stats;
+    const squeeze::meshing::TetMesh m = squeeze::meshing::tetrahedralize(d.shells, options.tetrahedralize, &stats);
     squeeze_s += seconds_since(t0);
     squeeze_tets = static_cast<double>(m.T.rows());
 

@@ -15,6 +15,7 @@
 #include "squeeze/plan/evaluate.h"
 
 using namespace squeeze;
+using namespace squeeze::meshing;
 
 namespace {
 

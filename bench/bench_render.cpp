@@ -32,6 +32,7 @@
 namespace {
 namespace fs = std::filesystem;
 using namespace squeeze;
+using namespace squeeze::meshing;
 
 constexpr int kFrames = 31;
 

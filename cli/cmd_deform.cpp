@@ -24,7 +24,7 @@ namespace {
 
 struct DeformArgs {
   std::string surface, rest, deformed, output;
-  BindOptions options;
+  ffd::BindOptions options;
 };
 
 }  // namespace
@@ -54,28 +54,28 @@ Runner add_deform_command(CLI::App& app, const Global& global) {
     DeformArgs& a = *args;
     const auto start = std::chrono::steady_clock::now();
     // Fail fast, before any work, on outputs that cannot be written.
-    if (!is_surface_format(a.output))
+    if (!meshing::is_surface_format(a.output))
       throw InputError(a.output + ": unknown surface format (use .off, .obj, .ply, .stl, .glb, ...)");
     check_output_directory(a.output);
 
-    LoadOptions load;
+    meshing::LoadOptions load;
     load.keep_order = true;  // the output matches the input vertex for vertex, face for face
-    SurfaceMesh surface = load_surface(a.surface, load);
-    const TetMesh rest = load_tet_mesh(a.rest);
-    const TetMesh deformed = load_tet_mesh(a.deformed);
-    check_same_connectivity(rest, deformed, a.rest, a.deformed);
-    const Eigen::VectorXd rest_volumes = tet_volumes(rest);
+    meshing::SurfaceMesh surface = meshing::load_surface(a.surface, load);
+    const meshing::TetMesh rest = meshing::load_tet_mesh(a.rest);
+    const meshing::TetMesh deformed = meshing::load_tet_mesh(a.deformed);
+    ffd::check_same_connectivity(rest, deformed, a.rest, a.deformed);
+    const Eigen::VectorXd rest_volumes = meshing::tet_volumes(rest);
     if (rest_volumes.minCoeff() <= 0)
       spdlog::warn("{}: {} tetrahedra have zero or negative volume; vertices in them cannot be bound reliably", a.rest,
                    (rest_volumes.array() <= 0).count());
-    const Eigen::VectorXd volumes = tet_volumes(deformed);
+    const Eigen::VectorXd volumes = meshing::tet_volumes(deformed);
     if (volumes.minCoeff() <= 0)
       spdlog::warn("{}: {} of {} tetrahedra are inverted or flat; the surface inside them turns inside out",
                    a.deformed, (volumes.array() <= 0).count(), volumes.size());
 
     Progress progress(!global.quiet);
-    const Binding binding = bind_surface(surface.V, rest, a.options, &progress, a.surface);
-    const double diagonal = bounding_box_diagonal(surface.V);
+    const ffd::Binding binding = ffd::bind_surface(surface.V, rest, a.options, &progress, a.surface);
+    const double diagonal = meshing::bounding_box_diagonal(surface.V);
     if (binding.outside > 0)
       spdlog::info("{}: {} of {} vertices lie outside {}, at most {:.4g} ({:.3g}% of the diagonal) away; they follow "
                    "their nearest tetrahedron",
@@ -85,7 +85,7 @@ Runner add_deform_command(CLI::App& app, const Global& global) {
     replay(binding, deformed.V, moved);
     const double displacement = (moved - surface.V).rowwise().norm().maxCoeff();
     surface.V = moved;
-    save_surface(a.output, surface);
+    meshing::save_surface(a.output, surface);
 
     if (!global.quiet) {
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -26,7 +26,7 @@ constexpr double kBoundaryFirstSliverBound = 6.0;
 
 struct MeshArgs {
   std::string input, output, shells, report;
-  MeshOptions options;
+  meshing::MeshOptions options;
 };
 
 
@@ -86,11 +86,11 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       if (sliver->count() == 0) a.options.tetrahedralize.sliver_bound = kBoundaryFirstSliverBound;
     }
     // Fail fast, before any work, on outputs that cannot be written.
-    if (!is_tet_format(a.output))
+    if (!meshing::is_tet_format(a.output))
       throw InputError(a.output + ": unknown tetrahedral mesh format (use .mesh, .msh, .vtk, .vtu or .node/.ele)");
     check_output_directory(a.output);
     if (!a.shells.empty()) {
-      if (!is_surface_format(a.shells))
+      if (!meshing::is_surface_format(a.shells))
         throw InputError(a.shells + ": unknown surface format (use .off, .obj, .ply, .stl, .gltf, .glb, ...)");
       check_output_directory(a.shells);
     }
@@ -102,7 +102,7 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
     if (!(a.options.tetrahedralize.facet_distance >= 0)) throw InputError("--facet-distance must be >= 0");
 
     Progress progress(!global.quiet);
-    MeshResult r = mesh_file(a.input, a.options, &progress);
+    meshing::MeshResult r = meshing::mesh_file(a.input, a.options, &progress);
     progress.finish();
     if (r.quality.min_dihedral < 5.0)
       spdlog::warn("{}: smallest dihedral angle {:.2f} deg is below 5 deg", a.input, r.quality.min_dihedral);
@@ -110,10 +110,10 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       spdlog::info("{}: stopped at the hull budget {} with concavity {:.4g} above the threshold {:.4g}", a.input,
                    r.hull_budget, r.decomposition.max_concavity, r.decomposition.threshold);
 
-    save_tet_mesh(a.output, r.tets);
-    if (!a.shells.empty()) save_surface(a.shells, shells_surface(r.decomposition));
+    meshing::save_tet_mesh(a.output, r.tets);
+    if (!a.shells.empty()) meshing::save_surface(a.shells, meshing::shells_surface(r.decomposition));
     if (!a.report.empty()) {
-      const auto json = mesh_report(r, a.input);
+      const auto json = meshing::mesh_report(r, a.input);
       write_atomically(a.report, [&](const fs::path& tmp) {
         std::ofstream out(tmp);
         out << json.dump(2) << '\n';
@@ -128,7 +128,7 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                    "dihedral %.1f..%.1f deg, min/mean edge %.2f, volume ratio %.3f, %.2f%% of input vertices covered, "
                    "%.2f s\n",
                    a.input.c_str(), r.decomposition.shells.size(),
-                   100.0 * r.decomposition.max_concavity / bounding_box_diagonal(r.input.V), r.quality.tets,
+                   100.0 * r.decomposition.max_concavity / meshing::bounding_box_diagonal(r.input.V), r.quality.tets,
                    r.quality.vertices, r.quality.min_dihedral, r.quality.max_dihedral,
                    r.quality.mean_edge > 0 ? r.quality.min_edge / r.quality.mean_edge : 0.0, r.input_volume > 0 ? r.quality.volume / r.input_volume : 0.0, 100.0 * r.covered_fraction, total);
     }

@@ -56,7 +56,7 @@ TrajectoryWriter::TrajectoryWriter(fem::SceneWorld& w, const std::string& output
   for (int b = 0; b < w.world.bodies(); ++b) {
     const fem::SceneObject& o = scene.objects[b];
     const std::string rest = "rest/" + o.name + ".mesh";
-    save_tet_mesh(tmp_ / rest, w.meshes[b]);
+    meshing::save_tet_mesh(tmp_ / rest, w.meshes[b]);
     index["objects"].push_back({{"name", o.name},
                                 {"role", o.robot ? "robot" : "obstacle"},
                                 {"kind", o.rigid ? "rigid" : "deformable"},

@@ -27,8 +27,9 @@
 
 namespace sqt {
 namespace fs = std::filesystem;
-using squeeze::SurfaceMesh;
-using squeeze::TetMesh;
+using namespace squeeze::meshing;
+using squeeze::meshing::SurfaceMesh;
+using squeeze::meshing::TetMesh;
 
 inline fs::path data(const std::string& name) { return fs::path(SQUEEZE_TEST_DATA) / name; }
 

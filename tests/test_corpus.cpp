@@ -81,7 +81,7 @@ TEST_P(CorpusTest, MeshMeetsTheContract) {
   ASSERT_EQ(surface.V.rows(), c.vertices);
   ASSERT_EQ(surface.F.rows(), c.faces);
   const InputTruth truth = truth_of(surface, c.closed);
-  const TetMesh tets = squeeze::load_tet_mesh(dir / "out.mesh");
+  const TetMesh tets = squeeze::meshing::load_tet_mesh(dir / "out.mesh");
   const TetFacts facts = expect_mesh_contract(tets, truth, c.file);
 
   const nlohmann::json report = nlohmann::json::parse(read_text(dir / "r.json"));
@@ -150,10 +150,10 @@ class TargetTest : public ::testing::TestWithParam<TargetCase> {};
 TEST_P(TargetTest, CountMetAndContractAndQualityHold) {
   const TargetCase& c = GetParam();
   const std::string what = std::string(c.file) + " --target-tets " + std::to_string(c.target);
-  squeeze::MeshOptions options;
+  squeeze::meshing::MeshOptions options;
   options.tetrahedralize.target_tets = c.target;
   options.check_self_intersection = false;
-  const auto r = squeeze::mesh_file(data(c.file), options);
+  const auto r = squeeze::meshing::mesh_file(data(c.file), options);
   const SurfaceMesh surface = read_off(data(c.file));
   // The organs are unions of touching, overlapping closed parts: their summed enclosed volume is
   // not the solid's, so only the closed single solids get a volume check; a coarse mesh encloses
@@ -167,7 +167,7 @@ TEST_P(TargetTest, CountMetAndContractAndQualityHold) {
   EXPECT_GE(f.min_dihedral, 10.0 - 1e-9) << what;
   EXPECT_GE(f.min_edge, 0.1 * f.mean_edge) << what << ": min edge " << f.min_edge << ", mean " << f.mean_edge;
   // The hull budget follows the target.
-  EXPECT_LE(static_cast<int>(r.decomposition.shells.size()), squeeze::hull_budget(options)) << what;
+  EXPECT_LE(static_cast<int>(r.decomposition.shells.size()), squeeze::meshing::hull_budget(options)) << what;
   // The library's own figures agree with ours.
   EXPECT_EQ(r.quality.tets, f.tets);
   EXPECT_NEAR(r.quality.min_edge, f.min_edge, 1e-12 * (1 + f.min_edge));

@@ -14,6 +14,7 @@
 #include "squeeze/fem/world.h"
 
 using namespace squeeze;
+using namespace squeeze::meshing;
 using namespace squeeze::fem;
 using Eigen::Vector3d;
 

@@ -25,6 +25,8 @@
 namespace {
 
 using namespace squeeze;
+using namespace squeeze::meshing;
+using namespace squeeze::ffd;
 namespace fs = std::filesystem;
 
 SurfaceMesh load_ordered(const std::string& name) {

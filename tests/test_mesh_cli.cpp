@@ -182,7 +182,7 @@ std::vector<Variant> variants() {
   return {
       {"stl_binary_elephant",
        [](const fs::path& d, InputTruth& t) {
-         squeeze::save_surface(d / "elephant.stl", elephant());
+         squeeze::meshing::save_surface(d / "elephant.stl", elephant());
          // Binary STL: 80-byte header, count, 50 bytes per triangle.
          EXPECT_EQ(fs::file_size(d / "elephant.stl"), 84u + 50u * static_cast<unsigned>(elephant().F.rows()));
          t = truth_of(elephant(), true);
@@ -220,13 +220,13 @@ std::vector<Variant> variants() {
        }},
       {"gltf_sphere",
        [](const fs::path& d, InputTruth& t) {
-         squeeze::save_surface(d / "sphere.gltf", sphere());
+         squeeze::meshing::save_surface(d / "sphere.gltf", sphere());
          t = truth_of(sphere(), true);
          return "sphere.gltf";
        }},
       {"glb_elephant",
        [](const fs::path& d, InputTruth& t) {
-         squeeze::save_surface(d / "elephant.glb", elephant());
+         squeeze::meshing::save_surface(d / "elephant.glb", elephant());
          t = truth_of(elephant(), true);
          return "elephant.glb";
        }},
@@ -297,7 +297,7 @@ std::vector<Variant> variants() {
          open.F.resize(static_cast<Eigen::Index>(keep.size()), 3);
          for (size_t i = 0; i < keep.size(); ++i) open.F.row(static_cast<Eigen::Index>(i)) = e.F.row(keep[i]);
          open = compact(open);
-         squeeze::save_surface(d / "open.ply", open);
+         squeeze::meshing::save_surface(d / "open.ply", open);
          t = truth_of(open, false);
          return "open.ply";
        }},
@@ -319,7 +319,7 @@ TEST_P(FormatTest, MeshMeetsTheContract) {
   ASSERT_FALSE(run.crashed()) << "squeeze crashed or timed out, code " << run.code << "\n" << run.err;
   ASSERT_EQ(run.code, 0) << run.err;
   EXPECT_EQ(temporaries_in(dir.path()).size(), tmp_before.size()) << "squeeze left a temporary file";
-  const TetMesh tets = squeeze::load_tet_mesh(dir / "out.mesh");
+  const TetMesh tets = squeeze::meshing::load_tet_mesh(dir / "out.mesh");
   const TetFacts facts = expect_mesh_contract(tets, truth, v.name);
   const nlohmann::json report = nlohmann::json::parse(read_text(dir / "r.json"));
   expect_report(report, facts, truth, v.name);
@@ -377,13 +377,13 @@ TEST(MeshCliOutputs, EveryTetFormatAndShellsAndReport) {
     ASSERT_EQ(r.code, 0) << r.err;
     TetMesh m;
     try {
-      m = squeeze::load_tet_mesh(dir / out);
+      m = squeeze::meshing::load_tet_mesh(dir / out);
     } catch (const std::exception& e) {
       ADD_FAILURE() << out << ": load_tet_mesh threw " << e.what();
       continue;
     }
     expect_mesh_contract(m, truth, out);
-    const SurfaceMesh shells = squeeze::load_surface(dir / "shells.obj");
+    const SurfaceMesh shells = squeeze::meshing::load_surface(dir / "shells.obj");
     EXPECT_GE(shells.F.rows(), 4);
     if (out == "s.node") { EXPECT_TRUE(fs::exists(dir / "s.ele")); }
   }
@@ -398,7 +398,7 @@ TEST(MeshCliOutputs, TargetTetsRaisesTheCount) {
                                   dir.path());
   ASSERT_EQ(a.code, 0) << a.err;
   ASSERT_EQ(b.code, 0) << b.err;
-  const auto na = squeeze::load_tet_mesh(dir / "a.mesh").T.rows(), nb = squeeze::load_tet_mesh(dir / "b.mesh").T.rows();
+  const auto na = squeeze::meshing::load_tet_mesh(dir / "a.mesh").T.rows(), nb = squeeze::meshing::load_tet_mesh(dir / "b.mesh").T.rows();
   EXPECT_GT(nb, 3 * na) << na << " vs " << nb;
 }
 
@@ -530,7 +530,7 @@ TEST_P(BadInputTest, FailsWithOneLineAndLeavesNothing) {
   ASSERT_FALSE(r.crashed()) << c.name << ": crashed, exit code " << r.code << "\n" << r.err;
   if (c.name == "flat_input" && r.code == 0) {
     // Meshing a lone triangle as a thin slab is acceptable; then the contract must hold.
-    const TetMesh m = squeeze::load_tet_mesh(dir / "out.mesh");
+    const TetMesh m = squeeze::meshing::load_tet_mesh(dir / "out.mesh");
     const TetFacts f = tet_facts(m);
     EXPECT_EQ(f.nonpositive, 0);
     EXPECT_EQ(f.overshared_faces, 0);

@@ -122,8 +122,8 @@ int inconsistent_edges(const Eigen::MatrixX3i& F) {
   return bad;
 }
 
-squeeze::MeshOptions fast_options() {
-  squeeze::MeshOptions o;
+squeeze::meshing::MeshOptions fast_options() {
+  squeeze::meshing::MeshOptions o;
   o.check_self_intersection = false;
   return o;
 }
@@ -152,7 +152,7 @@ TEST(MeshingFixtures, CubeSurfacesAreClosedAndOutward) {
 // Convex decomposition.
 
 TEST(MeshingDecompose, ConvexBoxGivesOneHull) {
-  const auto d = squeeze::decompose(box({-1, 0, 2}, {2, 1, 2.5}));
+  const auto d = squeeze::meshing::decompose(box({-1, 0, 2}, {2, 1, 2.5}));
   ASSERT_EQ(d.shells.size(), 1u);
   EXPECT_NEAR(d.shells[0].hull.volume, 3 * 1 * 0.5, 1e-9);
   EXPECT_EQ(d.parts, 1);
@@ -160,15 +160,15 @@ TEST(MeshingDecompose, ConvexBoxGivesOneHull) {
 
 TEST(MeshingDecompose, SphereGivesOneHull) {
   const SurfaceMesh s = read_off(data("sphere.off"));
-  SurfaceMesh m{s.V, squeeze::orient_outward(s.V, s.F)};
-  const auto d = squeeze::decompose(m);
+  SurfaceMesh m{s.V, squeeze::meshing::orient_outward(s.V, s.F)};
+  const auto d = squeeze::meshing::decompose(m);
   EXPECT_EQ(d.shells.size(), 1u);
   EXPECT_LE(d.max_concavity, d.threshold);
 }
 
 TEST(MeshingDecompose, TwoDisjointBoxesGiveTwoPartsAndTwoTetComponents) {
   const SurfaceMesh m = concat(box({0, 0, 0}, {1, 1, 1}), box({3, 0.2, 0}, {4, 1.2, 1.5}));
-  const auto r = squeeze::mesh_surface(m, fast_options());
+  const auto r = squeeze::meshing::mesh_surface(m, fast_options());
   EXPECT_EQ(r.decomposition.parts, 2);
   EXPECT_EQ(r.decomposition.shells.size(), 2u);
   InputTruth truth = truth_of(m, true);
@@ -182,7 +182,7 @@ TEST(MeshingDecompose, TwoDisjointBoxesGiveTwoPartsAndTwoTetComponents) {
 void expect_split_at_notch(const SurfaceMesh& m, const std::vector<Eigen::RowVector3d>& outside,
                            const std::string& what) {
   SCOPED_TRACE(what);
-  const auto d = squeeze::decompose(m);
+  const auto d = squeeze::meshing::decompose(m);
   EXPECT_GT(d.shells.size(), 1u) << what << " was not split";
   for (size_t s = 0; s < d.shells.size(); ++s)
     for (const auto& p : outside)
@@ -209,7 +209,7 @@ TEST(MeshingDecompose, UShapeIsSplitAtBothConcaveCorners) {
   // inside one while the corner edge is only 0.085 deep. Points 0.2 from the walls would put the
   // edge more than 0.14 deep: they must be in no shell.
   const SurfaceMesh u = u_shape();
-  const double threshold = squeeze::DecompositionOptions{}.concavity * diagonal(u.V);
+  const double threshold = squeeze::meshing::DecompositionOptions{}.concavity * diagonal(u.V);
   ASSERT_LT(threshold, 0.1);
   expect_split_at_notch(u, {{1.2, 1.2, 0.5}, {1.8, 1.2, 0.5}, {1.5, 2.0, 0.5}, {1.5, 2.95, 0.5}}, "U");
 }
@@ -227,7 +227,7 @@ TEST(MeshingDecompose, ThickUShapeIsSplitAtBothConcaveCorners) {
 
 TEST(MeshingDecompose, ShellsAreInteriorDisjoint) {
   // Plane cuts: the shells of the L meet only on cutting planes, so their volumes add up to the L's.
-  const auto d = squeeze::decompose(l_shape());
+  const auto d = squeeze::meshing::decompose(l_shape());
   double sum = 0;
   for (const auto& s : d.shells) sum += s.hull.volume;
   EXPECT_NEAR(sum, 5.0, 1e-6);
@@ -238,10 +238,10 @@ TEST(MeshingDecompose, ShellsCoverTheSolid) {
   // no input triangle, which its shell must hold too (version 2 left 3% of the elephant's
   // interior in no shell). Points of a regular grid inside the solid must each be in a shell.
   const SurfaceMesh s = read_off(data("elephant.off"));
-  const SurfaceMesh m{s.V, squeeze::orient_outward(s.V, s.F)};
-  const auto d = squeeze::decompose(m);
+  const SurfaceMesh m{s.V, squeeze::meshing::orient_outward(s.V, s.F)};
+  const auto d = squeeze::meshing::decompose(m);
   ASSERT_GT(d.shells.size(), 8u);
-  const squeeze::FastWindingNumber wn(m.V, m.F);
+  const squeeze::meshing::FastWindingNumber wn(m.V, m.F);
   const Eigen::RowVector3d lo = m.V.colwise().minCoeff(), hi = m.V.colwise().maxCoeff();
   const double diag = diagonal(m.V);
   const int n = 40;
@@ -262,27 +262,27 @@ TEST(MeshingDecompose, ShellsCoverTheSolid) {
 
 TEST(MeshingDecompose, ImpossibleOptionsThrow) {
   const SurfaceMesh m = box({0, 0, 0}, {1, 1, 1});
-  squeeze::DecompositionOptions o;
+  squeeze::meshing::DecompositionOptions o;
   o.concavity = 0;
-  EXPECT_THROW(squeeze::decompose(m, o), InputError);
+  EXPECT_THROW(squeeze::meshing::decompose(m, o), InputError);
   o.concavity = -1;
-  EXPECT_THROW(squeeze::decompose(m, o), InputError);
+  EXPECT_THROW(squeeze::meshing::decompose(m, o), InputError);
   o = {};
   o.max_hulls = 0;
-  EXPECT_THROW(squeeze::decompose(m, o), InputError);
+  EXPECT_THROW(squeeze::meshing::decompose(m, o), InputError);
   o = {};
   o.voxel_resolution = 2;
-  EXPECT_THROW(squeeze::decompose(m, o), InputError);
+  EXPECT_THROW(squeeze::meshing::decompose(m, o), InputError);
   for (double bad : {-0.1, 1.5, std::nan("")}) {
     o = {};
     o.notch_preference = bad;
-    EXPECT_THROW(squeeze::decompose(m, o), InputError) << "notch_preference " << bad;
+    EXPECT_THROW(squeeze::meshing::decompose(m, o), InputError) << "notch_preference " << bad;
   }
-  squeeze::TetrahedralizeOptions t;
+  squeeze::meshing::TetrahedralizeOptions t;
   t.target_tets = 0;
-  const auto d = squeeze::decompose(m);
-  EXPECT_THROW(squeeze::tetrahedralize(d.shells, t), InputError);
-  EXPECT_THROW(squeeze::tetrahedralize({}, {}), InputError);
+  const auto d = squeeze::meshing::decompose(m);
+  EXPECT_THROW(squeeze::meshing::tetrahedralize(d.shells, t), InputError);
+  EXPECT_THROW(squeeze::meshing::tetrahedralize({}, {}), InputError);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -290,7 +290,7 @@ TEST(MeshingDecompose, ImpossibleOptionsThrow) {
 
 TEST(MeshingPipeline, BoxMeetsTheContract) {
   const SurfaceMesh m = box({0, 0, 0}, {2, 1, 1});
-  const auto r = squeeze::mesh_surface(m, fast_options());
+  const auto r = squeeze::meshing::mesh_surface(m, fast_options());
   const TetFacts f = expect_mesh_contract(r.tets, truth_of(m, true), "box");
   EXPECT_EQ(f.components, 1);
   EXPECT_EQ(r.decomposition.shells.size(), 1u);
@@ -298,7 +298,7 @@ TEST(MeshingPipeline, BoxMeetsTheContract) {
 
 TEST(MeshingPipeline, LShapeMeetsTheContractAndIsConforming) {
   const SurfaceMesh m = l_shape();
-  const auto r = squeeze::mesh_surface(m, fast_options());
+  const auto r = squeeze::meshing::mesh_surface(m, fast_options());
   const TetFacts f = expect_mesh_contract(r.tets, truth_of(m, true), "L");
   EXPECT_EQ(f.components, 1);  // the shells meet on the cut and the mesh conforms across it
   // Labels name shells (1-based).
@@ -309,8 +309,8 @@ TEST(MeshingPipeline, LShapeMeetsTheContractAndIsConforming) {
 
 TEST(MeshingPipeline, SameInputSameOutput) {
   const SurfaceMesh m = u_shape();
-  const auto a = squeeze::mesh_surface(m, fast_options());
-  const auto b = squeeze::mesh_surface(m, fast_options());
+  const auto a = squeeze::meshing::mesh_surface(m, fast_options());
+  const auto b = squeeze::meshing::mesh_surface(m, fast_options());
   ASSERT_EQ(a.tets.T.rows(), b.tets.T.rows());
   ASSERT_EQ(a.tets.V.rows(), b.tets.V.rows());
   EXPECT_TRUE(a.tets.T == b.tets.T);
@@ -319,10 +319,10 @@ TEST(MeshingPipeline, SameInputSameOutput) {
 }
 
 TEST(MeshingPipeline, HullBudgetFollowsTheTarget) {
-  squeeze::MeshOptions o;  // tets_per_hull 40, max_hulls 32
+  squeeze::meshing::MeshOptions o;  // tets_per_hull 40, max_hulls 32
   auto budget = [&](int target) {
     o.tetrahedralize.target_tets = target;
-    return squeeze::hull_budget(o);
+    return squeeze::meshing::hull_budget(o);
   };
   EXPECT_EQ(budget(10), 1);
   EXPECT_EQ(budget(150), 4);
@@ -332,7 +332,7 @@ TEST(MeshingPipeline, HullBudgetFollowsTheTarget) {
   o.tets_per_hull = 0;          // max_hulls alone
   EXPECT_EQ(budget(150), 32);
   o.tets_per_hull = -1;
-  EXPECT_THROW(squeeze::mesh_surface(box({0, 0, 0}, {1, 1, 1}), o), InputError);
+  EXPECT_THROW(squeeze::meshing::mesh_surface(box({0, 0, 0}, {1, 1, 1}), o), InputError);
 }
 
 TEST(MeshingQuality, InflateToCoverMovesTheBoundaryOutLocally) {
@@ -343,32 +343,32 @@ TEST(MeshingQuality, InflateToCoverMovesTheBoundaryOutLocally) {
   const int tets[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
   m.T.resize(6, 4);
   for (int t = 0; t < 6; ++t) m.T.row(t) << tets[t][0], tets[t][1], tets[t][2], tets[t][3];
-  squeeze::orient_positively(m);
+  squeeze::meshing::orient_positively(m);
   Eigen::MatrixX3d P(3, 3);
   P << 0.5, 0.5, 1.05,  // above the top face
       0.3, -0.04, 0.5,  // in front of the front face
       0.5, 0.5, 0.5;    // inside already
-  const double before = squeeze::tet_volumes(m).sum();
-  const int moves = squeeze::inflate_to_cover(m, P, 0.01, 10.0);
+  const double before = squeeze::meshing::tet_volumes(m).sum();
+  const int moves = squeeze::meshing::inflate_to_cover(m, P, 0.01, 10.0);
   EXPECT_GT(moves, 0);
-  const squeeze::TetLocator locator(m);
+  const squeeze::meshing::TetLocator locator(m);
   for (Eigen::Index i = 0; i < P.rows(); ++i) {
     double d = 0;
     locator.nearest(P.row(i), &d);
     EXPECT_LE(d, 0.01) << "point " << i << " still " << d << " outside";
   }
-  EXPECT_GT(squeeze::tet_volumes(m).minCoeff(), 0);
-  const double after = squeeze::tet_volumes(m).sum();
+  EXPECT_GT(squeeze::meshing::tet_volumes(m).minCoeff(), 0);
+  const double after = squeeze::meshing::tet_volumes(m).sum();
   EXPECT_GT(after, before);
   EXPECT_LT(after, 1.5 * before);  // local moves, not a blow-up
   // Nothing outside: nothing moves.
   const Eigen::MatrixX3d V = m.V;
-  EXPECT_EQ(squeeze::inflate_to_cover(m, P.bottomRows(1), 0.01, 10.0), 0);
+  EXPECT_EQ(squeeze::meshing::inflate_to_cover(m, P.bottomRows(1), 0.01, 10.0), 0);
   EXPECT_TRUE(m.V == V);
 }
 
 TEST(MeshingQuality, EdgeFiguresAreReported) {
-  const auto r = squeeze::mesh_surface(l_shape(), fast_options());
+  const auto r = squeeze::meshing::mesh_surface(l_shape(), fast_options());
   const TetFacts f = tet_facts(r.tets);
   EXPECT_NEAR(r.quality.min_edge, f.min_edge, 1e-12);
   EXPECT_NEAR(r.quality.mean_edge, f.mean_edge, 1e-9 * f.mean_edge);
@@ -382,7 +382,7 @@ TEST(MeshingPipeline, DegenerateInputIsAnInputError) {
   m.V << 1, 1, 1, 1, 1, 1, 1, 1, 1;
   m.F.resize(1, 3);
   m.F << 0, 1, 2;
-  EXPECT_THROW(squeeze::mesh_surface(m, fast_options()), InputError);
+  EXPECT_THROW(squeeze::meshing::mesh_surface(m, fast_options()), InputError);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -397,7 +397,7 @@ TetMesh kuhn_cube() {
   const int tets[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
   m.T.resize(6, 4);
   for (int t = 0; t < 6; ++t) m.T.row(t) << tets[t][0], tets[t][1], tets[t][2], tets[t][3];
-  squeeze::orient_positively(m);
+  squeeze::meshing::orient_positively(m);
   m.label.resize(6);
   m.label << 1, 2, 3, 3, 7, 12;
   return m;
@@ -410,9 +410,9 @@ TEST(MeshingTetIO, RoundTripsEveryFormat) {
   for (const std::string name : {"a.mesh", "a.msh", "a.vtk", "a.vtu", "a.node", "b.ele"}) {
     SCOPED_TRACE(name);
     const fs::path p = dir / name;
-    EXPECT_TRUE(squeeze::is_tet_format(p));
+    EXPECT_TRUE(squeeze::meshing::is_tet_format(p));
     try {
-      squeeze::save_tet_mesh(p, m);
+      squeeze::meshing::save_tet_mesh(p, m);
     } catch (const std::exception& e) {
       ADD_FAILURE() << name << ": save_tet_mesh threw " << e.what();
       continue;
@@ -427,7 +427,7 @@ TEST(MeshingTetIO, RoundTripsEveryFormat) {
     for (const fs::path& r : reads) {
       TetMesh back;
       try {
-        back = squeeze::load_tet_mesh(r);
+        back = squeeze::meshing::load_tet_mesh(r);
       } catch (const std::exception& e) {
         ADD_FAILURE() << r << ": load_tet_mesh threw " << e.what();
         continue;
@@ -445,12 +445,12 @@ TEST(MeshingTetIO, RoundTripsEveryFormat) {
 
 TEST(MeshingTetIO, RoundTripsAPipelineMesh) {
   TempDir dir("tetio2");
-  const auto r = squeeze::mesh_surface(l_shape(), fast_options());
+  const auto r = squeeze::meshing::mesh_surface(l_shape(), fast_options());
   for (const std::string name : {"l.mesh", "l.msh", "l.vtk", "l.vtu", "l.node"}) {
-    squeeze::save_tet_mesh(dir / name, r.tets);
+    squeeze::meshing::save_tet_mesh(dir / name, r.tets);
     TetMesh back;
     try {
-      back = squeeze::load_tet_mesh(dir / name);
+      back = squeeze::meshing::load_tet_mesh(dir / name);
     } catch (const std::exception& e) {
       ADD_FAILURE() << name << ": load_tet_mesh threw " << e.what();
       continue;
@@ -463,26 +463,26 @@ TEST(MeshingTetIO, RoundTripsAPipelineMesh) {
 TEST(MeshingTetIO, Errors) {
   TempDir dir("tetioerr");
   const TetMesh m = kuhn_cube();
-  EXPECT_FALSE(squeeze::is_tet_format("x.xyz"));
-  EXPECT_FALSE(squeeze::is_tet_format("x.off"));
-  EXPECT_THROW(squeeze::save_tet_mesh(dir / "x.xyz", m), InputError);
-  EXPECT_THROW(squeeze::save_tet_mesh(dir / "missing" / "x.mesh", m), InputError);
-  EXPECT_THROW(squeeze::load_tet_mesh(dir / "none.mesh"), InputError);
+  EXPECT_FALSE(squeeze::meshing::is_tet_format("x.xyz"));
+  EXPECT_FALSE(squeeze::meshing::is_tet_format("x.off"));
+  EXPECT_THROW(squeeze::meshing::save_tet_mesh(dir / "x.xyz", m), InputError);
+  EXPECT_THROW(squeeze::meshing::save_tet_mesh(dir / "missing" / "x.mesh", m), InputError);
+  EXPECT_THROW(squeeze::meshing::load_tet_mesh(dir / "none.mesh"), InputError);
   {
     std::ofstream(dir / "bad.mesh") << "MeshVersionFormatted 1\nDimension 3\nVertices\n2\n0 0 0 0\n1 1 1 0\n"
                                        "Tetrahedra\n1\n1 2 3 4 1\nEnd\n";
   }
-  EXPECT_THROW(squeeze::load_tet_mesh(dir / "bad.mesh"), InputError);  // index out of range
+  EXPECT_THROW(squeeze::meshing::load_tet_mesh(dir / "bad.mesh"), InputError);  // index out of range
   {
     std::ofstream(dir / "nan.mesh") << "MeshVersionFormatted 1\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n"
                                        "0 nan 0 0\n0 0 1 0\nTetrahedra\n1\n1 2 3 4 1\nEnd\n";
   }
-  EXPECT_THROW(squeeze::load_tet_mesh(dir / "nan.mesh"), InputError);
+  EXPECT_THROW(squeeze::meshing::load_tet_mesh(dir / "nan.mesh"), InputError);
   {
     std::ofstream(dir / "notets.msh") << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n"
                                          "$Elements\n0\n$EndElements\n";
   }
-  EXPECT_THROW(squeeze::load_tet_mesh(dir / "notets.msh"), InputError);
+  EXPECT_THROW(squeeze::meshing::load_tet_mesh(dir / "notets.msh"), InputError);
   EXPECT_TRUE(temporaries_in(dir.path()).empty());
 }
 
@@ -512,50 +512,50 @@ SurfaceMesh hemisphere(int rings = 12, int sectors = 32) {
 
 TEST(MeshingWindingNumber, OneInsideZeroOutsideClosedMesh) {
   const SurfaceMesh s = read_off(data("sphere.off"));
-  const SurfaceMesh m{s.V, squeeze::orient_outward(s.V, s.F)};
+  const SurfaceMesh m{s.V, squeeze::meshing::orient_outward(s.V, s.F)};
   // The fast (dipole) evaluation: "error below 1e-2 for beta = 2 on our corpus" (winding_number.h).
-  const squeeze::FastWindingNumber fast(m.V, m.F);
+  const squeeze::meshing::FastWindingNumber fast(m.V, m.F);
   for (const Eigen::RowVector3d& p : {Eigen::RowVector3d(0, 0, 0), Eigen::RowVector3d(0.2, -0.1, 0.3),
                                      Eigen::RowVector3d(-0.4, 0, 0)}) {
-    EXPECT_NEAR(squeeze::winding_number(m.V, m.F, p), 1.0, 1e-9) << p;
+    EXPECT_NEAR(squeeze::meshing::winding_number(m.V, m.F, p), 1.0, 1e-9) << p;
     EXPECT_NEAR(fast(p), 1.0, 1e-2) << p;
   }
   for (const Eigen::RowVector3d& p : {Eigen::RowVector3d(2, 0, 0), Eigen::RowVector3d(0.6, 0.6, 0),
                                      Eigen::RowVector3d(0, 0, -50), Eigen::RowVector3d(1e4, 1e4, 1e4)}) {
-    EXPECT_NEAR(squeeze::winding_number(m.V, m.F, p), 0.0, 1e-9) << p;
+    EXPECT_NEAR(squeeze::meshing::winding_number(m.V, m.F, p), 0.0, 1e-9) << p;
     EXPECT_NEAR(fast(p), 0.0, 1e-2) << p;
   }
   // Inverted orientation: -1 inside.
   Eigen::MatrixX3i flipped = m.F;
   flipped.col(1).swap(flipped.col(2));
-  EXPECT_NEAR(squeeze::winding_number(m.V, flipped, Eigen::RowVector3d(0, 0, 0)), -1.0, 1e-9);
+  EXPECT_NEAR(squeeze::meshing::winding_number(m.V, flipped, Eigen::RowVector3d(0, 0, 0)), -1.0, 1e-9);
 }
 
 TEST(MeshingWindingNumber, BoxWithManyQueries) {
   const SurfaceMesh m = l_shape();
-  const squeeze::FastWindingNumber fast(m.V, m.F);
+  const squeeze::meshing::FastWindingNumber fast(m.V, m.F);
   EXPECT_NEAR(fast(Eigen::RowVector3d(0.5, 2.5, 0.5)), 1.0, 1e-2);
   EXPECT_NEAR(fast(Eigen::RowVector3d(2.5, 0.5, 0.5)), 1.0, 1e-2);
   EXPECT_NEAR(fast(Eigen::RowVector3d(1.5, 1.5, 0.5)), 0.0, 1e-2);  // in the notch
-  EXPECT_NEAR(squeeze::winding_number(m.V, m.F, Eigen::RowVector3d(1.5, 1.5, 0.5)), 0.0, 1e-9);
+  EXPECT_NEAR(squeeze::meshing::winding_number(m.V, m.F, Eigen::RowVector3d(1.5, 1.5, 0.5)), 0.0, 1e-9);
 }
 
 TEST(MeshingWindingNumber, HalfOnTheRimOfAnOpenHemisphere) {
   const SurfaceMesh h = hemisphere();
-  const squeeze::FastWindingNumber fast(h.V, h.F);
+  const squeeze::meshing::FastWindingNumber fast(h.V, h.F);
   // Centre of the opening (in the plane of the rim): the cap subtends exactly half the sphere.
-  const double sign = squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 0.5)) > 0 ? 1 : -1;
-  EXPECT_NEAR(sign * squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 0)), 0.5, 1e-9);
+  const double sign = squeeze::meshing::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 0.5)) > 0 ? 1 : -1;
+  EXPECT_NEAR(sign * squeeze::meshing::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 0)), 0.5, 1e-9);
   EXPECT_NEAR(sign * fast(Eigen::RowVector3d(0, 0, 0)), 0.5, 1e-2);
   // Points of the rim's disc away from the centre are ~0.5 too.
   for (const Eigen::RowVector3d& p : {Eigen::RowVector3d(0.5, 0, 0), Eigen::RowVector3d(0, -0.7, 0)}) {
-    EXPECT_NEAR(sign * squeeze::winding_number(h.V, h.F, p), 0.5, 1e-9) << p;
+    EXPECT_NEAR(sign * squeeze::meshing::winding_number(h.V, h.F, p), 0.5, 1e-9) << p;
     EXPECT_NEAR(sign * fast(p), 0.5, 1e-2) << p;
   }
   // Inside the dome it is more, below the opening less, far away 0.
-  EXPECT_GT(sign * squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 0.5)), 0.6);
-  EXPECT_LT(sign * squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, -0.5)), 0.4);
-  EXPECT_NEAR(squeeze::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 10)), 0.0, 2e-2);
+  EXPECT_GT(sign * squeeze::meshing::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 0.5)), 0.6);
+  EXPECT_LT(sign * squeeze::meshing::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, -0.5)), 0.4);
+  EXPECT_NEAR(squeeze::meshing::winding_number(h.V, h.F, Eigen::RowVector3d(0, 0, 10)), 0.0, 2e-2);
   // The orientation our construction chose (normals outward, away from the centre) gives +.
   EXPECT_EQ(sign, 1.0);
 }
@@ -565,19 +565,19 @@ TEST(MeshingWindingNumber, HalfOnTheRimOfAnOpenHemisphere) {
 
 TEST(MeshingOrientation, FixesFlippedFaces) {
   const SurfaceMesh s = read_off(data("sphere.off"));
-  const SurfaceMesh good{s.V, squeeze::orient_outward(s.V, s.F)};
+  const SurfaceMesh good{s.V, squeeze::meshing::orient_outward(s.V, s.F)};
   const double volume = signed_volume(good);
   ASSERT_GT(volume, 0.4);  // icosphere of radius 0.5: a bit under 4/3 pi / 8 = 0.5236
   Eigen::MatrixX3i bad = good.F;
   for (Eigen::Index f = 0; f < bad.rows(); f += 2) std::swap(bad(f, 1), bad(f, 2));
   ASSERT_GT(inconsistent_edges(bad), 0);
-  const SurfaceMesh fixed{s.V, squeeze::orient_outward(s.V, bad)};
+  const SurfaceMesh fixed{s.V, squeeze::meshing::orient_outward(s.V, bad)};
   EXPECT_EQ(inconsistent_edges(fixed.F), 0);
   EXPECT_NEAR(signed_volume(fixed), volume, 1e-12);
   // Every face entirely flipped: turned outward.
   Eigen::MatrixX3i inverted = good.F;
   inverted.col(1).swap(inverted.col(2));
-  EXPECT_NEAR(signed_volume({s.V, squeeze::orient_outward(s.V, inverted)}), volume, 1e-12);
+  EXPECT_NEAR(signed_volume({s.V, squeeze::meshing::orient_outward(s.V, inverted)}), volume, 1e-12);
 }
 
 TEST(MeshingOrientation, EachComponentOnItsOwn) {
@@ -586,29 +586,29 @@ TEST(MeshingOrientation, EachComponentOnItsOwn) {
   b.F.col(1).swap(b.F.col(2));  // b inside out
   for (Eigen::Index f = 1; f < a.F.rows(); f += 3) std::swap(a.F(f, 0), a.F(f, 1));  // a partly flipped
   const SurfaceMesh m = concat(a, b);
-  const SurfaceMesh fixed{m.V, squeeze::orient_outward(m.V, m.F)};
+  const SurfaceMesh fixed{m.V, squeeze::meshing::orient_outward(m.V, m.F)};
   EXPECT_EQ(inconsistent_edges(fixed.F), 0);
   EXPECT_NEAR(signed_volume(fixed), 1.0 + 5.0, 1e-9);
-  EXPECT_NEAR(squeeze::winding_number(fixed.V, fixed.F, Eigen::RowVector3d(0.5, 0.5, 0.5)), 1.0, 1e-9);
-  EXPECT_NEAR(squeeze::winding_number(fixed.V, fixed.F, Eigen::RowVector3d(5.5, 2.5, 0.5)), 1.0, 1e-9);
+  EXPECT_NEAR(squeeze::meshing::winding_number(fixed.V, fixed.F, Eigen::RowVector3d(0.5, 0.5, 0.5)), 1.0, 1e-9);
+  EXPECT_NEAR(squeeze::meshing::winding_number(fixed.V, fixed.F, Eigen::RowVector3d(5.5, 2.5, 0.5)), 1.0, 1e-9);
 }
 
 TEST(MeshingAnalysis, ClosedOpenComponents) {
   SurfaceMesh l = l_shape();
   l.V.col(2).array() += 3;
   const SurfaceMesh two = concat(box({0, 0, 0}, {1, 1, 1}), l);
-  auto info = squeeze::analyse_surface(two);
+  auto info = squeeze::meshing::analyse_surface(two);
   EXPECT_EQ(info.components, 2);
   EXPECT_TRUE(info.closed);
   EXPECT_EQ(info.boundary_edges, 0);
   EXPECT_NEAR(info.volume, 6.0, 1e-9);
-  EXPECT_FALSE(squeeze::does_self_intersect(two));
+  EXPECT_FALSE(squeeze::meshing::does_self_intersect(two));
   const SurfaceMesh h = hemisphere();
-  info = squeeze::analyse_surface(h);
+  info = squeeze::meshing::analyse_surface(h);
   EXPECT_FALSE(info.closed);
   EXPECT_EQ(info.boundary_edges, 32);
   // Two overlapping boxes intersect each other.
-  EXPECT_TRUE(squeeze::does_self_intersect(concat(box({0, 0, 0}, {1, 1, 1}), box({0.5, 0.5, 0.5}, {2, 2, 2}))));
+  EXPECT_TRUE(squeeze::meshing::does_self_intersect(concat(box({0, 0, 0}, {1, 1, 1}), box({0.5, 0.5, 0.5}, {2, 2, 2}))));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -619,8 +619,8 @@ TEST(MeshingSurfaceIO, RoundTripsThroughAssimpFormats) {
   const SurfaceMesh s = read_off(data("elephant.off"));
   for (const std::string name : {"e.off", "e.obj", "e.ply", "e.stl", "e.glb", "e.gltf"}) {
     SCOPED_TRACE(name);
-    squeeze::save_surface(dir / name, s);
-    const SurfaceMesh back = squeeze::load_surface(dir / name);
+    squeeze::meshing::save_surface(dir / name, s);
+    const SurfaceMesh back = squeeze::meshing::load_surface(dir / name);
     EXPECT_EQ(back.F.rows(), s.F.rows()) << name;
     EXPECT_EQ(back.V.rows(), s.V.rows()) << name;  // welded back to the shared vertices
     if (back.V.rows() == s.V.rows()) {
@@ -642,7 +642,7 @@ TEST(MeshingSurfaceIO, RoundTripsThroughAssimpFormats) {
   // Only the files asked for (and no temporary, no side file with a temporary name).
   const auto tmp = temporaries_in(dir.path());
   EXPECT_TRUE(tmp.empty()) << "left behind: " << (tmp.empty() ? "" : tmp.front());
-  EXPECT_THROW(squeeze::save_surface(dir / "e.nosuchformat", s), InputError);
+  EXPECT_THROW(squeeze::meshing::save_surface(dir / "e.nosuchformat", s), InputError);
 }
 
 TEST(MeshingSurfaceIO, BadFilesAreInputErrors) {
@@ -653,7 +653,7 @@ TEST(MeshingSurfaceIO, BadFilesAreInputErrors) {
   };
   auto expect_error = [&](const fs::path& p, const std::string& what) {
     try {
-      squeeze::load_surface(p);
+      squeeze::meshing::load_surface(p);
       ADD_FAILURE() << what << ": no error for " << p;
     } catch (const InputError& e) {
       const std::string msg = e.what();

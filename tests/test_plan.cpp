@@ -20,6 +20,7 @@
 
 namespace fs = std::filesystem;
 using namespace squeeze;
+using namespace squeeze::meshing;
 using namespace squeeze::plan;
 
 namespace {

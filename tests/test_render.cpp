@@ -116,7 +116,7 @@ fs::path write_trajectory(const fs::path& scene_file, const fs::path& dir, int f
   int offset = 0;
   for (size_t b = 0; b < scene.objects.size(); ++b) {
     const std::string rest = "rest/" + scene.objects[b].name + ".mesh";
-    squeeze::save_tet_mesh(traj / rest, w.meshes[b]);
+    squeeze::meshing::save_tet_mesh(traj / rest, w.meshes[b]);
     index["objects"].push_back({{"name", scene.objects[b].name},
                                 {"role", scene.objects[b].robot ? "robot" : "obstacle"},
                                 {"kind", scene.objects[b].rigid ? "rigid" : "deformable"},
@@ -328,7 +328,7 @@ TEST_F(RenderTest, SyntheticTrajectoryFramesPlotAndExports) {
   std::memcpy(&points, pc2.data() + 16, 4);
   std::memcpy(&samples, pc2.data() + 28, 4);
   EXPECT_EQ(samples, 11);
-  const squeeze::SurfaceMesh rest = read_off(data("sphere.off"));
+  const squeeze::meshing::SurfaceMesh rest = read_off(data("sphere.off"));
   ASSERT_EQ(points, rest.V.rows());
   ASSERT_EQ(pc2.size(), 32u + size_t(points) * 3 * 4 * 11);
   // World rest positions: transform of sphere.off (scale 0.1, +0.35 y).
@@ -347,8 +347,8 @@ TEST_F(RenderTest, SyntheticTrajectoryFramesPlotAndExports) {
                         "export/obj/box_00010.obj", "export/ply/ball_00005.ply", "export/vtu/ball_00010.vtu",
                         "export/ball.pvd", "export/box.pvd"})
     EXPECT_TRUE(fs::exists(o.output / f)) << f;
-  const squeeze::TetMesh v10 = squeeze::load_tet_mesh(o.output / "export" / "vtu" / "ball_00010.vtu");
-  const squeeze::TetMesh r0 = squeeze::load_tet_mesh(traj / "trajectory" / "rest" / "ball.mesh");
+  const squeeze::meshing::TetMesh v10 = squeeze::meshing::load_tet_mesh(o.output / "export" / "vtu" / "ball_00010.vtu");
+  const squeeze::meshing::TetMesh r0 = squeeze::meshing::load_tet_mesh(traj / "trajectory" / "rest" / "ball.mesh");
   EXPECT_LT((v10.V - squash(10, r0.V)).cwiseAbs().maxCoeff(), 1e-9);
   const std::string pvd = read_text(o.output / "export" / "ball.pvd");
   EXPECT_NE(pvd.find("timestep=\"1\" group=\"\" part=\"0\" file=\"vtu/ball_00010.vtu\""), std::string::npos);

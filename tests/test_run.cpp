@@ -16,6 +16,7 @@
 
 namespace fs = std::filesystem;
 using namespace squeeze;
+using namespace squeeze::meshing;
 
 namespace {
 

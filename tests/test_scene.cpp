@@ -203,9 +203,9 @@ TEST_F(SceneTest, MeshWithTinyTetsGetsAUsableAutomaticStep) {
   // A 20 cm cube whose cells shrink towards its centre (p ← p |p|∞², 6 cells per axis): the central
   // tets are 9 times smaller (edge length) than the outer ones, like the small tets of meshed
   // surfaces. Uniform stiffnesses (volume_weighted false, no mass scaling) collapse the step.
-  squeeze::TetMesh m = box_tet_mesh(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1), Eigen::Vector3i::Constant(6));
+  squeeze::meshing::TetMesh m = box_tet_mesh(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1), Eigen::Vector3i::Constant(6));
   for (Eigen::Index v = 0; v < m.V.rows(); ++v) m.V.row(v) *= 0.1 * std::pow(m.V.row(v).cwiseAbs().maxCoeff(), 2);
-  squeeze::save_tet_mesh(dir_->path() / "graded.mesh", m);
+  squeeze::meshing::save_tet_mesh(dir_->path() / "graded.mesh", m);
   auto scene = [&](const std::string& head, const std::string& material) {
     return write("graded.json", "{" + head + R"("objects": [{"name": "g", "mesh": "graded.mesh", "transform": {"translate": [0, 0.15, 0]},
       "material": )" + material + "}]}");
@@ -244,10 +244,10 @@ TEST_F(SceneTest, MeshWithTinyTetsGetsAUsableAutomaticStep) {
 TEST_F(SceneTest, SurfaceMeshesAreMeshedOnceAndCached) {
   const fs::path off = kAssets / "cube.off";
   bool hit = true;
-  const squeeze::TetMesh m1 = object_tet_mesh(off, 200, &hit);
+  const squeeze::meshing::TetMesh m1 = object_tet_mesh(off, 200, &hit);
   EXPECT_FALSE(hit);
   EXPECT_GT(m1.T.rows(), 20);
-  const squeeze::TetMesh m2 = object_tet_mesh(off, 200, &hit);
+  const squeeze::meshing::TetMesh m2 = object_tet_mesh(off, 200, &hit);
   EXPECT_TRUE(hit);
   EXPECT_EQ(m1.V, m2.V);
   EXPECT_EQ(m1.T, m2.T);
@@ -307,7 +307,7 @@ TEST_F(SceneTest, SimulateCubeDropEndToEnd) {
   ASSERT_EQ(index["objects"].size(), 1u);
   const auto& o = index["objects"][0];
   EXPECT_EQ(o["name"], "cube");
-  const squeeze::TetMesh rest = squeeze::load_tet_mesh(out / "trajectory" / o["rest_mesh"].get<std::string>());
+  const squeeze::meshing::TetMesh rest = squeeze::meshing::load_tet_mesh(out / "trajectory" / o["rest_mesh"].get<std::string>());
   EXPECT_EQ(rest.V.rows(), o["vertices"].get<int>());
   EXPECT_EQ(rest.T.rows(), o["tets"].get<int>());
   for (int f = 0; f < 31; ++f) {

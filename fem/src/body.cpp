@@ -38,7 +38,7 @@ void build_csr(int n, const std::vector<std::pair<int, int>>& pairs, std::vector
 
 }  // namespace
 
-Body::Body(const TetMesh& mesh, const Material& mat, bool is_rigid, const Eigen::Affine3d& transform)
+Body::Body(const meshing::TetMesh& mesh, const Material& mat, bool is_rigid, const Eigen::Affine3d& transform)
     : rigid(is_rigid), material(mat) {
   const int nv = static_cast<int>(mesh.V.rows()), nt = static_cast<int>(mesh.T.rows());
   if (nt == 0) throw InputError("fem body: the mesh has no tetrahedron");
@@ -260,10 +260,10 @@ double volume(const Body& body, const Eigen::Ref<const RowMatrixX3d>& X) {
   return v;
 }
 
-TetMesh box_tet_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3i& n) {
+meshing::TetMesh box_tet_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3i& n) {
   if (n.minCoeff() < 1) throw InputError("box_tet_mesh: cell counts must be >= 1");
   if (!((hi - lo).minCoeff() > 0)) throw InputError("box_tet_mesh: lo must be below hi on every axis");
-  TetMesh m;
+  meshing::TetMesh m;
   const int nx = n[0] + 1, ny = n[1] + 1, nz = n[2] + 1;
   m.V.resize(nx * ny * nz, 3);
   auto id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };
@@ -297,11 +297,11 @@ TetMesh box_tet_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const
   return m;
 }
 
-TetMesh ball_tet_mesh(double radius, int n) {
+meshing::TetMesh ball_tet_mesh(double radius, int n) {
   if (!(radius > 0)) throw InputError("ball_tet_mesh: radius must be > 0");
-  TetMesh box = box_tet_mesh(Eigen::Vector3d::Constant(-radius), Eigen::Vector3d::Constant(radius),
+  meshing::TetMesh box = box_tet_mesh(Eigen::Vector3d::Constant(-radius), Eigen::Vector3d::Constant(radius),
                              Eigen::Vector3i::Constant(n));
-  TetMesh m;
+  meshing::TetMesh m;
   m.V = box.V;
   std::vector<int> keep;
   for (int c = 0; c < box.T.rows() / 6; ++c) {  // 6 consecutive tets per cell
@@ -314,7 +314,7 @@ TetMesh ball_tet_mesh(double radius, int n) {
   if (keep.empty()) throw InputError("ball_tet_mesh: n must be >= 1");
   m.T.resize(static_cast<Eigen::Index>(keep.size()), 4);
   for (size_t r = 0; r < keep.size(); ++r) m.T.row(r) = box.T.row(keep[r]);
-  remove_unused_vertices(m);
+  meshing::remove_unused_vertices(m);
   return m;
 }
 

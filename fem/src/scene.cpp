@@ -245,16 +245,16 @@ fs::path mesh_cache_dir() {
   return {};
 }
 
-TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progress* progress) {
+meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progress* progress) {
   if (cache_hit) *cache_hit = false;
-  if (is_tet_mesh_file(mesh)) return load_tet_mesh(mesh);
-  MeshOptions options;
+  if (is_tet_mesh_file(mesh)) return meshing::load_tet_mesh(mesh);
+  meshing::MeshOptions options;
   options.tetrahedralize.target_tets = tets;
   options.check_self_intersection = false;
   // The cache key: format version, the input's extension and bytes, every meshing option.
   const std::string bytes = read_file_bytes(mesh);
   std::ostringstream opt;
-  opt << std::setprecision(17) << "squeeze-mesh-cache-v1|algorithm " << kMeshingAlgorithmVersion << "|" << mesh.extension().string() << '|'
+  opt << std::setprecision(17) << "squeeze-mesh-cache-v1|algorithm " << meshing::kMeshingAlgorithmVersion << "|" << mesh.extension().string() << '|'
       << options.decomposition.concavity << ',' << options.decomposition.max_hulls << ','
       << options.decomposition.max_hull_volume_ratio << ',' << options.decomposition.voxel_resolution << ','
       << options.decomposition.cut_samples << ',' << options.decomposition.flat_thickness << '|'
@@ -270,7 +270,7 @@ TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progres
   std::error_code ec;
   if (!cached.empty() && fs::is_regular_file(cached, ec)) {
     try {
-      TetMesh m = load_tet_mesh(cached);
+      meshing::TetMesh m = meshing::load_tet_mesh(cached);
       if (cache_hit) *cache_hit = true;
       return m;
     } catch (const InputError&) {
@@ -278,12 +278,12 @@ TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progres
     }
   }
   if (progress) progress->stage("meshing " + mesh.filename().string());
-  MeshResult r = mesh_file(mesh, options, nullptr);
+  meshing::MeshResult r = meshing::mesh_file(mesh, options, nullptr);
   if (progress) progress->finish();
   if (!cached.empty()) {
     fs::create_directories(cached.parent_path(), ec);
     try {
-      if (!ec) save_tet_mesh(cached, r.tets);  // atomic: through a temporary file renamed at the end
+      if (!ec) meshing::save_tet_mesh(cached, r.tets);  // atomic: through a temporary file renamed at the end
     } catch (const InputError&) {
       // An unwritable cache only costs time.
     }
@@ -327,12 +327,12 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
   wo.cap_contact_stiffness = true;  // contact never sets the stable step
   wo.h = scene.time_step.value_or(1e-3);
   World world(wo);
-  std::vector<TetMesh> meshes;
+  std::vector<meshing::TetMesh> meshes;
   std::vector<double> rest_volume;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const SceneObject& o = scene.objects[i];
     const std::string p = "objects[" + std::to_string(i) + "]";
-    TetMesh m;
+    meshing::TetMesh m;
     try {
       m = object_tet_mesh(o.mesh, o.tets, nullptr, progress);
     } catch (const InputError& e) {
@@ -373,7 +373,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
       mat.damping_volume = tau * mat.k_volume;
     }
     body->set_material(mat);
-    TetMesh rest;
+    meshing::TetMesh rest;
     rest.V = body->rest;
     rest.T = body->T;
     rest.label = m.label;
@@ -411,7 +411,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     sw.bounds = *scene.bounds;
   } else {
     Eigen::AlignedBox3d box;
-    for (const TetMesh& m : sw.meshes)
+    for (const meshing::TetMesh& m : sw.meshes)
       for (Eigen::Index v = 0; v < m.V.rows(); ++v) box.extend(Eigen::Vector3d(m.V.row(v).transpose()));
     if (scene.floor && *scene.floor < box.max().y()) box.extend(Eigen::Vector3d(box.min().x(), *scene.floor, box.min().z()));
     const double margin = 0.5 * box.sizes().maxCoeff();

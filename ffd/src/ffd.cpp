@@ -16,7 +16,7 @@
 #include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/tet_quality.h"
 
-namespace squeeze {
+namespace squeeze::ffd {
 
 namespace {
 
@@ -24,7 +24,7 @@ using Vec3 = Eigen::Vector3d;
 
 // Barycentric coordinates of p in tetrahedron t, solved by LU and polished by `steps` rounds of
 // iterative refinement against the residual of the very sum replay() evaluates (w0·v0 + ... + w3·v3).
-Eigen::Vector4d barycentric(const TetMesh& m, int t, const Vec3& p, int steps) {
+Eigen::Vector4d barycentric(const meshing::TetMesh& m, int t, const Vec3& p, int steps) {
   const Vec3 v0 = m.V.row(m.T(t, 0)).transpose(), v1 = m.V.row(m.T(t, 1)).transpose(),
              v2 = m.V.row(m.T(t, 2)).transpose(), v3 = m.V.row(m.T(t, 3)).transpose();
   Eigen::Matrix3d M;
@@ -45,7 +45,7 @@ constexpr Eigen::Index kReplayGrain = 16384;  // vertices per task: ~1 MB of bin
 
 }  // namespace
 
-Binding bind_surface(const Eigen::MatrixX3d& V, const TetMesh& rest, const BindOptions& options, Progress* progress,
+Binding bind_surface(const Eigen::MatrixX3d& V, const meshing::TetMesh& rest, const BindOptions& options, Progress* progress,
              const std::string& name) {
   const Eigen::Index n = V.rows();
   if (n == 0) throw InputError(name + ": has no vertices");
@@ -65,7 +65,7 @@ Binding bind_surface(const Eigen::MatrixX3d& V, const TetMesh& rest, const BindO
   std::vector<double> distance(static_cast<size_t>(n), 0.0);
   std::vector<char> outside(static_cast<size_t>(n), 0);
 
-  const TetLocator locator(rest);
+  const meshing::TetLocator locator(rest);
   if (progress) progress->stage("binding", static_cast<double>(n));
   std::atomic<Eigen::Index> done{0};
   // Each vertex's result depends on that vertex only, so any partition gives the same binding.
@@ -93,7 +93,7 @@ Binding bind_surface(const Eigen::MatrixX3d& V, const TetMesh& rest, const BindO
       b.max_outside_distance = std::max(b.max_outside_distance, distance[static_cast<size_t>(i)]);
     }
   }
-  const double diagonal = bounding_box_diagonal(V);
+  const double diagonal = meshing::bounding_box_diagonal(V);
   if (b.max_outside_distance > options.max_outside * diagonal)
     throw InputError(name + ": " + std::to_string(b.outside) + " vertices lie outside the tetrahedral mesh, up to " +
                      std::to_string(b.max_outside_distance / diagonal) + " of the diagonal from it (limit " +
@@ -177,7 +177,7 @@ Eigen::MatrixX3d vertex_normals(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
   return N;
 }
 
-void check_same_connectivity(const TetMesh& rest, const TetMesh& deformed, const std::string& rest_name,
+void check_same_connectivity(const meshing::TetMesh& rest, const meshing::TetMesh& deformed, const std::string& rest_name,
                              const std::string& deformed_name) {
   if (rest.V.rows() != deformed.V.rows() || rest.T.rows() != deformed.T.rows())
     throw InputError(deformed_name + ": not a deformation of " + rest_name + ": " +
@@ -195,4 +195,4 @@ void check_same_connectivity(const TetMesh& rest, const TetMesh& deformed, const
     }
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::ffd

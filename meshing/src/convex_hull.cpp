@@ -13,7 +13,7 @@
 
 #include "squeeze/meshing/surface_analysis.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
@@ -236,4 +236,4 @@ bool does_self_intersect(const SurfaceMesh& mesh) {
   return found;
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -20,7 +20,7 @@
 #include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/winding_number.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 namespace {
 
 using Vec3 = Eigen::Vector3d;
@@ -783,4 +783,4 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
   return result;
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -10,7 +10,7 @@
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/surface_io.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 namespace {
 
 class StageTimer {
@@ -178,4 +178,4 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
       {"seconds", seconds}};
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -1,6 +1,6 @@
 #include "squeeze/meshing/surface.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 
 void bounding_box(const Eigen::MatrixX3d& V, Eigen::RowVector3d& lo, Eigen::RowVector3d& hi) {
   lo = V.colwise().minCoeff();
@@ -12,4 +12,4 @@ double bounding_box_diagonal(const Eigen::MatrixX3d& V) {
   return (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -5,7 +5,7 @@
 #include <queue>
 #include <vector>
 
-namespace squeeze {
+namespace squeeze::meshing {
 namespace {
 
 struct HalfEdge {
@@ -149,4 +149,4 @@ SurfaceInfo analyse_surface(const SurfaceMesh& mesh) {
   return info;
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -18,7 +18,7 @@
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 namespace fs = std::filesystem;
 
 namespace {
@@ -380,4 +380,4 @@ bool is_surface_format(const fs::path& path) {
   return ext == "off" || ext == "obj" || !assimp_format_id(ext).empty();
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

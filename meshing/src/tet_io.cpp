@@ -12,7 +12,7 @@
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 namespace fs = std::filesystem;
 
 namespace {
@@ -485,4 +485,4 @@ TetMesh load_tet_mesh(const fs::path& path) {
                    "' (use .mesh, .msh, .vtk, .vtu or .node/.ele)");
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -10,7 +10,7 @@
 
 #include <tbb/parallel_for.h>
 
-namespace squeeze {
+namespace squeeze::meshing {
 namespace {
 
 using Vec3 = Eigen::Vector3d;
@@ -515,4 +515,4 @@ int TetLocator::nearest(const Eigen::RowVector3d& p, double* distance) const {
   return best;
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

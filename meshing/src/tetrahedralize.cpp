@@ -27,7 +27,7 @@
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/tet_quality.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 namespace {
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -336,4 +336,4 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
   return best;
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numeric>
 
-namespace squeeze {
+namespace squeeze::meshing {
 namespace {
 
 using Vec3 = Eigen::Vector3d;
@@ -136,4 +136,4 @@ double FastWindingNumber::operator()(const Eigen::RowVector3d& p) const {
   return impl_->eval(p.transpose(), 0);
 }
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

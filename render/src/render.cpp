@@ -160,7 +160,7 @@ struct Object {
   bool rigid = false;
   bool direct = false;      // the scene mesh is a tet mesh: its boundary is drawn, no FFD
   bool closed = false;      // closed and oriented outwards: back faces culled
-  Binding binding;          // surface -> coarse mesh (when !direct)
+  ffd::Binding binding;          // surface -> coarse mesh (when !direct)
   Eigen::MatrixX3d rest;    // high-res surface vertices at rest (world, m)
   Eigen::MatrixX3i F;       // its triangles
   Eigen::MatrixX4i T;       // coarse tets
@@ -271,25 +271,25 @@ RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
     ob.rigid = so.rigid;
     ob.offset = traj.objects[i].offset;
     ob.vertices = traj.objects[i].vertices;
-    const TetMesh rest = traj.rest_mesh(static_cast<int>(i));
+    const meshing::TetMesh rest = traj.rest_mesh(static_cast<int>(i));
     ob.T = rest.T;
     const Eigen::MatrixX3i coarse_faces = boundary_faces(rest.T);
     ob.coarse_edges = unique_edges(coarse_faces);
-    ob.direct = is_tet_format(so.mesh);
+    ob.direct = meshing::is_tet_format(so.mesh);
     if (ob.direct) {
       ob.rest = rest.V;
       ob.F = coarse_faces;
     } else {
       if (progress) progress->stage("loading " + so.name);
-      LoadOptions lo;
+      meshing::LoadOptions lo;
       lo.keep_order = true;
-      SurfaceMesh s = load_surface(so.mesh, lo);
+      meshing::SurfaceMesh s = meshing::load_surface(so.mesh, lo);
       const Eigen::Affine3d A = so.transform.affine();
       for (Eigen::Index v = 0; v < s.V.rows(); ++v) s.V.row(v) = (A * Eigen::Vector3d(s.V.row(v).transpose())).transpose();
       if (A.linear().determinant() < 0) s.F.col(1).swap(s.F.col(2));  // a mirroring transform keeps outward faces
       ob.rest = std::move(s.V);
       ob.F = std::move(s.F);
-      ob.binding = bind_surface(ob.rest, rest, BindOptions{}, progress, so.mesh.filename().string());
+      ob.binding = ffd::bind_surface(ob.rest, rest, ffd::BindOptions{}, progress, so.mesh.filename().string());
     }
     // A closed, consistently oriented surface is drawn with back faces culled; turned outwards first.
     ob.closed = is_closed_oriented(ob.F);
@@ -386,8 +386,8 @@ RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
   std::vector<std::unique_ptr<Pc2Writer>> pc2(objects.size());
   if (o.pc2)
     for (size_t b = 0; b < objects.size(); ++b) {
-      SurfaceMesh rest{objects[b].rest, objects[b].F};
-      save_surface(exp / (objects[b].name + ".obj"), rest);
+      meshing::SurfaceMesh rest{objects[b].rest, objects[b].F};
+      meshing::save_surface(exp / (objects[b].name + ".obj"), rest);
       pc2[b] = std::make_unique<Pc2Writer>(exp / (objects[b].name + ".pc2"), static_cast<int>(objects[b].rest.rows()),
                                            count, static_cast<float>(first), 1.0f);
     }
@@ -434,10 +434,10 @@ RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
       if (ob.draw_source.size()) {
         ob.drawn.resize(ob.draw_source.size(), 3);
         for (Eigen::Index i = 0; i < ob.draw_source.size(); ++i) ob.drawn.row(i) = ob.surface.row(ob.draw_source(i));
-        ob.normals = vertex_normals(ob.drawn, ob.draw_F);
+        ob.normals = ffd::vertex_normals(ob.drawn, ob.draw_F);
         renderer.update_mesh(ob.mesh_id, ob.drawn, ob.normals);
       } else {
-        ob.normals = vertex_normals(ob.surface, ob.draw_F);
+        ob.normals = ffd::vertex_normals(ob.surface, ob.draw_F);
         renderer.update_mesh(ob.mesh_id, ob.surface, ob.normals);
       }
       if (ob.lines_id >= 0) renderer.update_lines(ob.lines_id, ob.coarse);
@@ -455,16 +455,16 @@ RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
       Object& ob = objects[b];
       if (pc2[b]) pc2[b]->append(ob.surface);
       if (o.obj || o.ply) {
-        SurfaceMesh m{ob.surface, ob.F};
-        if (o.obj) save_surface(exp / "obj" / frame_name((ob.name + "_").c_str(), k, ".obj"), m);
-        if (o.ply) save_surface(exp / "ply" / frame_name((ob.name + "_").c_str(), k, ".ply"), m);
+        meshing::SurfaceMesh m{ob.surface, ob.F};
+        if (o.obj) meshing::save_surface(exp / "obj" / frame_name((ob.name + "_").c_str(), k, ".obj"), m);
+        if (o.ply) meshing::save_surface(exp / "ply" / frame_name((ob.name + "_").c_str(), k, ".ply"), m);
       }
       if (o.vtu) {
-        TetMesh tm;
+        meshing::TetMesh tm;
         tm.V = ob.coarse;
         tm.T = ob.T;
         const std::string rel = "vtu/" + frame_name((ob.name + "_").c_str(), k, ".vtu");
-        save_tet_mesh(exp / rel, tm);
+        meshing::save_tet_mesh(exp / rel, tm);
         pvd[b].emplace_back(t, rel);
       }
     }

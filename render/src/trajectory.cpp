@@ -40,7 +40,7 @@ void Trajectory::read_frame(int k, Eigen::MatrixX3d& X) const {
     }
 }
 
-TetMesh Trajectory::rest_mesh(int i) const { return load_tet_mesh(objects.at(static_cast<size_t>(i)).rest_mesh); }
+meshing::TetMesh Trajectory::rest_mesh(int i) const { return meshing::load_tet_mesh(objects.at(static_cast<size_t>(i)).rest_mesh); }
 
 Trajectory load_trajectory(const fs::path& path) {
   std::error_code ec;
@@ -126,12 +126,12 @@ void check_trajectory_matches_scene(const Trajectory& traj, const fem::Scene& sc
     if (so.rigid != to.rigid)
       throw InputError(head + "object '" + so.name + "' is " + (to.rigid ? "rigid" : "deformable") +
                        " in the trajectory, " + (so.rigid ? "rigid" : "deformable") + " in the scene");
-    const TetMesh coarse = fem::object_tet_mesh(so.mesh, so.tets);
+    const meshing::TetMesh coarse = fem::object_tet_mesh(so.mesh, so.tets);
     if (coarse.V.rows() != to.vertices || coarse.T.rows() != to.tets)
       throw InputError(head + "object '" + so.name + "' has " + std::to_string(to.vertices) + " vertices and " +
                        std::to_string(to.tets) + " tets, the scene's coarse mesh " +
                        std::to_string(coarse.V.rows()) + " and " + std::to_string(coarse.T.rows()));
-    const TetMesh rest = traj.rest_mesh(static_cast<int>(i));
+    const meshing::TetMesh rest = traj.rest_mesh(static_cast<int>(i));
     if (rest.V.rows() != to.vertices || rest.T.rows() != to.tets)
       throw InputError(to.rest_mesh.string() + ": does not have the " + std::to_string(to.vertices) +
                        " vertices and " + std::to_string(to.tets) + " tets of index.json");

@@ -66,7 +66,7 @@ class Body {
   /// Throws InputError if the mesh has no tetrahedron, an index out of range, a non-finite
   /// coordinate, a tetrahedron of non-positive volume (after the transform), or the material is
   /// invalid (see set_material).
-  Body(const TetMesh& mesh, const Material& material, bool rigid = false,
+  Body(const meshing::TetMesh& mesh, const Material& material, bool rigid = false,
        const Eigen::Affine3d& transform = Eigen::Affine3d::Identity());
 
   /// Sets `material` and recomputes what derives from it: masses (with mass scaling), added_mass
@@ -126,11 +126,11 @@ double volume(const Body& body, const Eigen::Ref<const RowMatrixX3d>& X);
 
 /// A box [lo, hi] split into n[0]×n[1]×n[2] cells of 6 tetrahedra each (Kuhn / Freudenthal
 /// subdivision, conforming), positively oriented. Throws InputError if a count is < 1 or lo >= hi.
-TetMesh box_tet_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3i& n);
+meshing::TetMesh box_tet_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3i& n);
 
 /// A voxelized ball of `radius` (m) centered at the origin: the cells of box_tet_mesh of
 /// [−radius, radius]³ with n cells per axis whose center lies in the ball (about π n³ tets, all of
 /// the same good shape). Throws InputError if radius <= 0 or no cell is kept.
-TetMesh ball_tet_mesh(double radius, int n);
+meshing::TetMesh ball_tet_mesh(double radius, int n);
 
 }  // namespace squeeze::fem

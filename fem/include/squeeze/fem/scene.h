@@ -101,7 +101,7 @@ std::filesystem::path mesh_cache_dir();
 /// meshing pipeline with target_tets = tets and cached as CACHE/meshes/HASH.mesh, HASH being a
 /// 128-bit hash of the file's bytes and every meshing option. `cache_hit` (optional) tells
 /// whether the cache served it. Throws InputError "PATH: problem".
-TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bool* cache_hit = nullptr,
+meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bool* cache_hit = nullptr,
                         Progress* progress = nullptr);
 
 /// A World built from a scene, with what it needs to step it like the scene says.
@@ -110,7 +110,7 @@ class SceneWorld {
   Scene scene;
   World world;
   double h = 0;                       // time step used (s)
-  std::vector<TetMesh> meshes;        // per object: rest mesh in world coordinates (m)
+  std::vector<meshing::TetMesh> meshes;        // per object: rest mesh in world coordinates (m)
   Eigen::AlignedBox3d bounds;         // scene bounds (given, or derived)
   std::vector<double> rest_volume;    // per object, m³
   RowMatrixX3d external;              // per state row: cancels gravity of objects with gravity=false

@@ -19,8 +19,10 @@
 #include "squeeze/meshing/tet_mesh.h"
 
 namespace squeeze {
-
 class Progress;
+}
+
+namespace squeeze::ffd {
 
 struct BindOptions {
   double max_outside = std::numeric_limits<double>::infinity();  // largest allowed distance of a
@@ -57,7 +59,7 @@ struct Binding {
 /// Throws InputError ("NAME: problem", NAME = `name`) if V is empty or not finite, the mesh has no
 /// tetrahedron or a degenerate (zero-volume) one is needed, or a vertex is farther outside than
 /// options.max_outside allows.
-Binding bind_surface(const Eigen::MatrixX3d& V, const TetMesh& rest, const BindOptions& options = {},
+Binding bind_surface(const Eigen::MatrixX3d& V, const meshing::TetMesh& rest, const BindOptions& options = {},
                      Progress* progress = nullptr, const std::string& name = "surface");
 
 /// The binding as the sparse #S by #V_tet weight matrix W (row-major, four entries per row, columns
@@ -80,7 +82,7 @@ Eigen::MatrixX3d vertex_normals(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
 
 /// Checks that `deformed` is a state of `rest`: same number of vertices and identical T.
 /// Throws InputError ("DEFORMED_NAME: problem", naming the first difference) otherwise.
-void check_same_connectivity(const TetMesh& rest, const TetMesh& deformed, const std::string& rest_name,
+void check_same_connectivity(const meshing::TetMesh& rest, const meshing::TetMesh& deformed, const std::string& rest_name,
                              const std::string& deformed_name);
 
-}  // namespace squeeze
+}  // namespace squeeze::ffd

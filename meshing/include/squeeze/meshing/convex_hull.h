@@ -3,7 +3,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-namespace squeeze {
+namespace squeeze::meshing {
 
 /// A convex polytope.
 ///   V       #V by 3 hull vertices: the input points on the hull's boundary (corners, and points
@@ -32,4 +32,4 @@ Eigen::MatrixX3d extreme_points(const ConvexHull& hull);
 /// decide how to thicken such input.
 ConvexHull convex_hull(const Eigen::MatrixX3d& P);
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

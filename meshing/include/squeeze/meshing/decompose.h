@@ -59,8 +59,10 @@
 #include "squeeze/meshing/surface.h"
 
 namespace squeeze {
-
 class Progress;
+}
+
+namespace squeeze::meshing {
 
 struct DecompositionOptions {
   double concavity = 0.02;       // threshold, as a fraction of the input's bounding-box diagonal
@@ -98,4 +100,4 @@ struct Decomposition {
 Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& options = {},
                         Progress* progress = nullptr);
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

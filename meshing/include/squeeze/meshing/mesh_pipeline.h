@@ -14,8 +14,10 @@
 #include "squeeze/meshing/tetrahedralize.h"
 
 namespace squeeze {
-
 class Progress;
+}
+
+namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
@@ -65,4 +67,4 @@ SurfaceMesh shells_surface(const Decomposition& d);
 /// The report of `squeeze mesh --report` (keys documented in docs/meshing.md).
 nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name);
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

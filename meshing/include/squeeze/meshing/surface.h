@@ -2,7 +2,7 @@
 #pragma once
 #include <Eigen/Core>
 
-namespace squeeze {
+namespace squeeze::meshing {
 
 /// A triangle soup or mesh.
 ///   V  #V by 3 vertex positions (model units; metres in scenes)
@@ -18,4 +18,4 @@ void bounding_box(const Eigen::MatrixX3d& V, Eigen::RowVector3d& lo, Eigen::RowV
 /// Length of the bounding-box diagonal of V (0 for an empty V).
 double bounding_box_diagonal(const Eigen::MatrixX3d& V);
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

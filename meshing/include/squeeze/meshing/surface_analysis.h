@@ -5,7 +5,7 @@
 
 #include "squeeze/meshing/surface.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 
 /// What squeeze mesh reports about its input.
 struct SurfaceInfo {
@@ -42,4 +42,4 @@ SurfaceInfo analyse_surface(const SurfaceMesh& mesh);
 /// Faces sharing a vertex are not tested (the usual approximation for soups).
 bool does_self_intersect(const SurfaceMesh& mesh);
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

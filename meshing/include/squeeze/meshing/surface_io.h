@@ -4,7 +4,7 @@
 
 #include "squeeze/meshing/surface.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 
 struct LoadOptions {
   bool merge_coincident = true;  // weld vertices with identical coordinates (across meshes too)
@@ -40,4 +40,4 @@ void save_surface(const std::filesystem::path& path, const SurfaceMesh& mesh);
 /// Whether save_surface can write a file with this extension (checked before long work).
 bool is_surface_format(const std::filesystem::path& path);
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

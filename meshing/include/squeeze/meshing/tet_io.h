@@ -5,7 +5,7 @@
 
 #include "squeeze/meshing/tet_mesh.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 
 /// The tetrahedral formats, chosen by extension:
 ///   .mesh       Medit (INRIA), ASCII, MeshVersionFormatted 1
@@ -29,4 +29,4 @@ void save_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh);
 /// has an index out of range, or a NaN or infinite coordinate.
 TetMesh load_tet_mesh(const std::filesystem::path& path);
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

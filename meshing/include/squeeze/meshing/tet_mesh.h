@@ -2,7 +2,7 @@
 #pragma once
 #include <Eigen/Core>
 
-namespace squeeze {
+namespace squeeze::meshing {
 
 /// A tetrahedral mesh.
 ///   V      #V by 3 vertex positions (model units)
@@ -15,4 +15,4 @@ struct TetMesh {
   Eigen::VectorXi label;
 };
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -6,7 +6,7 @@
 
 #include "squeeze/meshing/tet_mesh.h"
 
-namespace squeeze {
+namespace squeeze::meshing {
 
 /// Signed volume of tetrahedron (a,b,c,d): (b-a)·((c-a)×(d-a)) / 6 (units³).
 double tet_volume(const Eigen::RowVector3d& a, const Eigen::RowVector3d& b, const Eigen::RowVector3d& c,
@@ -95,4 +95,4 @@ class TetLocator {
 double point_triangle_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                const Eigen::Vector3d& c);
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -7,8 +7,10 @@
 #include "squeeze/meshing/tet_mesh.h"
 
 namespace squeeze {
-
 class Progress;
+}
+
+namespace squeeze::meshing {
 
 struct TetrahedralizeOptions {
   int target_tets = 1000;         // desired tetrahedron count, met within about ±35%: Mesh_3's cell
@@ -61,4 +63,4 @@ TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const Tetrahedral
                        TetrahedralizeStats* stats = nullptr, Progress* progress = nullptr,
                        const Eigen::MatrixX3d* cover = nullptr);
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -11,7 +11,7 @@
 #include <memory>
 #include <vector>
 
-namespace squeeze {
+namespace squeeze::meshing {
 
 /// Exact generalized winding number of the triangles (V,F) at point p: the sum of their signed
 /// solid angles over 4π (Van Oosterom & Strackee 1983). 1 inside a closed, outward-oriented
@@ -36,4 +36,4 @@ class FastWindingNumber {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace squeeze
+}  // namespace squeeze::meshing

@@ -44,7 +44,7 @@ struct Trajectory {
   /// NaN or infinite coordinate.
   void read_frame(int k, Eigen::MatrixX3d& X) const;
   /// The rest tet mesh of object i (world coordinates). Throws InputError.
-  TetMesh rest_mesh(int i) const;
+  meshing::TetMesh rest_mesh(int i) const;
 };
 
 /// Opens a trajectory: `path` is the output folder of `squeeze simulate` (holding trajectory/ and
