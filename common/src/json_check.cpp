@@ -88,13 +88,16 @@ void JsonChecker::fail(const std::string& path, const std::string& problem) cons
   throw InputError(file + ": " + path + ": " + problem);
 }
 void JsonChecker::keys(const json& j, const std::string& path, std::initializer_list<const char*> allowed) const {
+  keys(j, path, std::vector<std::string>(allowed.begin(), allowed.end()));
+}
+void JsonChecker::keys(const json& j, const std::string& path, const std::vector<std::string>& allowed) const {
   if (!j.is_object()) fail(path.empty() ? "(top level)" : path, "must be an object, got " + json_type_name(j));
   for (auto it = j.begin(); it != j.end(); ++it) {
     bool ok = false;
-    for (const char* a : allowed) ok = ok || it.key() == a;
+    for (const std::string& a : allowed) ok = ok || it.key() == a;
     if (!ok) {
       std::string list;
-      for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+      for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
       fail(path.empty() ? it.key() : path + "." + it.key(), "unknown key (allowed here: " + list + ")");
     }
   }

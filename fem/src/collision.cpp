@@ -17,7 +17,6 @@
 namespace squeeze::fem {
 namespace {
 
-constexpr int kSerialTets = 1024;  // fewer tets: detection pass on the calling thread
 constexpr int kBlock = 64;   // tets per task of the detection pass (fixed: results are concatenated in order)
 
 bool allowed(const CollisionFilter& f, int v, int t) {
@@ -59,7 +58,7 @@ std::uint32_t SpatialHash::hash(std::int64_t i, std::int64_t j, std::int64_t k) 
 }
 
 std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, const Eigen::MatrixX4i& T,
-                                       const CollisionFilter& filter) {
+                                       const CollisionFilter& filter, int serial_below) {
   const int nv = static_cast<int>(X.rows()), nt = static_cast<int>(T.rows());
   if (++now_ == 0) {  // wrapped around: clear once every 2^32 queries
     for (Bucket& bk : bucket_) bk.stamp = 0;
@@ -285,7 +284,7 @@ std::vector<Contact> SpatialHash::find(const Eigen::Ref<const RowMatrixX3d>& X, 
     }
   };
   // Small scenes: waking TBB workers costs more than the pass (results do not depend on it).
-  if (nt < kSerialTets) {
+  if (nt < serial_below) {
     for (int blk = 0; blk < nblocks; ++blk) block(blk);
   } else {
     tbb::parallel_for(0, nblocks, block);
@@ -364,7 +363,7 @@ bool surface_hit(const Body& B, int fv, const Eigen::Ref<const RowMatrixX3d>& X,
 }  // namespace
 
 std::vector<Penetration> penetration_depths(const CollisionScene& scene, const Eigen::Ref<const RowMatrixX3d>& X,
-                                            const std::vector<Contact>& contacts) {
+                                            const std::vector<Contact>& contacts, int serial_below) {
   const int nv = static_cast<int>(X.rows());
   const int nb = static_cast<int>(scene.bodies.size());
   auto body_of_vertex = [&](int v) {
@@ -425,8 +424,7 @@ std::vector<Penetration> penetration_depths(const CollisionScene& scene, const E
       pen.layer = 0;
     }
   };
-  constexpr size_t kSerialBorder = 32;  // fewer colliding vertices: waking a worker costs more
-  if (res.size() < kSerialBorder) {
+  if (res.size() < static_cast<size_t>(std::max(0, serial_below))) {
     for (size_t r = 0; r < res.size(); ++r) border(r);
   } else {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, res.size(), 8), [&](const tbb::blocked_range<size_t>& b) {

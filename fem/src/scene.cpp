@@ -3,6 +3,7 @@
 #include "squeeze/fem/constraints.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -63,7 +64,11 @@ std::string read_file_bytes(const fs::path& p) {
   return s.str();
 }
 
+std::atomic<long long> g_scene_builds{0};
+
 }  // namespace
+
+long long scene_builds() { return g_scene_builds; }
 
 Eigen::Affine3d SceneTransform::affine() const {
   const double d = M_PI / 180.0;
@@ -379,6 +384,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     rest.label = m.label;
     meshes.push_back(std::move(rest));
     rest_volume.push_back(V);
+    body->gravity = o.gravity;
     world.add_body(std::move(*body));
   }
   // Pins: per object, on rest positions in world coordinates.
@@ -402,9 +408,9 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     throw InputError(file + ": time_step: the stable step of these meshes is only " + num(h) +
                      " s (tiny or flat tetrahedra, or very stiff materials): set time_step, another tets count, or a "
                      "tet mesh of better quality");
+  world.set_time_step(h);
+  world.prepare();
   SceneWorld sw(scene, std::move(world));
-  sw.h = sw.world.options().h;
-  sw.set_time_step(h);
   sw.meshes = std::move(meshes);
   sw.rest_volume = std::move(rest_volume);
   if (scene.bounds) {
@@ -420,17 +426,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     if (scene.floor && *scene.floor < box.max().y()) box.min().y() = std::max(box.min().y(), *scene.floor);
     sw.bounds = box;
   }
-  // External forces that cancel gravity on objects with gravity = false.
-  sw.external = RowMatrixX3d::Zero(sw.world.state_rows(), 3);
-  bool any = false;
-  for (int b = 0; b < sw.world.bodies(); ++b) {
-    const int r0 = sw.world.first_state_row(b);
-    if (r0 < 0 || scene.objects[b].gravity) continue;
-    any = true;
-    for (int v = 0; v < sw.world.body(b).vertices(); ++v)
-      sw.external.row(r0 + v) = -sw.world.masses()(r0 + v) * scene.gravity.transpose();
-  }
-  if (!any) sw.external.resize(0, 3);
+  ++g_scene_builds;
   return sw;
 }
 
@@ -447,18 +443,9 @@ State SceneWorld::initial_state() const {
 
 void SceneWorld::set_time_step(double step) {
   if (!(step > 0) || !std::isfinite(step)) throw InputError(scene.file.string() + ": time_step: must be > 0");
-  if (step == h) return;
-  WorldOptions o = world.options();
-  o.h = step;
-  World w2(o);
-  for (int b = 0; b < world.bodies(); ++b) w2.add_body(world.body(b));
-  for (int r = 0; r < world.state_rows(); ++r)
-    if (world.pinned(r)) w2.pin_vertex(r);
-  world = std::move(w2);
-  h = step;
+  world.set_time_step(step);
 }
 
-void SceneWorld::step(State& s) { world.step(s, external.rows() ? &external : nullptr); }
 
 RowMatrixX3d SceneWorld::positions(const State& s, int b) const {
   const int r0 = world.first_state_row(b);

@@ -11,6 +11,7 @@
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 namespace squeeze {
 
@@ -29,6 +30,7 @@ struct JsonChecker {
   [[noreturn]] void fail(const std::string& path, const std::string& problem) const;
   /// j must be an object whose keys are all in `allowed`.
   void keys(const nlohmann::json& j, const std::string& path, std::initializer_list<const char*> allowed) const;
+  void keys(const nlohmann::json& j, const std::string& path, const std::vector<std::string>& allowed) const;
   double number(const nlohmann::json& j, const std::string& path) const;        // finite
   double positive(const nlohmann::json& j, const std::string& path) const;      // > 0
   double non_negative(const nlohmann::json& j, const std::string& path) const;  // >= 0

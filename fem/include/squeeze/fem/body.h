@@ -77,6 +77,7 @@ class Body {
   void set_material(const Material& material);
 
   bool rigid = false;
+  bool gravity = true;      // false: gravity does not act on this object (World::gravity_of)
   Material material;
   RowMatrixX3d rest;        // #V by 3 world positions at rest (m)
   Eigen::MatrixX4i T;       // #T by 4 tetrahedra

@@ -99,8 +99,10 @@ class SpatialHash {
   /// Every allowed (vertex, tet) pair with the vertex inside the tet (TetFrame::contains),
   /// sorted by tet then vertex.
   ///   X  #X by 3 positions (m), T  #T by 4 indices into X
+  /// serial_below: fewer tets run the pass on the calling thread (waking TBB workers would cost
+  /// more; the result is the same either way).
   std::vector<Contact> find(const Eigen::Ref<const RowMatrixX3d>& X, const Eigen::MatrixX4i& T,
-                            const CollisionFilter& filter);
+                            const CollisionFilter& filter, int serial_below = 1024);
 
   /// hash(i,j,k) = ((i'·73856093) xor (j'·19349663) xor (k'·83492791)) mod table_size, in 32-bit
   /// arithmetic, with i' = i + 2^20 (likewise j', k'): the shift keeps the xor of the products of
@@ -169,7 +171,8 @@ struct Penetration {
 /// edge (p,q) with the penetrated surface is found by walking the penetrated mesh's face adjacency
 /// from p's tet towards q; the surface normal is that of the boundary triangle crossed.
 ///   X  all positions (m) in the scene's numbering; contacts from SpatialHash::find
+///   serial_below  fewer colliding vertices: the border pass runs on the calling thread (same result)
 std::vector<Penetration> penetration_depths(const CollisionScene& scene, const Eigen::Ref<const RowMatrixX3d>& X,
-                                            const std::vector<Contact>& contacts);
+                                            const std::vector<Contact>& contacts, int serial_below = 32);
 
 }  // namespace squeeze::fem

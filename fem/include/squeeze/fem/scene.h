@@ -5,6 +5,7 @@
 //   SceneWorld w = build_scene(s, &progress);            // mesh (cached), bodies, pins
 //   State st = w.initial_state();
 //   w.step(st);                                          // per-object gravity flags applied
+//   SceneWorld copy = w;                                 // cheap: shares the rest data
 //
 // Errors: every problem with the scene is an InputError with one line
 // "SCENE_FILE: KEY.PATH: problem", e.g. "cube.json: objects[2].material.k_volume: must be > 0".
@@ -104,24 +105,26 @@ std::filesystem::path mesh_cache_dir();
 meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bool* cache_hit = nullptr,
                         Progress* progress = nullptr);
 
-/// A World built from a scene, with what it needs to step it like the scene says.
+/// A World built from a scene, with what the later stages need beside it. Build it once
+/// (build_scene: meshing, bodies, pins, time step) and copy it: copies are cheap (the world's rest
+/// data is shared) and independent, so planning, replay and metrics each work on their own copy.
 class SceneWorld {
  public:
   Scene scene;
-  World world;
-  double h = 0;                       // time step used (s)
-  std::vector<meshing::TetMesh> meshes;        // per object: rest mesh in world coordinates (m)
+  World world;                        // per-object gravity, pins and the time step included
+  std::vector<meshing::TetMesh> meshes;  // per object: rest mesh in world coordinates (m)
   Eigen::AlignedBox3d bounds;         // scene bounds (given, or derived)
   std::vector<double> rest_volume;    // per object, m³
-  RowMatrixX3d external;              // per state row: cancels gravity of objects with gravity=false
 
   SceneWorld(Scene s, World w) : scene(std::move(s)), world(std::move(w)) {}
+  /// The time step (s): the world's.
+  double time_step() const { return world.time_step(); }
+  /// Changes the time step (s, > 0); nothing is rebuilt. Throws InputError naming the scene.
+  void set_time_step(double step);
   /// Rest positions, initial velocities (zero on pinned vertices), time 0.
   State initial_state() const;
-  /// Changes the time step (s, > 0): the world is rebuilt from the same bodies and pins.
-  void set_time_step(double step);
-  /// One step of h with the per-object gravity flags.
-  void step(State& s);
+  /// One step of the world (per-object gravity and pins are the world's).
+  void step(State& s) { world.step(s); }
   /// Positions of object b in state s (#V by 3, m); rigid objects: their rest positions.
   RowMatrixX3d positions(const State& s, int b) const;
 };
@@ -136,9 +139,14 @@ class SceneWorld {
 /// 1/γ when overdamped). Returns 1e-3 with no deformable object.
 double stable_time_step(const World& world);
 
-/// Meshes every object (through the cache), builds bodies, pins and the time step.
+/// Meshes every object (through the cache), builds bodies, pins and the time step; the world is
+/// prepared (World::prepare), so copies share its rest data.
 /// Throws InputError "FILE: objects[i].KEY: problem" (e.g. a pin box that holds no vertex).
 SceneWorld build_scene(const Scene& scene, Progress* progress = nullptr);
+
+/// How many times build_scene has run in this process (a scene should be built once per command;
+/// `squeeze run -v` reports it).
+long long scene_builds();
 
 /// Measures of one object in one state.
 struct ObjectMetrics {

@@ -1,17 +1,21 @@
-// squeeze::fem — a world of deformable and rigid objects and its time step.
+// squeeze::fem — a world of deformable and rigid objects: the model, and its time step.
 //
 // Model: Rodriguez, Lien, Amato, ICRA 2006, Section IV (constraint forces of Teschner et al.
-// 2004, Verlet integration, spatial-hash collision detection, consistent penetration depth
-// response); see constraints.h and collision.h for the sources.
+// 2004, spatial-hash collision detection, consistent penetration depth response); see
+// constraints.h and collision.h for the sources. The forces are assembled by forces.h
+// (assemble_forces); a TimeIntegrator (integrator.h) advances a State with them. World::step is
+// the one-line way to do both with the world's own integrator and scratch data.
 //
-// Integration (Verlet with a fixed step h; Teschner 2004, Sec. 4):
-//   x_{n+1} = 2 x_n − x_{n−1} + h² a_n,  carried as  v_{n+1} = v_n + h a_n,  x_{n+1} = x_n + h v_{n+1}
-// so the state holds x_n and v_n = (x_n − x_{n−1}) / h. a_n = F(x_n, v_n) / m with
-//   F = Σ distance and volume constraint forces (elastic + damping) + m g + external forces
-//       + contact penalty forces k_c d r − c_c (v·r) r of every colliding vertex (Heidelberger 2004)
-//       + floor penalty forces when the floor is enabled.
-// Pinned vertices never move. Rigid objects never move; a rigid vertex inside a deformable
-// tetrahedron pushes back on that tetrahedron's vertices (−k_c d r spread by barycentric weights).
+//   World w(options);                        // h, gravity, floor, contact coefficients
+//   w.add_body(Body(mesh, material));        // deformable or rigid objects
+//   w.pin(box);                              // pinned vertices never move
+//   State s = w.initial_state();
+//   for (...) w.step(s);                     // the integrator of options.integrator ("verlet")
+//
+// A World is a value: copies are cheap (they share the immutable rest data: bodies, element
+// groups, collision numbering) and independent (each has its own scratch data and integrator), so
+// one built world can be handed to several threads as copies. It is not safe to use one World
+// from two threads at once; the const functions that take a ForceWorkspace are.
 //
 // Determinism: every force is summed per vertex from per-group results in a fixed order, the
 // collision lists are concatenated in tetrahedron order, and the contact forces are summed in a
@@ -21,16 +25,30 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "squeeze/fem/body.h"
-#include "squeeze/fem/collision.h"
+#include "squeeze/fem/forces.h"
+#include "squeeze/fem/state.h"
 
 namespace squeeze::fem {
 
+class TimeIntegrator;
+struct WorldData;  // the prepared rest data (fem/src/world_data.h)
+
+/// Below these sizes a pass runs on the calling thread (waking TBB workers would cost more than
+/// the pass). Results never depend on them; tests lower them to 0 to run the parallel paths.
+struct ParallelThresholds {
+  int elements = 2048;         // edges + tets of the element force pass
+  int detection_tets = 1024;   // tetrahedra of the spatial hash's detection pass
+  int border_vertices = 32;    // colliding vertices of the penetration depth's border pass
+};
+
 struct WorldOptions {
-  double h = 1e-3;                                 // s, fixed time step
-  Eigen::Vector3d gravity{0.0, -9.81, 0.0};        // m/s²
+  double h = 1e-3;                                 // s, time step
+  std::string integrator = "verlet";               // time integrator by name (integrator.h: integrator_names())
+  Eigen::Vector3d gravity{0.0, -9.81, 0.0};        // m/s², on every object whose Body::gravity is true
   bool floor = false;                              // enables the half-space y >= floor_height
   double floor_height = 0.0;                       // m
   bool collisions = true;                          // detect and answer collisions between objects
@@ -46,29 +64,18 @@ struct WorldOptions {
   bool cap_contact_stiffness = false;
   double cell_size = 0.0;                          // m, spatial hash cell; 0: mean edge length of the deformable objects
   int table_size = 0;                              // spatial hash entries; 0: a prime >= 4 × vertex count
-};
-
-/// Positions and velocities of every vertex of every deformable object, object after object in
-/// the order they were added (World::first_state_row). A plain value: copy it to save, assign to
-/// restore. Rigid objects are not part of it.
-struct State {
-  RowMatrixX3d x;     // #N by 3 positions (m)
-  RowMatrixX3d v;     // #N by 3 velocities (m/s), (x_n − x_{n−1}) / h
-  double time = 0.0;  // s
-};
-
-/// What the last step() found.
-struct StepStats {
-  int contacts = 0;            // (vertex, tet) pairs found by the spatial hash
-  int colliding_vertices = 0;  // vertices given a penetration depth
-  double max_depth = 0.0;      // m
+  ParallelThresholds parallel;                     // when passes go parallel (never changes results)
 };
 
 class World {
  public:
-  /// Throws InputError if h <= 0, or a contact coefficient is negative.
+  /// Throws InputError if h <= 0, a contact coefficient is negative, gravity is not finite, or
+  /// the integrator is unknown.
   explicit World(const WorldOptions& options = {});
   ~World();
+  /// Copies share the rest data and get their own scratch data and integrator.
+  World(const World& other);
+  World& operator=(const World& other);
   World(World&&) noexcept;
   World& operator=(World&&) noexcept;
 
@@ -79,90 +86,63 @@ class World {
   int pin(const Eigen::AlignedBox3d& box);
   /// Pins one vertex (row of the state). Throws InputError if out of range.
   void pin_vertex(int row);
+  /// Builds the derived rest data now (element groups, collision numbering) instead of at the
+  /// first step: copies made afterwards share it. Idempotent.
+  void prepare();
 
   const WorldOptions& options() const { return options_; }
-  int bodies() const { return static_cast<int>(bodies_.size()); }
-  const Body& body(int b) const { return bodies_[b]; }
+  /// The time step h (s). set_time_step changes it (no rebuild). Throws InputError if <= 0.
+  double time_step() const { return options_.h; }
+  void set_time_step(double h);
+  /// The integrator step() uses, and its replacement (e.g. make_integrator("verlet")).
+  TimeIntegrator& integrator() { return *integrator_; }
+  const TimeIntegrator& integrator() const { return *integrator_; }
+  void set_integrator(std::unique_ptr<TimeIntegrator> integrator);
+
+  int bodies() const;
+  const Body& body(int b) const;
   /// First state row of object b, or -1 for a rigid object.
-  int first_state_row(int b) const { return state_row_[b]; }
-  int state_rows() const { return rows_; }
+  int first_state_row(int b) const;
+  int state_rows() const;
   int tets() const;  // all objects
-  bool pinned(int row) const { return pinned_[row] != 0; }
-  const Eigen::VectorXd& masses() const { return mass_; }  // #N kg per state row
+  bool pinned(int row) const;
+  const Eigen::VectorXd& masses() const;  // #N kg per state row
   /// Factor (<= 1) of the contact coefficients of a state row: see WorldOptions::cap_contact_stiffness.
-  double contact_scale(int row) const { return contact_scale_(row); }
+  double contact_scale(int row) const;
+  /// The gravity acceleration acting on object b (m/s²): options().gravity, or zero if Body::gravity is false.
+  Eigen::Vector3d gravity_of(int b) const;
 
   /// Rest positions, zero velocities, time 0.
   State initial_state() const;
 
-  /// Advances s by one step h. external: #N by 3 forces (N) per state row, or null. Objects with
-  /// Material::deformation_damping > 0 first get their deformation velocities damped (exactly,
-  /// see body.h); then the forces of total_forces() and the Verlet update.
-  /// Throws InputError if s or external has the wrong number of rows.
+  /// Advances s by one step h with the world's integrator. external: #N by 3 forces (N) per state
+  /// row, or null. Throws InputError if s or external has the wrong number of rows.
   void step(State& s, const RowMatrixX3d* external = nullptr);
 
   /// Internal constraint forces only (elastic + damping), #N by 3 (N); no gravity, contact, floor.
-  void internal_forces(const State& s, RowMatrixX3d& F) const;
+  void internal_forces(const State& s, RowMatrixX3d& F);
   /// Every force of the next step (internal, gravity, external, floor, contacts), #N by 3 (N).
   void total_forces(const State& s, const RowMatrixX3d* external, RowMatrixX3d& F);
+  /// The contacts of state s (its StepStats), without forces.
+  StepStats contact_stats(const State& s);
+  /// What the last step() (or force evaluation) found.
+  const StepStats& last_stats() const;
 
   double elastic_energy(const State& s) const;   // J, Σ ½ k C² over all constraints
   double kinetic_energy(const State& s) const;   // J, ½ Σ m v²
-  double gravity_energy(const State& s) const;   // J, −Σ m g·x
+  double gravity_energy(const State& s) const;   // J, −Σ m g·x over the objects gravity acts on
   /// Volume (m³) of deformable object b in state s.
   double body_volume(const State& s, int b) const;
-  const StepStats& last_stats() const { return stats_; }
+
+  /// The prepared rest data (prepare() first). For the force assembly and integrators.
+  const WorldData& data() const;
 
  private:
-  void prepare();  // global numbering, hash
-  void build_element_groups();  // edges_, tet_elems_, groups_, acc_, gather_ (prepare)
-  void add_contact_forces(const State& s, RowMatrixX3d& F);
-  void damp_deformation(State& s) const;  // Material::deformation_damping, per object, fixed order
-
+  WorldData& mutable_data();  // copy-on-write: unshares the rest data before a change
   WorldOptions options_;
-  std::vector<Body> bodies_;
-  std::vector<int> state_row_;   // per body, -1 if rigid
-  int rows_ = 0;
-  Eigen::VectorXd mass_;         // per state row
-  Eigen::VectorXd inv_mass_;     // per state row, 0 for pinned or massless vertices
-  Eigen::VectorXd contact_scale_;  // per state row, see contact_scale()
-  Eigen::VectorXd contact_k_, contact_c_;  // per state row: contact stiffness and damping (contact_scale applied)
-  RowMatrixX3d force_;           // step scratch
-  std::vector<char> pinned_;     // per state row
-  // Collision numbering: all vertices (deformables in state order, then rigid), all tets.
-  bool prepared_ = false;
-  CollisionScene scene_;
-  CollisionFilter filter_;
-  Eigen::MatrixX4i T_all_;
-  RowMatrixX3d X_all_;
-  std::unique_ptr<SpatialHash> hash_;
-  // Elements of all deformable objects in groups, for the force pass. A group is the edges and
-  // tets owned by a cluster of 128 vertices (kClusterRows, world.cpp) of one object, neighbours in
-  // space (consecutive in the Morton order of the rest positions; an element belongs to the
-  // cluster of its corner first in that order). A group adds its elements' forces, element after
-  // element, into its own accumulator slots, one per vertex it touches; a row's force is then
-  // the sum of its slots, group after group. Fixed groups, fixed orders: the sums do not depend on
-  // the threads, and a row is summed from 1–2 slots instead of ~24 element results, so little
-  // data crosses between the cores (docs/fem.md, Determinism).
-  struct EdgeElem { int i, j; double D0, k, kd; int si, sj; };  // rows; slots (offsets in doubles into acc_)
-  struct TetElem { int v[4]; double V0, k, kd; int s[4]; };
-  struct ElemGroup { int e0, e1, t0, t1, a0, a1; };  // edges [e0, e1), tets [t0, t1), slots acc_[a0, a1)
-  std::vector<EdgeElem> edges_;
-  std::vector<TetElem> tet_elems_;
-  std::vector<ElemGroup> groups_;
-  mutable std::vector<double> acc_;  // the groups' accumulator slots, 3 doubles each
-  // Per state row: its slots, group order: gather_[gather_start_[r] .. gather_start_[r + 1]),
-  // offsets in doubles into acc_.
-  std::vector<int> gather_start_, gather_;
-  void element_forces(const State& s) const;        // fills acc_ (parallel over groups)
-  Eigen::Vector3d gathered(int row) const;          // Σ of the row's slots, fixed order
-  // Contact forces of the step, applied in the order found: per row a singly linked list.
-  std::vector<int> contact_head_, contact_tail_;    // per state row, −1: none
-  std::vector<int> contact_next_;
-  std::vector<Eigen::Vector3d> contact_f_;
-  std::vector<int> contact_rows_;                   // rows with a list (to reset them)
-  void collect_contact_forces(const State& s);      // fills the lists above (and stats_)
-  StepStats stats_;
+  std::shared_ptr<WorldData> data_;             // rest data, shared between copies
+  std::unique_ptr<TimeIntegrator> integrator_;  // per copy
+  ForceWorkspace workspace_;                    // per copy
 };
 
 }  // namespace squeeze::fem

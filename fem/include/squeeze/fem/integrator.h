@@ -1,0 +1,52 @@
+// squeeze::fem — the time-integrator seam: how a world's state advances by one step h.
+//
+// An integrator advances a State with the forces of the model (forces.h: assemble_forces, or the
+// per-element kernels of constraints.h) and the world's rest data; it holds no state of the
+// simulation itself, only scratch and statistics, so one World can swap integrators between
+// steps. World::step calls the world's integrator (WorldOptions::integrator, World::set_integrator).
+//
+// Registered integrators (make_integrator):
+//   "verlet"  the paper's explicit Verlet step (Rodriguez 2006 Sec. IV-B; Teschner 2004 Sec. 4),
+//             fem/src/verlet.cpp
+//
+// To add one: a class deriving from TimeIntegrator in its own file fem/src/NAME.cpp defining
+// `std::unique_ptr<TimeIntegrator> make_NAME_integrator()`, that file in fem/CMakeLists.txt, and NAME
+// in the one registration line of fem/src/integrator.cpp.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "squeeze/fem/forces.h"
+#include "squeeze/fem/state.h"
+
+namespace squeeze::fem {
+
+class World;
+
+class TimeIntegrator {
+ public:
+  virtual ~TimeIntegrator() = default;
+  /// The registered name ("verlet", ...).
+  virtual const char* name() const = 0;
+  /// A fresh integrator of the same kind and settings (World copies get their own).
+  virtual std::unique_ptr<TimeIntegrator> clone() const = 0;
+  /// Advances s by world.time_step(). external: #N by 3 forces (N) per state row, or null.
+  /// world is prepared (World::step does it); ws is the scratch of this thread. Pinned vertices
+  /// keep their positions with zero velocity.
+  virtual void step(const World& world, State& s, const RowMatrixX3d* external, ForceWorkspace& ws) = 0;
+};
+
+/// The registered integrator names, in registration order.
+std::vector<std::string> integrator_names();
+/// A new integrator by name. Throws InputError naming the registered ones if `name` is unknown.
+std::unique_ptr<TimeIntegrator> make_integrator(const std::string& name);
+
+/// Deformation damping of every object with Material::deformation_damping α > 0 (Müller et al.,
+/// "Position based dynamics", VRIPHYS 2006, Sec. 3.5; see body.h): the velocities of its free
+/// vertices become v_rigid + e^(−α h)(v − v_rigid), v_rigid the rigid motion with the object's
+/// linear and angular momentum (zero for an object with a pinned vertex). Sequential, fixed order.
+///   h  time step (s)
+void damp_deformation(const World& world, State& s, double h);
+
+}  // namespace squeeze::fem

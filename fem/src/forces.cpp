@@ -1,0 +1,250 @@
+#include "squeeze/fem/forces.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "squeeze/common/error.h"
+#include "squeeze/fem/collision.h"
+#include "squeeze/fem/constraints.h"
+#include "squeeze/fem/world.h"
+#include "world_data.h"
+
+namespace squeeze::fem {
+
+struct ForceWorkspace::Impl {
+  std::uint64_t version = 0;  // of the WorldData the buffers are sized for
+  std::vector<double> acc;    // the element groups' accumulator slots, 3 doubles each
+  RowMatrixX3d X_all;         // positions in the collision numbering
+  std::unique_ptr<SpatialHash> hash;
+  // Contact forces of the evaluation, applied in the order found: per row a singly linked list.
+  std::vector<int> contact_head, contact_tail;  // per state row, −1: none
+  std::vector<int> contact_next;
+  std::vector<Vec3> contact_f;
+  std::vector<int> contact_rows;  // rows with a list (to reset them)
+  StepStats stats;
+
+  void fit(const WorldData& d) {
+    if (version == d.version) return;
+    acc.assign(3 * static_cast<size_t>(d.slots), 0.0);
+    X_all = d.X_rest_all;
+    contact_head.assign(static_cast<size_t>(d.rows), -1);
+    contact_tail.assign(static_cast<size_t>(d.rows), -1);
+    contact_rows.clear();
+    if (!hash || hash->cell() != d.cell || hash->table_size() != d.table) hash = std::make_unique<SpatialHash>(d.cell, d.table);
+    version = d.version;
+  }
+};
+
+ForceWorkspace::ForceWorkspace() : impl_(std::make_unique<Impl>()) {}
+ForceWorkspace::~ForceWorkspace() = default;
+ForceWorkspace::ForceWorkspace(const ForceWorkspace&) : impl_(std::make_unique<Impl>()) {}
+ForceWorkspace& ForceWorkspace::operator=(const ForceWorkspace&) {
+  impl_ = std::make_unique<Impl>();
+  return *this;
+}
+ForceWorkspace::ForceWorkspace(ForceWorkspace&&) noexcept = default;
+ForceWorkspace& ForceWorkspace::operator=(ForceWorkspace&&) noexcept = default;
+const StepStats& ForceWorkspace::stats() const { return impl_->stats; }
+
+namespace {
+
+template <class Fn>
+void parallel_rows(int n, Fn fn) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 512), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i != r.end(); ++i) fn(i);
+  });
+}
+
+void check_rows(const WorldData& d, const State& s, const RowMatrixX3d* external) {
+  if (s.x.rows() != d.rows || s.v.rows() != d.rows)
+    throw InputError("fem world: the state has " + std::to_string(s.x.rows()) + " rows, the world " +
+                     std::to_string(d.rows));
+  if (external && external->rows() != d.rows)
+    throw InputError("fem world: external forces have " + std::to_string(external->rows()) + " rows, the world " +
+                     std::to_string(d.rows));
+}
+
+// The element pass: every group adds its elements' forces into its own accumulator slots
+// (parallel over groups; fixed orders within a group).
+void element_forces(const WorldData& d, const World& w, const State& s, std::vector<double>& acc_v) {
+  const double* x = s.x.data();
+  const double* v = s.v.data();
+  double* acc = acc_v.data();
+  auto add3 = [](double* a, const double* f) { a[0] += f[0], a[1] += f[1], a[2] += f[2]; };
+  auto group = [&](const WorldData::ElemGroup& G) {
+    std::fill(acc + G.a0, acc + G.a1, 0.0);
+    int e = G.e0;
+#if defined(__SSE2__)
+    for (; e + 1 < G.e1; e += 2) {  // edge e, then edge e + 1 (they may share a vertex)
+      const WorldData::EdgeElem &E0 = d.edges[e], &E1 = d.edges[e + 1];
+      const simd::Pair3 fj = distance_forces_pair(x, v, E0, E1), fi = simd::neg(fj);
+      simd::add_lane0(acc + E0.si, fi), simd::add_lane0(acc + E0.sj, fj);
+      simd::add_lane1(acc + E1.si, fi), simd::add_lane1(acc + E1.sj, fj);
+    }
+#endif
+    for (; e < G.e1; ++e) {
+      const WorldData::EdgeElem& E = d.edges[e];
+      Vec3 fi, fj;
+      distance_forces(Vec3(x + 3 * E.i), Vec3(x + 3 * E.j), Vec3(v + 3 * E.i), Vec3(v + 3 * E.j), E.D0, E.k, E.kd, fi,
+                      fj);
+      add3(acc + E.si, fi.data()), add3(acc + E.sj, fj.data());
+    }
+    int t = G.t0;
+#if defined(__SSE2__)
+    for (; t + 1 < G.t1; t += 2) {  // tet t, then tet t + 1
+      const WorldData::TetElem &T0 = d.tet_elems[t], &T1 = d.tet_elems[t + 1];
+      simd::Pair3 f[4];
+      volume_forces_pair(x, v, T0, T1, f);
+      for (int k = 0; k < 4; ++k) simd::add_lane0(acc + T0.s[k], f[k]);
+      for (int k = 0; k < 4; ++k) simd::add_lane1(acc + T1.s[k], f[k]);
+    }
+#endif
+    for (; t < G.t1; ++t) {
+      const WorldData::TetElem& T = d.tet_elems[t];
+      Vec3 p[4], vel[4], f[4];
+      for (int k = 0; k < 4; ++k) {
+        p[k] = Vec3(x + 3 * T.v[k]);
+        vel[k] = Vec3(v + 3 * T.v[k]);
+      }
+      volume_forces(p, vel, T.V0, T.k, T.kd, f);
+      for (int k = 0; k < 4; ++k) add3(acc + T.s[k], f[k].data());
+    }
+  };
+  const int ng = static_cast<int>(d.groups.size());
+  // Small scenes (fewer edges and tets than the threshold) run on the calling thread.
+  if (d.edges.size() + d.tet_elems.size() < static_cast<size_t>(w.options().parallel.elements)) {
+    for (const WorldData::ElemGroup& G : d.groups) group(G);
+  } else {
+    tbb::parallel_for(tbb::blocked_range<int>(0, ng, 1), [&](const tbb::blocked_range<int>& r) {
+      for (int g = r.begin(); g != r.end(); ++g) group(d.groups[g]);
+    });
+  }
+}
+
+// Σ of a row's slots, fixed order.
+inline Vec3 gathered(const WorldData& d, const std::vector<double>& acc, int row) {
+  Vec3 f = Vec3::Zero();
+  const double* src = acc.data();
+  for (int c = d.gather_start[row]; c < d.gather_start[row + 1]; ++c) f += Vec3(src + d.gather[c]);
+  return f;
+}
+
+// Collision detection and the contact penalty forces of state s, into the workspace's lists.
+void collect_contact_forces(const WorldData& d, const World& w, const State& s, ForceWorkspace::Impl& ws,
+                            bool with_forces) {
+  for (int r : ws.contact_rows) ws.contact_head[r] = ws.contact_tail[r] = -1;
+  ws.contact_rows.clear();
+  ws.contact_next.clear();
+  ws.contact_f.clear();
+  ws.stats = StepStats{};
+  const WorldOptions& o = w.options();
+  if (!o.collisions || d.bodies.empty()) return;
+  const int rows = d.rows;
+  ws.X_all.topRows(rows) = s.x;
+  const std::vector<Contact> contacts = ws.hash->find(ws.X_all, d.T_all, d.filter, o.parallel.detection_tets);
+  ws.stats.contacts = static_cast<int>(contacts.size());
+  if (contacts.empty()) return;
+  const std::vector<Penetration> pens = penetration_depths(d.scene, ws.X_all, contacts, o.parallel.border_vertices);
+  ws.stats.colliding_vertices = static_cast<int>(pens.size());
+  auto velocity = [&](int g) -> Vec3 { return g < rows ? Vec3(s.v.row(g).transpose()) : Vec3::Zero(); };
+  auto add = [&](int row, const Vec3& f) {  // appended: applied in the order found
+    const int id = static_cast<int>(ws.contact_f.size());
+    ws.contact_f.push_back(f);
+    ws.contact_next.push_back(-1);
+    if (ws.contact_head[row] < 0) {
+      ws.contact_head[row] = id;
+      ws.contact_rows.push_back(row);
+    } else {
+      ws.contact_next[ws.contact_tail[row]] = id;
+    }
+    ws.contact_tail[row] = id;
+  };
+  for (const Penetration& p : pens) {  // fixed order: sequential
+    if (!(p.depth > 0)) continue;
+    ws.stats.max_depth = std::max(ws.stats.max_depth, p.depth);
+    if (!with_forces) continue;
+    Vec3 vt = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) vt += p.bary[k] * velocity(d.T_all(p.tet, k));
+    const Vec3& r = p.direction;
+    const double closing = (velocity(p.vertex) - vt).dot(r);
+    double kc, cc;  // of the penetrating vertex; a rigid one: interpolated from the tet's corners
+    if (!o.cap_contact_stiffness) {
+      kc = o.contact_stiffness;
+      cc = o.contact_damping;
+    } else if (p.vertex < rows) {
+      kc = d.contact_k(p.vertex);
+      cc = d.contact_c(p.vertex);
+    } else {
+      kc = cc = 0;
+      for (int k = 0; k < 4; ++k) {
+        const int g = d.T_all(p.tet, k);
+        if (g < rows) kc += p.bary[k] * d.contact_k(g), cc += p.bary[k] * d.contact_c(g);
+      }
+    }
+    const Vec3 f = (kc * p.depth - cc * closing) * r;
+    if (p.vertex < rows) {
+      add(p.vertex, f);
+    } else {  // rigid vertex inside a deformable tet: the reaction acts on the tet
+      for (int k = 0; k < 4; ++k) {
+        const int g = d.T_all(p.tet, k);
+        if (g < rows) add(g, -(p.bary[k] * f));
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void assemble_forces(const World& w, const State& s, const RowMatrixX3d* external, ForceWorkspace& workspace,
+                     RowMatrixX3d& F, const ForceTerms& terms) {
+  const WorldData& d = w.data();
+  check_rows(d, s, external);
+  ForceWorkspace::Impl& ws = workspace.impl();
+  ws.fit(d);
+  // Collision detection and response (partly sequential: the hash's counting sort, the
+  // penetration depths) run alongside the element pass; both read the state only and write
+  // disjoint data, so the results do not depend on the threads.
+  if (terms.contacts && terms.internal)
+    tbb::parallel_invoke([&] { collect_contact_forces(d, w, s, ws, true); }, [&] { element_forces(d, w, s, ws.acc); });
+  else if (terms.contacts)
+    collect_contact_forces(d, w, s, ws, true);
+  else if (terms.internal)
+    element_forces(d, w, s, ws.acc);
+  const WorldOptions& o = w.options();
+  const Vec3 g = o.gravity;
+  const bool gravity = terms.gravity;
+  const bool cancel = terms.gravity && d.any_gravity_off;  // objects whose gravity is off
+  const RowMatrixX3d* ext = terms.external ? external : nullptr;
+  const bool floor = terms.floor && o.floor;
+  const double fy = o.floor_height;
+  const bool contacts = terms.contacts;
+  F.resize(d.rows, 3);
+  parallel_rows(d.rows, [&](int i) {
+    Vec3 f = terms.internal ? gathered(d, ws.acc, i) : Vec3::Zero();
+    if (gravity) f += d.mass(i) * g;
+    if (cancel || ext) {
+      Vec3 e = (cancel && d.gravity_off[i]) ? Vec3(-d.mass(i) * g) : Vec3::Zero();
+      if (ext) e += ext->row(i).transpose();
+      f += e;
+    }
+    if (floor && s.x(i, 1) < fy) f.y() += d.contact_k(i) * (fy - s.x(i, 1)) - d.contact_c(i) * std::min(0.0, s.v(i, 1));
+    if (contacts)
+      for (int id = ws.contact_head[i]; id >= 0; id = ws.contact_next[id]) f += ws.contact_f[id];
+    F.row(i) = f.transpose();
+  });
+}
+
+void detect_contacts(const World& w, const State& s, ForceWorkspace& workspace) {
+  const WorldData& d = w.data();
+  check_rows(d, s, nullptr);
+  ForceWorkspace::Impl& ws = workspace.impl();
+  ws.fit(d);
+  collect_contact_forces(d, w, s, ws, false);
+}
+
+}  // namespace squeeze::fem
