@@ -40,13 +40,13 @@ struct Row {
 std::vector<Row> rows;
 
 void BM_Plan(benchmark::State& st) {
-  const fem::Scene scene = fem::load_scene(scene_file());
-  plan::PlannerOptions o = plan::planner_options(fem::build_scene(scene));
+  const fem::SceneWorld world = fem::build_scene(fem::load_scene(scene_file()));
+  plan::PlannerOptions o = plan::planner_options(world);
   o.seed = static_cast<std::uint64_t>(st.range(0));
   o.time_limit = limit();
   o.iterations = std::max(o.iterations, 100000000 / 2);  // the time limit decides
   for (auto _ : st) {
-    const plan::PlanEvaluation e = plan::evaluate_plan(scene, o);
+    const plan::PlanEvaluation e = plan::evaluate_plan(world, o);
     const plan::PlanStatistics& s = e.result.stats;
     const double volume = *std::max_element(e.max_volume_change.begin(), e.max_volume_change.end());
     st.counters["solved"] = e.result.status == plan::PlanStatus::solved;

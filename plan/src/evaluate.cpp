@@ -5,12 +5,13 @@
 
 namespace squeeze::plan {
 
-PlanEvaluation evaluate_plan(const fem::Scene& scene, const PlannerOptions& options, Progress* progress) {
+PlanEvaluation evaluate_plan(const fem::SceneWorld& world, const PlannerOptions& options, Progress* progress) {
   PlanEvaluation e;
-  e.result = plan(scene, options, progress);
+  e.result = plan(world, options, progress);
   PropagatorOptions po;
   po.stop_when_invalid = false;
-  SimulationPropagator p(scene, po);
+  SimulationPropagator p(world, po);
+  const fem::Scene& scene = world.scene;
   const fem::World& w = p.world().world;
   std::vector<int> bodies;
   for (int b = 0; b < w.bodies(); ++b)

@@ -16,38 +16,29 @@ using json = nlohmann::json;
 namespace {
 
 json control_json(const Control& c, int steps, double h) {
-  json j = {{"kind", to_string(c.kind)},
+  json j = {{"kind", c.kind->name()},
             {"target", {c.target.x(), c.target.y(), c.target.z()}},
             {"force", c.force},
             {"steps", steps},
             {"duration", steps * h}};
-  if (c.kind == ForceKind::control_point) {
-    j["vertex"] = c.vertex;
-    j["radius"] = c.radius;
-  }
-  if (c.kind == ForceKind::interpolation) j["omega"] = c.omega;
+  c.kind->to_json(c, j);
   return j;
 }
 
 Control read_control(const JsonChecker& c, const json& j, const std::string& path, int* steps) {
-  c.keys(j, path, {"kind", "target", "force", "vertex", "radius", "omega", "steps", "duration"});
-  for (const char* k : {"kind", "target", "force", "steps"})
-    if (!j.contains(k)) c.fail(path + "." + k, "missing (required)");
+  if (!j.is_object()) c.fail(path, "must be an object, got " + json_type_name(j));
+  if (!j.contains("kind")) c.fail(path + ".kind", "missing (required)");
   Control ctl;
-  ctl.kind = force_kind_from_string(c.string(j["kind"], path + ".kind"), c.file + ": " + path + ".kind");
+  ctl.kind = &control_kind(c.string(j["kind"], path + ".kind"), c.file + ": " + path + ".kind");
+  std::vector<std::string> keys = {"kind", "target", "force", "steps", "duration"};
+  for (const std::string& k : ctl.kind->json_keys()) keys.push_back(k);
+  c.keys(j, path, keys);
+  for (const char* k : {"target", "force", "steps"})
+    if (!j.contains(k)) c.fail(path + "." + k, "missing (required)");
   ctl.target = c.vec3(j["target"], path + ".target");
   ctl.force = c.non_negative(j["force"], path + ".force");
   *steps = static_cast<int>(c.integer(j["steps"], path + ".steps", 0, 1LL << 30));
-  if (ctl.kind == ForceKind::control_point) {
-    if (!j.contains("vertex")) c.fail(path + ".vertex", "missing (required for a control_point force)");
-    if (!j.contains("radius")) c.fail(path + ".radius", "missing (required for a control_point force)");
-    ctl.vertex = static_cast<int>(c.integer(j["vertex"], path + ".vertex", 0, 1LL << 30));
-    ctl.radius = c.non_negative(j["radius"], path + ".radius");
-  }
-  if (ctl.kind == ForceKind::interpolation) {
-    if (!j.contains("omega")) c.fail(path + ".omega", "missing (required for an interpolation force)");
-    ctl.omega = c.positive(j["omega"], path + ".omega");
-  }
+  ctl.kind->from_json(c, j, path, ctl);
   return ctl;
 }
 
@@ -87,9 +78,8 @@ void save_plan(const std::filesystem::path& file, const PlanFile& p) {
                   {"interpolation_omega", o.interpolation_omega},
                   {"settle", o.settle},
                   {"batch", o.batch},
-                  {"weights", {{"body", o.weights.body},
-                               {"control_point", o.weights.control_point},
-                               {"interpolation", o.weights.interpolation}}}};
+                  {"algorithm", o.algorithm}};
+  for (const ControlKind* k : control_kinds()) j["planner"]["weights"][k->name()] = o.weights[k->name()];
   const PlanStatistics& s = p.stats;
   j["statistics"] = {{"iterations", s.iterations},
                      {"nodes", s.nodes},
@@ -142,10 +132,13 @@ PlanFile load_plan(const std::filesystem::path& file) {
   }
   p.settle = read_control(c, j["settle"], "settle", &p.settle_steps);
   if (j.contains("seed")) p.options.seed = static_cast<std::uint64_t>(c.integer(j["seed"], "seed", 0, 1LL << 53));
-  if (j.contains("final_state_hash")) {
-    const std::string h = c.string(j["final_state_hash"], "final_state_hash");
-    p.final_state_hash = std::strtoull(h.c_str(), nullptr, 16);
-  }
+  // The hash is what a replay is checked against: required, exactly 16 hexadecimal digits.
+  if (!j.contains("final_state_hash"))
+    c.fail("final_state_hash", "missing (required: the replay is checked against it; the plan file is damaged)");
+  const std::string h = c.string(j["final_state_hash"], "final_state_hash");
+  if (h.size() != 16 || h.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos)
+    c.fail("final_state_hash", "must be 16 hexadecimal digits, got \"" + h + "\"");
+  p.final_state_hash = std::strtoull(h.c_str(), nullptr, 16);
   if (j.contains("statistics") && j["statistics"].is_object()) {
     const json& s = j["statistics"];
     p.stats.iterations = s.value("iterations", 0);

@@ -73,31 +73,34 @@ void check_robot_start(const fem::SceneWorld& w) {
   }
 }
 
-SimulationPropagator::SimulationPropagator(const fem::Scene& scene, const PropagatorOptions& options)
-    : world_(fem::build_scene(scene)), options_(options) {
+int goal_object_index(const fem::Scene& scene) {
   const int r = robot_index(scene);
-  auto g_of = [&](int b) -> Eigen::Vector3d {
-    return scene.objects[b].gravity ? scene.gravity : Eigen::Vector3d::Zero();
-  };
-  robot_ = Robot(world_.world, r, g_of(r));
-  goal_object_ = r;
-  if (scene.goal && !scene.goal->object.empty()) {
-    const int g = scene.find(scene.goal->object);
-    if (g < 0) throw InputError(scene.file.string() + ": goal.object: no object is called \"" + scene.goal->object + "\"");
-    if (scene.objects[g].rigid)
-      throw InputError(scene.file.string() + ": goal.object: \"" + scene.goal->object + "\" is rigid and never moves");
-    goal_object_ = g;
-  }
-  goal_ = goal_object_ == r ? robot_ : Robot(world_.world, goal_object_, g_of(goal_object_));
+  if (!scene.goal || scene.goal->object.empty()) return r;
+  const int g = scene.find(scene.goal->object);
+  if (g < 0) throw InputError(scene.file.string() + ": goal.object: no object is called \"" + scene.goal->object + "\"");
+  if (scene.objects[g].rigid)
+    throw InputError(scene.file.string() + ": goal.object: \"" + scene.goal->object + "\" is rigid and never moves");
+  return g;
+}
+
+double volume_change(const fem::SceneWorld& w, const fem::State& s, int b) {
+  if (w.world.body(b).rigid) return 0.0;
+  return std::abs(w.world.body_volume(s, b) / w.rest_volume[b] - 1.0);
+}
+
+SimulationPropagator::SimulationPropagator(const fem::SceneWorld& world, const PropagatorOptions& options)
+    : world_(world), options_(options) {
+  if (options.check_every < 1)
+    throw InputError("propagator: check_every must be >= 1, got " + std::to_string(options.check_every));
+  const fem::Scene& scene = world_.scene;
+  const int r = robot_index(scene);
+  robot_ = Robot(world_.world, r);
+  goal_object_ = goal_object_index(scene);
+  goal_ = goal_object_ == r ? robot_ : Robot(world_.world, goal_object_);
   F_.setZero(world_.world.state_rows(), 3);
 }
 
 Eigen::Vector3d SimulationPropagator::goal_com(const fem::State& s) const { return goal_.com(s); }
-
-double SimulationPropagator::volume_change(const fem::State& s, int b) const {
-  if (world_.world.body(b).rigid) return 0.0;
-  return std::abs(world_.world.body_volume(s, b) / world_.rest_volume[b] - 1.0);
-}
 
 double SimulationPropagator::max_volume_change(const fem::State& s, int* object) const {
   double worst = 0;
@@ -131,18 +134,15 @@ Validity SimulationPropagator::propagate(const fem::State& start, const Control&
                                          fem::State& result) {
   if (steps < 0) throw InputError("propagate: negative number of steps");
   result = start;
-  const AppliedControl applied(robot_, control, start);
-  const bool has_external = world_.external.rows() > 0;
+  const std::unique_ptr<AppliedControl> applied = apply_control(robot_, control, start);
   // Constant forces: the sum is the same every step.
   F_.setZero();
-  if (has_external) F_ = world_.external;
-  if (applied.constant()) applied.add_forces(start, F_);
+  if (applied->constant()) applied->add_forces(start, F_);
   Validity v = Validity::valid;
   for (int k = 1; k <= steps; ++k) {
-    if (!applied.constant()) {
-      if (has_external) F_ = world_.external;
-      else F_.setZero();
-      applied.add_forces(result, F_);
+    if (!applied->constant()) {
+      F_.setZero();
+      applied->add_forces(result, F_);
     }
     world_.world.step(result, &F_);
     ++steps_done_;

@@ -16,7 +16,7 @@ struct PlanEvaluation {
                                           // replayed path (settling phase included)
 };
 
-/// Plans `scene` with `options`, then replays the path (and the settling phase) and measures it.
-PlanEvaluation evaluate_plan(const fem::Scene& scene, const PlannerOptions& options, Progress* progress = nullptr);
+/// Plans in the built scene `world` with `options`, then replays the path (and the settling phase) and measures it.
+PlanEvaluation evaluate_plan(const fem::SceneWorld& world, const PlannerOptions& options, Progress* progress = nullptr);
 
 }  // namespace squeeze::plan

@@ -1,23 +1,18 @@
-// squeeze::plan — kinodynamic RRT over the whole deformable state (Rodriguez, Lien, Amato,
-// "Planning motion in completely deformable environments", ICRA 2006, Algorithm 1 and Sec. V).
+// squeeze::plan — planning the robot's motion in a built scene (Rodriguez, Lien, Amato, "Planning
+// motion in completely deformable environments", ICRA 2006, Algorithm 1 and Sec. V).
 //
-// Every node of the tree is a full simulation state: positions and velocities of every movable
-// vertex of the robot and of every deformable obstacle. One iteration: sample x in the scene's
-// bounds (the goal with probability goal_bias, and always for an interpolation force); take the
-// node whose robot centre of mass is nearest to x (kd-tree, nanoflann); draw a manipulation force
-// by the weights and a duration dT in [t_min, t_max]; restore the node's state, simulate dT / h
-// steps with the force (collisions and penalties every step) and add the result as a child unless
-// it is invalid (NaN or blow-up, volume change beyond max_volume_change, robot outside bounds).
-// Solved when the goal object's centre of mass is within goal.tolerance of goal.position.
+// A Planner (OMPL's ompl::base::Planner) is handed a PlanningProblem: the built scene, its robot,
+// the goal, the start state and a factory of propagators (propagator.h) through which it advances
+// states; it samples controls through the control registry (control.h). plan() picks the planner
+// of PlannerOptions::algorithm from the registry. Registered planners:
+//   "rrt"  the paper's kinodynamic RRT (Algorithm 1), rrt.cpp: every tree node is a full
+//          simulation state of the robot and every deformable obstacle; see docs/plan.md.
+// To add a planner: a class deriving from Planner in its own file plan/src/NAME.cpp defining
+// `std::unique_ptr<Planner> make_NAME_planner()`, that file in plan/CMakeLists.txt, and NAME in the
+// one registration line of plan/src/planner_registry.cpp.
 //
-// Parallelism and determinism: iterations run in batches of `batch` expansions. All random draws
-// of a batch come from one seeded stream, in order, against the tree as it was when the batch
-// began; the expansions then run in parallel (one world per worker) and are added in batch order.
-// The batch size does not depend on the number of threads, so the same seed gives the same tree
-// and the same plan with any number of threads.
-//
-// Storage: a node keeps one block (x and v) per deformable object; a block bit-identical to the
-// parent's (an object at rest, or not touched along the branch) is shared, not copied.
+// Determinism: planners draw from a seeded Random (random.h) and must give the same plan for a
+// seed whatever the number of threads (the RRT draws a whole batch before running it in parallel).
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
@@ -35,15 +30,20 @@ class Progress;
 
 namespace squeeze::plan {
 
-/// Relative weights of the manipulation forces (any scale, >= 0, not all zero).
+/// Relative weights of the manipulation forces, one per registered kind (control_kinds() order;
+/// any scale, >= 0, not all zero). Default: each kind's default_weight.
 struct ForceWeights {
-  double body = 0.5;
-  double control_point = 0.3;
-  double interpolation = 0.2;
+  std::vector<double> w;
+  ForceWeights();
+  /// The weight of the kind called `kind`; throws InputError for an unknown kind.
+  double& operator[](const std::string& kind);
+  double operator[](const std::string& kind) const;
+  double sum() const;  // Σ in registry order
 };
 
 /// The scene's "planner" block (scenes/README.md), defaults filled in.
 struct PlannerOptions {
+  std::string algorithm = "rrt";   // planner by name (planner_names())
   int iterations = 1000;           // expansions attempted (valid or not)
   std::uint64_t seed = 1;          // of the random stream
   double goal_bias = 0.05;         // probability that x is the goal position
@@ -62,6 +62,8 @@ struct PlannerOptions {
 /// Reads and validates `scene.planner` (errors "FILE: planner.KEY: problem"), deriving the
 /// defaults from the built world: max_force from the robot's mass, control_radius from its size.
 PlannerOptions planner_options(const fem::SceneWorld& world);
+/// Throws InputError "FILE: planner.KEY: problem" if an option is out of range.
+void check_options(const PlannerOptions& options, const std::string& file);
 
 enum class PlanStatus { solved, approximate, failed };
 const char* to_string(PlanStatus s);
@@ -97,25 +99,58 @@ struct PlanResult {
   std::uint64_t final_state_hash = 0;   // state_hash of the final node's state
 };
 
+/// What a planner is handed (OMPL: SpaceInformation and ProblemDefinition).
+struct PlanningProblem {
+  const fem::SceneWorld* world = nullptr;  // the built scene: bounds, time step, objects
+  Robot robot;                             // the object the controls move
+  Robot goal_object;                       // the object whose centre of mass must reach the goal
+  Eigen::Vector3d goal{0, 0, 0};           // m
+  double tolerance = 0.05;                 // m
+  fem::State start;                        // the scene's initial state
+  PropagatorFactory make_propagator;       // one propagator per parallel expansion
+};
+
+class Planner {
+ public:
+  virtual ~Planner() = default;
+  virtual const char* name() const = 0;
+  /// Plans from problem.start. Honours options.iterations and options.time_limit (stops within one
+  /// batch of expansions).
+  virtual PlanResult solve(const PlanningProblem& problem, const PlannerOptions& options, Progress* progress) = 0;
+};
+
+/// The registered planner names.
+std::vector<std::string> planner_names();
+/// A planner by name; throws InputError naming the registered ones if `name` is unknown.
+std::unique_ptr<Planner> make_planner(const std::string& name);
+
 /// Throws InputError "FILE: KEY: problem" unless the world can be planned in: a goal inside the
 /// bounds, and the robot starting clear of every other object, above the floor and inside the
 /// bounds (check_robot_start). plan() calls it; commands call it early, before other work.
 void check_planning_inputs(const fem::SceneWorld& world);
 
+/// The problem of a built scene. make_propagator: null for copies of the world
+/// (SimulationPropagator with max_volume_change from options).
+PlanningProblem planning_problem(const fem::SceneWorld& world, const PlannerOptions& options,
+                                 PropagatorFactory make_propagator = {});
+
 /// FNV-1a 64 of the bytes of s.x and s.v (to check a replay against the tree).
 std::uint64_t state_hash(const fem::State& s);
 
-/// Plans from the scene's initial state. Throws InputError if the scene has no goal or no robot,
-/// the goal lies outside the bounds, or the robot starts inside another object (check_robot_start).
-PlanResult plan(const fem::Scene& scene, const PlannerOptions& options, Progress* progress = nullptr);
+/// Plans in a built scene from its initial state with the planner of options.algorithm.
+/// make_propagator: how expansions advance states (default: copies of `world`). Throws
+/// InputError if the scene has no goal or no robot, the goal lies outside the bounds, the robot
+/// starts inside another object (check_robot_start), or an option is out of range.
+PlanResult plan(const fem::SceneWorld& world, const PlannerOptions& options, Progress* progress = nullptr,
+                PropagatorFactory make_propagator = {});
 
-/// The states a plan passes through: re-simulates `path` from the scene's initial state with
-/// `propagator` (its on_step sees every step), then `settle_steps` of interpolation toward the
-/// goal. Returns the state at the end of every path segment (bit-identical to the tree's).
+/// The states a plan passes through: re-simulates `path` from the world's initial state with
+/// `propagator` (its on_step sees every step), then `settle_steps` of the settle control.
+/// Returns the state at the end of every path segment (bit-identical to the tree's).
 std::vector<fem::State> replay(SimulationPropagator& propagator, const std::vector<PathSegment>& path,
                                const Control& settle, int settle_steps);
 
 /// The settle control of a plan's replay (interpolation to the goal with the planner's cap and ω).
-Control settle_control(const SimulationPropagator& propagator, const PlannerOptions& options);
+Control settle_control(const fem::SceneWorld& world, const PlannerOptions& options);
 
 }  // namespace squeeze::plan

@@ -1,10 +1,11 @@
-// squeeze::plan — the simulator as the planner sees it (the propagator of OMPL's kinodynamic
-// planners): propagate(state, control, duration, result). Runs the steps of paper Algorithm 1,
-// lines 7–11: every step the world computes collisions and penalty forces, and the control adds
-// the manipulation forces.
+// squeeze::plan — how a planner advances a state: the propagator of OMPL's kinodynamic planners
+// (ompl::control::StatePropagator): propagate(state, control, duration, result). The simulation
+// propagator runs the steps of paper Algorithm 1, lines 7–11: every step the world computes
+// collisions and penalty forces, and the control adds the manipulation forces.
 #pragma once
 #include <Eigen/Geometry>
 #include <functional>
+#include <memory>
 
 #include "squeeze/fem/scene.h"
 #include "squeeze/plan/control.h"
@@ -17,7 +18,7 @@ const char* to_string(Validity v);
 
 struct PropagatorOptions {
   double max_volume_change = 0.1;  // fraction: |V/V0 − 1| above it in any deformable object is invalid
-  int check_every = 1;             // steps between validity checks (and at the last step)
+  int check_every = 1;             // steps between validity checks (and at the last step), >= 1
   bool stop_when_invalid = true;   // false: run every step anyway (replay)
 };
 
@@ -27,16 +28,24 @@ class Propagator {
   /// Simulates `steps` time steps from `start` with `control` applied to the robot; `result`
   /// receives the final state (or the state where the expansion became invalid).
   virtual Validity propagate(const fem::State& start, const Control& control, int steps, fem::State& result) = 0;
+  /// Time steps simulated by this propagator so far (statistics).
+  virtual long long steps_done() const = 0;
 };
 
-/// The propagator of a scene: owns a SceneWorld (one per thread: a World is not thread-safe).
+/// Makes one propagator; a planner asks for one per parallel expansion (each used by one thread).
+using PropagatorFactory = std::function<std::unique_ptr<Propagator>()>;
+
+/// |V/V0 − 1| of object b of `world` in s (0 for a rigid object; NaN if s is not finite).
+double volume_change(const fem::SceneWorld& world, const fem::State& s, int b);
+
+/// The propagator of a scene: a copy of a built SceneWorld (cheap: the rest data is shared).
 class SimulationPropagator : public Propagator {
  public:
-  /// Builds the scene's world (meshes come from the cache). Throws InputError like build_scene,
-  /// or if the robot is missing or rigid.
-  SimulationPropagator(const fem::Scene& scene, const PropagatorOptions& options);
+  /// Throws InputError if the scene's robot is missing or rigid, or options.check_every < 1.
+  SimulationPropagator(const fem::SceneWorld& world, const PropagatorOptions& options);
 
   Validity propagate(const fem::State& start, const Control& control, int steps, fem::State& result) override;
+  long long steps_done() const override { return steps_done_; }
 
   /// Called after every step with the state and the number of steps done in this propagation.
   std::function<void(const fem::State&, int)> on_step;
@@ -48,10 +57,9 @@ class SimulationPropagator : public Propagator {
   /// Centre of mass of the goal object in state s (m).
   Eigen::Vector3d goal_com(const fem::State& s) const;
   /// |V/V0 − 1| of object b in s (0 for a rigid object; NaN if s is not finite).
-  double volume_change(const fem::State& s, int b) const;
+  double volume_change(const fem::State& s, int b) const { return plan::volume_change(world_, s, b); }
   /// Largest |V/V0 − 1| over the deformable objects in s, and the object (or −1).
   double max_volume_change(const fem::State& s, int* object = nullptr) const;
-  long long steps_done() const { return steps_done_; }  // all propagations so far
 
  private:
   Validity check(const fem::State& s) const;
@@ -66,6 +74,8 @@ class SimulationPropagator : public Propagator {
 
 /// Index of the scene's robot; throws InputError "FILE: objects: …" if there is none or several.
 int robot_index(const fem::Scene& scene);
+/// Index of the scene's goal object (goal.object, else the robot); throws InputError if it is rigid.
+int goal_object_index(const fem::Scene& scene);
 
 /// Throws InputError "FILE: objects[i].transform: the robot starts inside NAME (…)" if, at rest, a
 /// vertex of the robot's coarse mesh lies strictly inside a tetrahedron of another object or a
