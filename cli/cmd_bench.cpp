@@ -130,7 +130,7 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
       for (int seed = 1; seed <= a.seeds; ++seed) {
         o.seed = static_cast<std::uint64_t>(seed);
         if (!global.quiet) std::fprintf(stderr, "squeeze: %s, seed %d of %d (limit %.0f s)\n", r->name, seed, a.seeds, limit);
-        const plan::PlanEvaluation e = plan::evaluate_plan(scene, o, &progress);
+        const plan::PlanEvaluation e = plan::evaluate_plan(w, o, &progress);
         const plan::PlanStatistics& s = e.result.stats;
         rate_it += s.iterations;
         rate_s += s.seconds;

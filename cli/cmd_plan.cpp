@@ -44,31 +44,30 @@ std::string hex64(std::uint64_t h) {
   return buf;
 }
 
-plan::PlannerOptions prepare_planning(const fem::Scene& scene, const PlanOverrides& o, Progress& progress) {
+PreparedPlanning prepare_planning(const fem::Scene& scene, const PlanOverrides& o, Progress& progress) {
   plan::robot_index(scene);  // errors about the robot before meshing
-  const fem::SceneWorld w = fem::build_scene(scene, &progress);  // meshes (cached)
+  fem::SceneWorld w = fem::build_scene(scene, &progress);  // meshes (cached)
   plan::check_planning_inputs(w);
   plan::PlannerOptions options = plan::planner_options(w);
   if (o.seed >= 0) options.seed = static_cast<std::uint64_t>(o.seed);
   if (o.iterations > 0) options.iterations = static_cast<int>(std::min<long long>(o.iterations, 100000000));
   options.time_limit = o.time_limit;
-  return options;
+  return {std::move(w), options};
 }
 
-ReplayOutput write_replay(const fem::Scene& scene, const plan::PlanFile& f, const std::string& plan_name,
+ReplayOutput write_replay(const fem::SceneWorld& world, const plan::PlanFile& f, const std::string& plan_name,
                           const std::string& output, double fps, int settle_steps, Progress& progress) {
   check_output_folder(output);
+  const fem::Scene& scene = world.scene;
   plan::PropagatorOptions po;
   po.stop_when_invalid = false;
-  plan::SimulationPropagator p(scene, po);
-  if (p.world().h != f.time_step) p.world().set_time_step(f.time_step);
+  plan::SimulationPropagator p(world, po);  // a copy of the built world
+  if (p.world().time_step() != f.time_step) p.world().set_time_step(f.time_step);
   const double h = f.time_step;
-  const int robot_vertices = p.robot().vertices;
-  for (const auto& seg : f.path)
-    if (seg.control.kind == plan::ForceKind::control_point && seg.control.vertex >= robot_vertices)
-      throw InputError(plan_name + ": a control point names robot vertex " + std::to_string(seg.control.vertex) +
-                       " but the robot of " + scene.file.string() + " has " + std::to_string(robot_vertices) +
-                       ": the plan was made for another scene");
+  for (size_t i = 0; i < f.path.size(); ++i)
+    f.path[i].control.kind->validate(f.path[i].control, p.robot(),
+                                     plan_name + ": path[" + std::to_string(i) + "] does not fit the robot of " +
+                                         scene.file.string() + " (the plan was made for another scene)");
   long long total = settle_steps;
   for (const auto& seg : f.path) total += seg.steps;
   const double duration = total * h;
@@ -77,8 +76,7 @@ ReplayOutput write_replay(const fem::Scene& scene, const plan::PlanFile& f, cons
   ReplayOutput out;
   out.frames = static_cast<int>(frames_d) + 1;
 
-  fem::SceneWorld metrics_world = fem::build_scene(scene);  // contacts for the metrics, apart from the replay
-  if (metrics_world.h != h) metrics_world.set_time_step(h);
+  fem::SceneWorld metrics_world = p.world();  // contacts for the metrics, apart from the replay
   TrajectoryWriter writer(metrics_world, output, fps, h, out.frames);
   const fem::World& w = p.world().world;
   for (int b = 0; b < w.bodies(); ++b) out.names.push_back(scene.objects[b].name);
@@ -105,7 +103,7 @@ ReplayOutput write_replay(const fem::Scene& scene, const plan::PlanFile& f, cons
   progress.finish();
   writer.commit();
   out.hash = plan::state_hash(ends.empty() ? s0 : ends.back());
-  out.matches = f.final_state_hash == 0 || out.hash == f.final_state_hash;
+  out.matches = out.hash == f.final_state_hash;
   out.final_distance = scene.goal ? (p.goal_com(settled) - scene.goal->position).norm() : 0.0;
   out.duration = duration;
   return out;
@@ -140,8 +138,9 @@ Runner add_plan_command(CLI::App& app, const Global& global) {
     check_output_directory(a.output);
     Progress progress(!global.quiet);
     const fem::Scene scene = fem::load_scene(a.scene);
-    const plan::PlannerOptions options = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
-    const plan::PlanResult r = plan::plan(scene, options, &progress);
+    const PreparedPlanning prep = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
+    const plan::PlannerOptions& options = prep.options;
+    const plan::PlanResult r = plan::plan(prep.world, options, &progress);
 
     const plan::PlanFile f = plan::make_plan_file(scene, options, r);
     plan::save_plan(a.output, f);
@@ -189,7 +188,8 @@ Runner add_replay_command(CLI::App& app, const Global& global) {
     const fem::Scene scene = fem::load_scene(a.scene);
     const plan::PlanFile f = plan::load_plan(a.plan);
     const int settle_steps = a.settle >= 0 ? static_cast<int>(std::lround(a.settle / f.time_step)) : f.settle_steps;
-    const ReplayOutput r = write_replay(scene, f, a.plan, a.output, a.fps, settle_steps, progress);
+    const fem::SceneWorld world = fem::build_scene(scene, &progress);
+    const ReplayOutput r = write_replay(world, f, a.plan, a.output, a.fps, settle_steps, progress);
     if (!global.quiet) {
       double worst = 0;
       for (double v : r.max_volume_change) worst = std::max(worst, v);

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 
 #include "commands.h"
 #include "plan_shared.h"
@@ -75,7 +76,9 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     auto t = clock_type::now();
     const fem::Scene scene = fem::load_scene(a.scene);
     const render::RenderSettings rs = render::parse_render_settings(scene.render, scene.file.string());
-    const plan::PlannerOptions options = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
+    const long long builds_before = fem::scene_builds();
+    const PreparedPlanning prep = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
+    const plan::PlannerOptions& options = prep.options;
     seconds.emplace_back("meshing", since(t));
     const fs::path out = a.output;
     std::error_code ec;
@@ -84,7 +87,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
 
     // Plan.
     t = clock_type::now();
-    const plan::PlanResult r = plan::plan(scene, options, &progress);
+    const plan::PlanResult r = plan::plan(prep.world, options, &progress);
     const plan::PlanFile f = plan::make_plan_file(scene, options, r);
     plan::save_plan(out / "plan.json", f);
     seconds.emplace_back("planning", since(t));
@@ -92,7 +95,12 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     // Replay.
     t = clock_type::now();
     const double fps = a.fps > 0 ? a.fps : rs.fps.value_or(30.0);
-    const ReplayOutput rep = write_replay(scene, f, (out / "plan.json").string(), a.output, fps, f.settle_steps, progress);
+    const ReplayOutput rep =
+        write_replay(prep.world, f, (out / "plan.json").string(), a.output, fps, f.settle_steps, progress);
+    // The scene's world is built once (prepare_planning); planning, replay and metrics use copies.
+    const long long builds = fem::scene_builds() - builds_before;
+    spdlog::info("squeeze run: built the scene's world {} time{} (planning, replay and metrics use copies)", builds,
+                builds == 1 ? "" : "s");
     if (!rep.matches)
       throw std::logic_error("the replay does not reproduce the planner's final state (hash " + hex64(rep.hash) +
                              ", planner " + hex64(f.final_state_hash) + ")");

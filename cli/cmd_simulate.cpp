@@ -61,7 +61,7 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
     fem::Scene scene = fem::load_scene(a.scene);
     fem::SceneWorld w = fem::build_scene(scene, &progress);
     const double interval = 1.0 / a.fps;
-    const int substeps = std::max(1, static_cast<int>(std::ceil(interval / w.h - 1e-9)));
+    const int substeps = std::max(1, static_cast<int>(std::ceil(interval / w.time_step() - 1e-9)));
     const double h = interval / substeps;
     w.set_time_step(h);  // divides the frame interval, never larger than the scene's step
     const int nobj = w.world.bodies();

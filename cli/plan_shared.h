@@ -20,10 +20,17 @@ struct PlanOverrides {
   double time_limit = 0;  // s, 0: none
 };
 
+/// A scene built once for planning and everything after it (replay, metrics): copies of `world`.
+struct PreparedPlanning {
+  fem::SceneWorld world;
+  plan::PlannerOptions options;
+};
+
 /// Checks the scene for planning (robot first, before meshing; then, on the built world, the goal,
-/// the bounds and the robot's start: plan::check_planning_inputs), meshes it (cached) and returns the
-/// planner options with the overrides applied. Throws InputError "FILE: KEY: problem".
-plan::PlannerOptions prepare_planning(const fem::Scene& scene, const PlanOverrides& overrides, Progress& progress);
+/// the bounds and the robot's start: plan::check_planning_inputs), builds it (meshes from the
+/// cache) and returns it with the planner options, overrides applied. Throws InputError
+/// "FILE: KEY: problem".
+PreparedPlanning prepare_planning(const fem::Scene& scene, const PlanOverrides& overrides, Progress& progress);
 
 struct ReplayOutput {
   int frames = 0;
@@ -35,9 +42,10 @@ struct ReplayOutput {
   bool matches = false;                   // hash equals the plan's final_state_hash
 };
 
-/// Re-simulates plan `f` of `scene` (path, then `settle_steps` of settling) and writes
-/// OUTPUT/metrics.csv and OUTPUT/trajectory/ at `fps`. Throws InputError on bad input.
-ReplayOutput write_replay(const fem::Scene& scene, const plan::PlanFile& f, const std::string& plan_name,
+/// Re-simulates plan `f` in the built scene `world` (path, then `settle_steps` of settling) and
+/// writes OUTPUT/metrics.csv and OUTPUT/trajectory/ at `fps`. Throws InputError on bad input (a
+/// plan that does not fit the scene names `plan_name`).
+ReplayOutput write_replay(const fem::SceneWorld& world, const plan::PlanFile& f, const std::string& plan_name,
                           const std::string& output, double fps, int settle_steps, Progress& progress);
 
 std::string hex64(std::uint64_t h);

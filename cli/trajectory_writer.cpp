@@ -88,9 +88,7 @@ TrajectoryWriter::~TrajectoryWriter() {
 
 void TrajectoryWriter::add_frame(const fem::State& s, double t) {
   // Contacts of this very state (the step's statistics belong to the state before it).
-  fem::RowMatrixX3d F;
-  w_.world.total_forces(s, w_.external.rows() ? &w_.external : nullptr, F);
-  const fem::StepStats& st = w_.world.last_stats();
+  const fem::StepStats st = w_.world.contact_stats(s);
   double depth = st.max_depth;
   int colliding = st.colliding_vertices;
   const auto& floor = w_.scene.floor;

@@ -1,6 +1,7 @@
 // Tests of squeeze::fem: constraint kernels, the world's step, spatial hashing, penetration depth.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +13,8 @@
 #include "squeeze/fem/constraints.h"
 #include "squeeze/fem/scene.h"
 #include "squeeze/fem/world.h"
+#include "squeeze/fem/forces.h"
+#include "squeeze/fem/integrator.h"
 
 using namespace squeeze;
 using namespace squeeze::meshing;
@@ -474,6 +477,7 @@ double centroid_gap(const World& w, const State& s) { return (centroid(w, s, 1) 
 World busy_world(int n = 4) {
   WorldOptions o;
   o.h = 1e-4;
+  o.parallel = {0, 0, 0};  // every pass in parallel, however small (with 2 threads)
   o.floor = true;
   o.floor_height = -0.3;
   o.contact_stiffness = 2e3;
@@ -528,6 +532,8 @@ void expect_bit_identical_with_1_and_2_threads(int n, int steps, int min_touch) 
 
 }  // namespace
 
+// The parallel thresholds are 0 here: with 2 threads every pass (element forces, detection,
+// penetration depths) runs in parallel even on these small balls.
 TEST(FemWorld, BitIdenticalWhateverTheThreadCount) { expect_bit_identical_with_1_and_2_threads(4, 1500, 50); }
 
 // Finer balls: several element groups per object, the force pass in parallel.
@@ -829,4 +835,116 @@ TEST(FemWorld, DeformationDampingKeepsMomentumAndRigidMotion) {
   EXPECT_GT(speed, 0.1);  // it still moves (momentum, angular momentum)
   EXPECT_LT(max_rate(s), 0.03 * rate0);
   EXPECT_LT(w.kinetic_energy(s), e0);
+}
+
+// Issue 15: a World is a value. A copy shares the rest data, steps bit for bit like the original,
+// and changing one (a body, a pin, the time step) leaves the other as it was.
+TEST(FemWorld, CopiesStepLikeTheOriginalAndChangeIndependently) {
+  World a = busy_world(4);
+  a.prepare();
+  World b = a;
+  State sa = a.initial_state(), sb = b.initial_state();
+  for (int k = 0; k < 200; ++k) {
+    a.step(sa);
+    b.step(sb);
+  }
+  EXPECT_EQ(std::memcmp(sa.x.data(), sb.x.data(), sizeof(double) * sa.x.size()), 0);
+  EXPECT_EQ(std::memcmp(sa.v.data(), sb.v.data(), sizeof(double) * sa.v.size()), 0);
+  // A new time step for the copy only; nothing rebuilt, the original keeps its own.
+  b.set_time_step(5e-5);
+  EXPECT_EQ(b.time_step(), 5e-5);
+  EXPECT_EQ(a.time_step(), 1e-4);
+  State s1 = a.initial_state(), s2 = s1;
+  a.step(s1);
+  b.step(s2);
+  EXPECT_NEAR(s1.time, 1e-4, 1e-18);
+  EXPECT_NEAR(s2.time, 5e-5, 1e-18);
+  // Pinning a vertex of the copy does not pin the original's.
+  World c = a;
+  c.pin_vertex(0);
+  EXPECT_TRUE(c.pinned(0));
+  EXPECT_FALSE(a.pinned(0));
+  // A body added to the copy only.
+  World d = a;
+  d.add_body(Body(ball_tet_mesh(0.05, 3), Material{}, false));
+  EXPECT_EQ(d.bodies(), a.bodies() + 1);
+  EXPECT_GT(d.state_rows(), a.state_rows());
+  State sd = d.initial_state();
+  d.step(sd);
+  EXPECT_TRUE(sd.x.allFinite());
+}
+
+// Issue 15: the force assembly is thread-safe on one const World with one workspace per thread,
+// and World::total_forces is the same assembly.
+TEST(FemWorld, AssemblyWithSeparateWorkspacesIsThreadSafe) {
+  World w = busy_world(7);
+  w.prepare();
+  State s = w.initial_state();
+  RowMatrixX3d ext = RowMatrixX3d::Zero(s.x.rows(), 3);
+  for (int k = 0; k < 400; ++k) w.step(s);  // a deformed state with contacts
+  RowMatrixX3d F;
+  w.total_forces(s, nullptr, F);
+  ASSERT_GT(w.last_stats().contacts, 0);
+  const World& cw = w;
+  std::vector<RowMatrixX3d> got(8);
+  tbb::parallel_for(0, 8, [&](int i) {
+    ForceWorkspace ws;
+    assemble_forces(cw, s, &ext, ws, got[i]);
+  });
+  for (const RowMatrixX3d& G : got) EXPECT_EQ(std::memcmp(G.data(), F.data(), sizeof(double) * F.size()), 0);
+  // internal_only: no gravity, floor or contacts.
+  ForceWorkspace ws;
+  RowMatrixX3d I, J;
+  assemble_forces(cw, s, nullptr, ws, I, ForceTerms::internal_only());
+  w.internal_forces(s, J);
+  EXPECT_EQ(std::memcmp(I.data(), J.data(), sizeof(double) * I.size()), 0);
+  EXPECT_GT((F - I).norm(), 0.0);
+}
+
+// Issue 15: integrators come from one registry; an unknown one is named.
+TEST(FemIntegrator, RegistryMakesTheRegisteredOnesAndNamesThemOtherwise) {
+  const std::vector<std::string> names = integrator_names();
+  ASSERT_FALSE(names.empty());
+  EXPECT_EQ(names[0], "verlet");
+  for (const std::string& n : names) {
+    const std::unique_ptr<TimeIntegrator> i = make_integrator(n);
+    EXPECT_EQ(i->name(), n);
+    EXPECT_EQ(i->clone()->name(), n);
+  }
+  try {
+    make_integrator("euler");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown integrator \"euler\" (known: \"verlet\""), std::string::npos) << e.what();
+  }
+  WorldOptions o;
+  o.integrator = "euler";
+  EXPECT_THROW(World{o}, InputError);
+}
+
+// Issue 15: gravity is per body in the world: an object without it feels no net force at rest,
+// and the interpolation of the planner reads it from the world.
+TEST(FemWorld, GravityIsPerBody) {
+  WorldOptions o;
+  o.h = 1e-4;
+  o.collisions = false;
+  World w(o);
+  Material m;
+  m.k_distance = m.k_volume = 10;
+  Body floating(ball_tet_mesh(0.1, 3), m, false);
+  floating.gravity = false;
+  w.add_body(floating);
+  Eigen::Affine3d far = Eigen::Affine3d::Identity();
+  far.translation() = Vector3d(1, 0, 0);
+  w.add_body(Body(ball_tet_mesh(0.1, 3), m, false, far));
+  EXPECT_EQ(w.gravity_of(0), Vector3d::Zero());
+  EXPECT_EQ(w.gravity_of(1), o.gravity);
+  State s = w.initial_state();
+  RowMatrixX3d F;
+  w.total_forces(s, nullptr, F);
+  const int n0 = w.body(0).vertices();
+  EXPECT_LT(F.topRows(n0).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_GT(F.bottomRows(F.rows() - n0).cwiseAbs().maxCoeff(), 1e-6);
+  for (int k = 0; k < 100; ++k) w.step(s);
+  EXPECT_LT((s.x.topRows(n0) - w.body(0).rest).cwiseAbs().maxCoeff(), 1e-12);
 }

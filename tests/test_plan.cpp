@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -72,14 +73,14 @@ TEST(PlanForces, BodyForceIsTheRequestedTotalTowardTheSample) {
   const sqt::TempDir tmp("plan-body");
   const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
-  SimulationPropagator p(scene, {});
+  SimulationPropagator p(fem::build_scene(scene), {});
   const fem::State s = p.world().initial_state();
   Control c;
-  c.kind = ForceKind::body;
+  c.kind = &control_kind("body");
   c.target = Eigen::Vector3d(0.3, 0.9, -0.4);
   c.force = 7.5;
   fem::RowMatrixX3d F = fem::RowMatrixX3d::Zero(s.x.rows(), 3);
-  AppliedControl(p.robot(), c, s).add_forces(s, F);
+  apply_control(p.robot(), c, s)->add_forces(s, F);
   const Eigen::Vector3d total = F.colwise().sum().transpose();
   const Eigen::Vector3d dir = (c.target - p.robot().com(s)).normalized();
   EXPECT_NEAR(total.norm(), 7.5, 1e-12);
@@ -99,17 +100,17 @@ TEST(PlanForces, ControlPointForceActsWithinTheRadiusOnly) {
   const sqt::TempDir tmp("plan-cp");
   const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
-  SimulationPropagator p(scene, {});
+  SimulationPropagator p(fem::build_scene(scene), {});
   const fem::State s = p.world().initial_state();
   const Robot& r = p.robot();
   Control c;
-  c.kind = ForceKind::control_point;
+  c.kind = &control_kind("control_point");
   c.vertex = 0;  // a corner of the cube
   c.radius = 0.11;
   c.force = 3;
   c.target = Eigen::Vector3d(0, 1, 0);
   fem::RowMatrixX3d F = fem::RowMatrixX3d::Zero(s.x.rows(), 3);
-  AppliedControl(r, c, s).add_forces(s, F);
+  apply_control(r, c, s)->add_forces(s, F);
   int pushed = 0;
   for (int i = 0; i < r.vertices; ++i) {
     const double dist = (s.x.row(r.first_row + i) - s.x.row(r.first_row)).norm();
@@ -126,23 +127,23 @@ TEST(PlanForces, InterpolationForceVanishesAtTheGoalConfiguration) {
   const sqt::TempDir tmp("plan-interp");
   const fs::path& d = tmp.path();
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
-  SimulationPropagator p(scene, {});
+  SimulationPropagator p(fem::build_scene(scene), {});
   fem::State s = p.world().initial_state();
   const Robot& r = p.robot();
   Control c;
-  c.kind = ForceKind::interpolation;
+  c.kind = &control_kind("interpolation");
   c.target = r.rest_com;  // the goal configuration is the rest shape where it is
   c.force = 100;
   c.omega = 10;
   fem::RowMatrixX3d F = fem::RowMatrixX3d::Zero(s.x.rows(), 3);
-  AppliedControl(r, c, s).add_forces(s, F);
+  apply_control(r, c, s)->add_forces(s, F);
   // Only the robot's gravity is cancelled: f_i = −m_i g.
   for (int i = 0; i < r.vertices; ++i)
     EXPECT_NEAR((F.row(r.first_row + i).transpose() + r.mass(i) * r.gravity).norm(), 0.0, 1e-12);
   // Away from it, the pull points back and is capped at force / mass per vertex.
   s.x.middleRows(r.first_row, r.vertices).rowwise() += Eigen::RowVector3d(5, 0, 0);
   F.setZero();
-  AppliedControl(r, c, s).add_forces(s, F);
+  apply_control(r, c, s)->add_forces(s, F);
   for (int i = 0; i < r.vertices; ++i) {
     const Eigen::Vector3d a = F.row(r.first_row + i).transpose() / r.mass(i) + r.gravity;
     EXPECT_LT(a.x(), 0);
@@ -162,11 +163,11 @@ TEST(Planner, SameSeedSamePlanWithOneAndTwoThreads) {
   PlanResult one, two;
   {
     tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
-    one = squeeze::plan::plan(scene, o);
+    one = squeeze::plan::plan(fem::build_scene(scene), o);
   }
   {
     tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 2);
-    two = squeeze::plan::plan(scene, o);
+    two = squeeze::plan::plan(fem::build_scene(scene), o);
   }
   EXPECT_EQ(one.stats.iterations, 24);
   EXPECT_EQ(one.stats.nodes, two.stats.nodes);
@@ -183,7 +184,7 @@ TEST(Planner, SameSeedSamePlanWithOneAndTwoThreads) {
   EXPECT_EQ(one.final_state_hash, two.final_state_hash);
   // Another seed gives another tree.
   o.seed = 8;
-  const PlanResult other = squeeze::plan::plan(scene, o);
+  const PlanResult other = squeeze::plan::plan(fem::build_scene(scene), o);
   EXPECT_NE(other.final_state_hash, one.final_state_hash);
 }
 
@@ -197,7 +198,7 @@ TEST(Planner, NeighbouringSeedsGiveUnrelatedTrees) {
   std::set<std::uint64_t> hashes;
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
     o.seed = seed;
-    const PlanResult r = squeeze::plan::plan(scene, o);
+    const PlanResult r = squeeze::plan::plan(fem::build_scene(scene), o);
     hashes.insert(r.final_state_hash);
   }
   EXPECT_EQ(hashes.size(), 6u);
@@ -209,11 +210,11 @@ TEST(Planner, ReplayReproducesTheTreeStatesBitForBit) {
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene()));
   PlannerOptions o = options_of(scene);
   o.iterations = 40;
-  const PlanEvaluation e = evaluate_plan(scene, o);
+  const PlanEvaluation e = evaluate_plan(fem::build_scene(scene), o);
   ASSERT_GT(e.result.path.size(), 1u);
   EXPECT_TRUE(e.replay_matches);
   // The path really moves the robot toward the goal.
-  SimulationPropagator p(scene, {});
+  SimulationPropagator p(fem::build_scene(scene), {});
   const double start = (p.goal_com(p.world().initial_state()) - scene.goal->position).norm();
   EXPECT_LT(e.result.stats.final_distance, start);
   // Obstacles at rest are shared between nodes: less state per node than a full copy.
@@ -232,7 +233,7 @@ TEST(Planner, SolvesTheMiniCorridorWithinLimitsOfVolume) {
   int solved = 0;
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     o.seed = seed;
-    const PlanEvaluation e = evaluate_plan(scene, o);
+    const PlanEvaluation e = evaluate_plan(fem::build_scene(scene), o);
     if (e.result.status != PlanStatus::solved) continue;
     ++solved;
     EXPECT_LE(e.result.stats.final_distance, scene.goal->tolerance);
@@ -250,7 +251,7 @@ TEST(Planner, UnreachableGoalEndsApproximate) {
   j["objects"][1] = {{"name", "wall"}, {"mesh", kAssets + "box_3x3x3.mesh"}, {"kind", "rigid"},
                      {"transform", {{"scale", {0.2, 1.4, 1.6}}, {"translate", {0.0, 0.55, 0.0}}}}};
   const fem::Scene scene = fem::load_scene(write_scene(d, j));
-  const PlanResult r = squeeze::plan::plan(scene, options_of(scene));
+  const PlanResult r = squeeze::plan::plan(fem::build_scene(scene), options_of(scene));
   EXPECT_EQ(r.status, PlanStatus::approximate);
   EXPECT_EQ(r.stats.iterations, 60);
   EXPECT_GT(r.stats.final_distance, 0.5);  // still on the near side of the wall
@@ -361,4 +362,171 @@ TEST(PlanCli, PlanThenReplayWritesMetricsAndTrajectory) {
   EXPECT_EQ(run(d, {"replay", scene.string(), (d / "missing.json").string(), "-o", (d / "o3").string()}, &err), 1);
   EXPECT_NE(err.find("missing.json: cannot be read"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(d / "o3"));
+}
+
+// Issue 15: a plan whose final_state_hash is removed, altered or not hexadecimal is refused with
+// one line (the replay used to call a missing or malformed hash a bit-for-bit match).
+TEST(PlanCli, ReplayRefusesAMissingAlteredOrMalformedHash) {
+  const sqt::TempDir tmp("plan-hash");
+  const fs::path& d = tmp.path();
+  const fs::path scene = write_scene(d, mini_scene({{"planner", {{"iterations", 8}}}}));
+  const fs::path plan_file = d / "plan.json";
+  const int rc = run(d, {"-q", "plan", scene.string(), "-o", plan_file.string(), "--seed", "1"});
+  ASSERT_TRUE(rc == 0 || rc == 3) << rc;
+  std::ifstream in(plan_file);
+  const nlohmann::json good = nlohmann::json::parse(in);
+  std::string err;
+  ASSERT_EQ(run(d, {"-q", "replay", scene.string(), plan_file.string(), "-o", (d / "ok").string()}, &err), 0) << err;
+  const std::string h = good["final_state_hash"];
+  std::string altered = h;
+  altered[15] = altered[15] == '0' ? '1' : '0';
+  struct Case {
+    const char* what;
+    nlohmann::json hash;  // null: the key removed
+    const char* expect;
+  };
+  const std::vector<Case> cases = {{"removed", nullptr, "final_state_hash: missing"},
+                                   {"altered", altered, "does not reproduce the planner's final state"},
+                                   {"not hexadecimal", "zz" + h.substr(2), "final_state_hash: must be 16 hexadecimal digits"},
+                                   {"zero", "0", "final_state_hash: must be 16 hexadecimal digits"},
+                                   {"not a string", 12, "final_state_hash"}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    nlohmann::json j = good;
+    if (c.hash.is_null()) j.erase("final_state_hash");
+    else j["final_state_hash"] = c.hash;
+    const fs::path bad = d / "bad.json";
+    std::ofstream(bad) << j.dump(2);
+    const fs::path out = d / "o";
+    EXPECT_EQ(run(d, {"-q", "replay", scene.string(), bad.string(), "-o", out.string()}, &err), 1) << err;
+    EXPECT_NE(err.find(c.expect), std::string::npos) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  }
+}
+
+// Issue 15: controls have one home. Every registered kind has a name, a weight key, and
+// survives the plan file; unknown kinds and weights name the registered ones.
+TEST(ControlRegistry, EveryKindRoundTripsThroughThePlanFile) {
+  const sqt::TempDir tmp("plan-registry");
+  const fs::path& d = tmp.path();
+  const fem::SceneWorld w = fem::build_scene(fem::load_scene(write_scene(d, mini_scene())));
+  const PlannerOptions o = planner_options(w);
+  ASSERT_GE(control_kinds().size(), 3u);
+  EXPECT_EQ(o.weights.w.size(), control_kinds().size());
+  PlanFile f;
+  f.scene = "x";
+  f.time_step = w.time_step();
+  f.options = o;
+  f.final_state_hash = 0x0123456789abcdefULL;
+  const Robot robot(w.world, robot_index(w.scene));
+  Random rng(7);
+  SamplingContext ctx{&robot, o.max_force, o.control_radius, o.interpolation_omega};
+  for (const ControlKind* k : control_kinds()) {
+    EXPECT_EQ(&control_kind(k->name()), k);
+    EXPECT_GE(o.weights[k->name()], 0.0);
+    Control c;
+    c.kind = k;
+    c.target = Eigen::Vector3d(0.1, 0.2, 0.3);
+    k->sample(c, ctx, rng);
+    EXPECT_NO_THROW(k->validate(c, robot, "test"));
+    EXPECT_NE(apply_control(robot, c, w.initial_state()), nullptr);
+    f.path.push_back({c, 5});
+  }
+  f.settle = settle_control(w, o);
+  f.settle_steps = 3;
+  save_plan(d / "p.json", f);
+  const PlanFile g = load_plan(d / "p.json");
+  ASSERT_EQ(g.path.size(), f.path.size());
+  for (size_t i = 0; i < f.path.size(); ++i) {
+    const Control &a = f.path[i].control, &b = g.path[i].control;
+    EXPECT_EQ(a.kind, b.kind);
+    EXPECT_EQ(a.target, b.target);
+    EXPECT_EQ(a.force, b.force);
+    EXPECT_EQ(f.path[i].steps, g.path[i].steps);
+    if (std::string(a.kind->name()) == "control_point") EXPECT_EQ(a.vertex, b.vertex);
+    if (std::string(a.kind->name()) == "interpolation") EXPECT_EQ(a.omega, b.omega);
+  }
+  EXPECT_EQ(g.final_state_hash, f.final_state_hash);
+  // Unknown names list the registered kinds.
+  try {
+    control_kind("twist", "path[0].kind");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    for (const ControlKind* k : control_kinds()) EXPECT_NE(std::string(e.what()).find(k->name()), std::string::npos) << e.what();
+  }
+  const fem::Scene bad = fem::load_scene(write_scene(d, mini_scene({{"planner", {{"weights", {{"twist", 1}}}}}}), "bad.json"));
+  try {
+    planner_options(fem::build_scene(bad));
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("planner.weights.twist: unknown key (allowed here: body, control_point"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+namespace {
+// A propagator that forwards to a SimulationPropagator and counts its propagations.
+class CountingPropagator : public Propagator {
+ public:
+  CountingPropagator(const fem::SceneWorld& w, int* count) : inner_(w, PropagatorOptions{}), count_(count) {}
+  Validity propagate(const fem::State& start, const Control& c, int steps, fem::State& result) override {
+    ++*count_;  // the planner runs the propagators of a batch in parallel: count with atomics in real code
+    return inner_.propagate(start, c, steps, result);
+  }
+  long long steps_done() const override { return inner_.steps_done(); }
+
+ private:
+  SimulationPropagator inner_;
+  int* count_;
+};
+}  // namespace
+
+// Issue 15: plan() advances states through the propagators it is handed (OMPL's seam).
+TEST(Planner, UsesThePropagatorsItIsHanded) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  const sqt::TempDir tmp("plan-seam");
+  const fs::path& d = tmp.path();
+  const fem::SceneWorld w = fem::build_scene(fem::load_scene(write_scene(d, mini_scene({{"planner", {{"iterations", 12}}}}))));
+  PlannerOptions o = planner_options(w);
+  std::vector<int> counts;
+  counts.reserve(64);
+  int made = 0;
+  const PlanResult r = squeeze::plan::plan(w, o, nullptr, [&] {
+    ++made;
+    counts.push_back(0);
+    return std::make_unique<CountingPropagator>(w, &counts.back());
+  });
+  EXPECT_EQ(made, o.batch);
+  int total = 0;
+  for (int c : counts) total += c;
+  EXPECT_EQ(total, r.stats.iterations);
+  // The default propagators (copies of the world) give the same plan.
+  const PlanResult def = squeeze::plan::plan(w, o);
+  EXPECT_EQ(def.final_state_hash, r.final_state_hash);
+  EXPECT_EQ(def.stats.iterations, r.stats.iterations);
+  // An unknown planner is named.
+  o.algorithm = "prm";
+  try {
+    squeeze::plan::plan(w, o);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown planner \"prm\" (known: \"rrt\")"), std::string::npos) << e.what();
+  }
+}
+
+// Issue 15: check_every 0 would divide by zero; it is refused.
+TEST(Planner, PropagatorRefusesCheckEveryBelowOne) {
+  const sqt::TempDir tmp("plan-check-every");
+  const fem::SceneWorld w = fem::build_scene(fem::load_scene(write_scene(tmp.path(), mini_scene())));
+  PropagatorOptions po;
+  po.check_every = 0;
+  EXPECT_THROW(SimulationPropagator(w, po), InputError);
+  po.check_every = 3;
+  SimulationPropagator p(w, po);
+  fem::State s;
+  Control c;
+  c.kind = &control_kind("body");
+  EXPECT_EQ(p.propagate(w.initial_state(), c, 7, s), Validity::valid);
+  EXPECT_EQ(p.steps_done(), 7);
 }

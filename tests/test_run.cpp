@@ -149,3 +149,16 @@ TEST(BenchTable1Cli, BadArgumentsGetOneLineAndWriteNothing) {
   EXPECT_NE(err.find("--only nosuchscene: no bundled scene matches"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(d / "out"));
 }
+
+// Issue 15: `squeeze run` builds the scene's World once; planning, replay and metrics use copies.
+TEST(RunCli, BuildsTheSceneWorldOnce) {
+  const sqt::TempDir tmp("run-once");
+  const fs::path& d = tmp.path();
+  std::string err;
+  const int rc = run(d, {"-v", "run", kScenes + "barriers1.json", "-o", (d / "out").string(), "--iterations", "8",
+                         "--no-render"},
+                     &err);
+  ASSERT_TRUE(rc == 0 || rc == 3) << rc << err;
+  EXPECT_NE(err.find("built the scene's world 1 time (planning, replay and metrics use copies)"), std::string::npos)
+      << err;
+}

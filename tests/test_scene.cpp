@@ -73,9 +73,9 @@ TEST_F(SceneTest, DefaultsFillAMinimalScene) {
   EXPECT_TRUE(o.pinned.empty());
 
   SceneWorld w = build_scene(s);
-  EXPECT_GT(w.h, 0.0);
-  EXPECT_LE(w.h, 1e-3);
-  EXPECT_EQ(w.world.options().h, w.h);
+  EXPECT_GT(w.time_step(), 0.0);
+  EXPECT_LE(w.time_step(), 1e-3);
+  EXPECT_EQ(w.world.options().h, w.time_step());
   const Body& B = w.world.body(0);
   EXPECT_NEAR(B.material.k_distance, 1e5 * B.total_volume() / B.E.rows(), 1e-12);
   EXPECT_NEAR(B.material.k_volume, 3e5 * B.total_volume() / B.tets(), 1e-12);
@@ -89,7 +89,7 @@ TEST_F(SceneTest, DefaultsFillAMinimalScene) {
   EXPECT_EQ(B.material.mass_scaling, 1.5);
   EXPECT_EQ(B.material.deformation_damping, 20.0);
   EXPECT_TRUE(w.world.options().cap_contact_stiffness);
-  EXPECT_NEAR(w.h, stable_time_step(w.world), 1e-15);
+  EXPECT_NEAR(w.time_step(), stable_time_step(w.world), 1e-15);
   EXPECT_TRUE(w.bounds.contains(Eigen::Vector3d(0, 0, 0)));
 }
 
@@ -188,9 +188,9 @@ TEST_F(SceneTest, PinsGravityFlagAndInitialVelocity) {
     {"name": "c", "mesh": "cube.mesh", "gravity": false, "velocity": [1, 0, 0], "transform": {"translate": [-3, 0, 0]}}]})");
   SceneWorld w = build_scene(load_scene(p));
   State s = w.initial_state();
-  const int steps = static_cast<int>(0.1 / w.h);
+  const int steps = static_cast<int>(0.1 / w.time_step());
   for (int k = 0; k < steps; ++k) w.step(s);
-  const double t = steps * w.h;
+  const double t = steps * w.time_step();
   const ObjectMetrics a = object_metrics(w, s, 0), b = object_metrics(w, s, 1), c = object_metrics(w, s, 2);
   EXPECT_NEAR(a.aabb.max().y(), 0.5, 1e-12);  // pinned top
   EXPECT_LT(a.com.y(), -1e-4);                // the rest sags
@@ -220,14 +220,14 @@ TEST_F(SceneTest, MeshWithTinyTetsGetsAUsableAutomaticStep) {
   const double plain = stable_time_step(
       build_scene(load_scene(scene(R"("time_step": 1e-4, )", R"({"volume_weighted": false, "mass_scaling": 0})"))).world);
   SceneWorld w = build_scene(load_scene(scene("", "{}")));
-  std::printf("graded cube: automatic step %.3g s (uniform stiffnesses: %.3g s), %.2f %% mass added\n", w.h, plain,
+  std::printf("graded cube: automatic step %.3g s (uniform stiffnesses: %.3g s), %.2f %% mass added\n", w.time_step(), plain,
               100 * w.world.body(0).added_mass / w.world.body(0).mass.sum());
-  EXPECT_GT(w.h, 50 * plain);
-  EXPECT_GT(w.h, 2e-5);
+  EXPECT_GT(w.time_step(), 50 * plain);
+  EXPECT_GT(w.time_step(), 2e-5);
   EXPECT_LT(w.world.body(0).added_mass, 0.08 * w.world.body(0).mass.sum());  // graded everywhere: many outliers
   // It falls, lands and settles without losing volume.
   State s = w.initial_state();
-  const int steps = static_cast<int>(0.7 / w.h);
+  const int steps = static_cast<int>(0.7 / w.time_step());
   double worst = 1;
   for (int k = 0; k < steps; ++k) {
     w.step(s);
