@@ -13,7 +13,9 @@
 #include "squeeze/common/error.h"
 #include "squeeze/fem/scene.h"
 #include "squeeze/meshing/tet_io.h"
-#include "squeeze/render/exports.h"
+#include "squeeze/render/export_formats.h"
+#include "squeeze/render/exporter.h"
+#include "squeeze/render/pc2_exporter.h"
 #include "squeeze/render/png_io.h"
 #include "squeeze/render/render.h"
 #include "squeeze/render/renderer.h"
@@ -295,7 +297,7 @@ TEST_F(RenderTest, SyntheticTrajectoryFramesPlotAndExports) {
   const fs::path sc = scene();
   const fs::path traj = write_trajectory(sc, dir_->path() / "sim", 11, 10.0, squash);
   RenderOptions o = options(sc, traj, "out");
-  o.pc2 = o.obj = o.ply = o.vtu = true;
+  o.exports = {"pc2", "obj", "ply", "vtu"};
   o.coarse = true;
   const RenderStats st = render_trajectory(o);
   EXPECT_EQ(st.total_frames, 11);  // 1 s × 10 fps + 1
