@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
+#include "squeeze/render/export_formats.h"
 #include "squeeze/render/render.h"
 
 namespace squeeze::cli {
@@ -42,9 +43,7 @@ Runner add_render_command(CLI::App& app, const Global& global) {
                   "Render only output frames A-B (inclusive, 0-based; frame k is at t = k / fps), e.g. to split a "
                   "long path across machines");
   cmd->add_flag("--coarse", args->coarse, "Overlay the coarse tetrahedral meshes as wireframes");
-  cmd->add_option("--export", args->exports,
-                  "Comma-separated exports: pc2 (rest OBJ + Blender point cache per object), obj, ply (per frame "
-                  "and object), vtu (coarse tet meshes per frame + .pvd for ParaView)");
+  cmd->add_option("--export", args->exports, render::export_option_help());
   cmd->add_option("--gl", args->gl, "OpenGL context: osmesa (default) or egl (EGL surfaceless, Mesa)")
       ->capture_default_str();
   cmd->add_option("--samples", args->samples, "Multisample anti-aliasing samples per pixel (1: off)")

@@ -17,6 +17,7 @@
 #include "squeeze/fem/scene.h"
 #include "squeeze/plan/plan_io.h"
 #include "squeeze/plan/planner.h"
+#include "squeeze/render/export_formats.h"
 #include "squeeze/render/render.h"
 #include "squeeze/render/settings.h"
 #include "trajectory_writer.h"
@@ -59,7 +60,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--width", args->width, "Image width in pixels (default: render.width, else 1280)")->check(CLI::PositiveNumber);
   cmd->add_option("--height", args->height, "Image height in pixels (default: render.height, else 720)")->check(CLI::PositiveNumber);
-  cmd->add_option("--export", args->exports, "Exports: any of pc2,obj,ply,vtu, or none")->capture_default_str();
+  cmd->add_option("--export", args->exports, render::export_option_help())->capture_default_str();
   cmd->add_option("--gl", args->gl, "OpenGL context: osmesa or egl")->capture_default_str();
   cmd->add_flag("--no-render", args->no_render, "Stop after the replay (no frames, plots or exports)");
 
@@ -118,7 +119,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       render::RenderOptions frames = ro;
       frames.output = out / "frames";
       frames.plots = false;
-      frames.pc2 = frames.obj = frames.ply = frames.vtu = false;
+      frames.exports.clear();
       frames.on_frame = [&](const render::FrameProgress& p) {
         if (p.done == 1) progress.stage("rendering frames", p.total);
         progress.update(p.done);
@@ -176,7 +177,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
                    rep.frames, fps);
       if (!a.no_render)
         std::fprintf(stderr, ", frames/frame_*.png (%dx%d), volume.png, volume.svg%s", st.width, st.height,
-                     (ro.pc2 || ro.obj || ro.ply || ro.vtu) ? ", export/" : "");
+                     !ro.exports.empty() ? ", export/" : "");
       std::fprintf(stderr, ", summary.json\n");
     }
     return r.status == plan::PlanStatus::solved ? kExitOk : kExitNotSolved;

@@ -12,8 +12,11 @@
 #include "meshing_test_util.h"
 #include "squeeze/common/error.h"
 #include "squeeze/fem/scene.h"
+#include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_io.h"
-#include "squeeze/render/exports.h"
+#include "squeeze/render/export_formats.h"
+#include "squeeze/render/exporter.h"
+#include "squeeze/render/pc2_exporter.h"
 #include "squeeze/render/png_io.h"
 #include "squeeze/render/render.h"
 #include "squeeze/render/renderer.h"
@@ -291,11 +294,68 @@ TEST(RenderExport, Pc2HeaderAndPayload) {
   EXPECT_FALSE(any_temporary_in(dir.path()));
 }
 
+// The registry is the one list of export formats: parse_exports accepts exactly its names, and
+// the "unknown export" message and the --export help list every one of them.
+TEST(RenderExport, RegistryDrivesParseExports) {
+  const std::vector<ExportFormat>& formats = export_formats();
+  ASSERT_GE(formats.size(), 4u);
+  std::vector<std::string> names;
+  for (const ExportFormat& f : formats) {
+    EXPECT_FALSE(f.name.empty());
+    EXPECT_EQ(f.name.find(','), std::string::npos) << f.name;
+    EXPECT_NE(f.name, "none");
+    EXPECT_FALSE(f.description.empty()) << f.name;
+    EXPECT_NE(f.make(), nullptr) << f.name;
+    EXPECT_EQ(find_export_format(f.name), &f);
+    RenderOptions o;
+    parse_exports(f.name, o);
+    EXPECT_EQ(o.exports, std::vector<std::string>{f.name});
+    names.push_back(f.name);
+  }
+  EXPECT_EQ(std::set<std::string>(names.begin(), names.end()).size(), names.size()) << "a name registered twice";
+  // The contract names (scripts use them) come first, in the order of the help; more may follow.
+  const std::vector<std::string> contract{"pc2", "obj", "ply", "vtu"};
+  EXPECT_TRUE(std::equal(contract.begin(), contract.end(), names.begin()));
+  std::string all, listed;
+  for (const std::string& n : names) {
+    all += (all.empty() ? "" : ",") + n;
+    listed += (listed.empty() ? "" : ", ") + n;
+  }
+  RenderOptions o;
+  parse_exports(all + "," + names.front(), o);  // a repeated name counts once
+  EXPECT_EQ(o.exports, names);
+  EXPECT_EQ(make_exporters(o.exports).size(), names.size());
+  for (const char* nothing : {"", "none"}) {
+    RenderOptions n;
+    parse_exports(nothing, n);
+    EXPECT_TRUE(n.exports.empty()) << nothing;
+  }
+  // An unknown name: one line listing every registered name.
+  const std::string e = error_of([&] {
+    RenderOptions u;
+    parse_exports(names.front() + ",fbx", u);
+  });
+  EXPECT_EQ(e, "--export " + names.front() + ",fbx: unknown export 'fbx' (" + listed + ", or none)");
+  const std::string help = export_option_help();
+  for (const ExportFormat& f : formats) {
+    EXPECT_NE(e.find(f.name), std::string::npos) << f.name;
+    EXPECT_NE(help.find(f.name + " (" + f.description + ")"), std::string::npos) << f.name;
+  }
+  for (const char* bad : {"none,pc2", "pc2,,obj", "PC2"})
+    EXPECT_NE(error_of([&] {
+                RenderOptions b;
+                parse_exports(bad, b);
+              }).find("unknown export"),
+              std::string::npos)
+        << bad;
+  EXPECT_EQ(error_of([] { make_exporters({"pc2", "fbx"}); }), "exports: unknown export 'fbx' (" + listed + ")");
+}
+
 TEST_F(RenderTest, SyntheticTrajectoryFramesPlotAndExports) {
   const fs::path sc = scene();
   const fs::path traj = write_trajectory(sc, dir_->path() / "sim", 11, 10.0, squash);
   RenderOptions o = options(sc, traj, "out");
-  o.pc2 = o.obj = o.ply = o.vtu = true;
+  o.exports = {"pc2", "obj", "ply", "vtu"};
   o.coarse = true;
   const RenderStats st = render_trajectory(o);
   EXPECT_EQ(st.total_frames, 11);  // 1 s × 10 fps + 1
@@ -353,6 +413,60 @@ TEST_F(RenderTest, SyntheticTrajectoryFramesPlotAndExports) {
   const std::string pvd = read_text(o.output / "export" / "ball.pvd");
   EXPECT_NE(pvd.find("timestep=\"1\" group=\"\" part=\"0\" file=\"vtu/ball_00010.vtu\""), std::string::npos);
   EXPECT_FALSE(any_temporary_in(o.output));
+}
+
+// An exporter of a format that is not registered: a point cache of the surfaces that throws in
+// frame `fail_at` after appending to its stream.
+class ThrowingExporter final : public Exporter {
+ public:
+  explicit ThrowingExporter(int fail_at) : fail_at_(fail_at) {}
+  void begin(const ExportContext& c) override {
+    writer_ = std::make_unique<Pc2Writer>(c.folder / "throwing.pc2", static_cast<int>(c.objects[0].rest.rows()),
+                                          c.frame_count);
+  }
+  void frame(int k, double, const std::vector<ExportState>& states) override {
+    writer_->append(states[0].surface);
+    if (k == fail_at_) throw InputError("throwing.pc2: disk full at frame " + std::to_string(k));
+  }
+  void finish() override { writer_->close(); }
+
+ private:
+  int fail_at_;
+  std::unique_ptr<Pc2Writer> writer_;
+};
+
+// An exception in the middle of the frames (here an exporter's frame()) leaves no temporary and no
+// partial file: no point cache or .pvd index covering only some frames, every file present complete.
+TEST_F(RenderTest, ExporterThrowingMidwayLeavesNoPartialFile) {
+  const fs::path sc = scene();
+  const fs::path traj = write_trajectory(sc, dir_->path() / "sim", 11, 10.0, squash);
+  RenderOptions o = options(sc, traj, "out");
+  o.exports = {"pc2", "obj", "vtu"};
+  o.plots = false;
+  std::vector<std::unique_ptr<Exporter>> more;
+  more.push_back(std::make_unique<ThrowingExporter>(3));
+  int frames_done = 0;
+  o.on_frame = [&](const FrameProgress& p) { frames_done = p.done; };
+  EXPECT_EQ(error_of([&] { render_trajectory(o, std::move(more)); }), "throwing.pc2: disk full at frame 3");
+  EXPECT_EQ(frames_done, 3);  // frames 0-2 went through, frame 3 threw
+  ASSERT_TRUE(fs::is_directory(o.output / "export"));
+  EXPECT_FALSE(any_temporary_in(o.output));
+  int objs = 0, vtus = 0;
+  for (const auto& e : fs::recursive_directory_iterator(o.output)) {
+    const std::string ext = e.path().extension().string();
+    EXPECT_NE(ext, ".pc2") << e.path();  // unfinished streams are removed
+    EXPECT_NE(ext, ".pvd") << e.path();  // indexes are written by finish() only
+    if (ext == ".obj") {
+      EXPECT_GT(squeeze::meshing::load_surface(e.path()).F.rows(), 0) << e.path();
+      ++objs;
+    }
+    if (ext == ".vtu") {
+      EXPECT_GT(squeeze::meshing::load_tet_mesh(e.path()).T.rows(), 0) << e.path();
+      ++vtus;
+    }
+  }
+  EXPECT_EQ(objs, 2 + 2 * 4);  // the rest OBJs of pc2 (written by begin()), frames 0-3 of obj
+  EXPECT_EQ(vtus, 2 * 4);      // frames 0-3
 }
 
 TEST_F(RenderTest, FrameRangeRenderFpsAndSceneCamera) {

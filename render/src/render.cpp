@@ -6,7 +6,6 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <ctime>
 #include <fstream>
 #include <map>
@@ -19,7 +18,8 @@
 #include "squeeze/ffd/ffd.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_io.h"
-#include "squeeze/render/exports.h"
+#include "squeeze/render/export_formats.h"
+#include "squeeze/render/exporter.h"
 #include "squeeze/render/plot.h"
 #include "squeeze/render/png_io.h"
 #include "squeeze/render/renderer.h"
@@ -34,11 +34,9 @@ void parse_exports(const std::string& list, RenderOptions& o) {
   if (list.empty() || list == "none") return;
   std::stringstream s(list);
   for (std::string item; std::getline(s, item, ',');) {
-    if (item == "pc2") o.pc2 = true;
-    else if (item == "obj") o.obj = true;
-    else if (item == "ply") o.ply = true;
-    else if (item == "vtu") o.vtu = true;
-    else throw InputError("--export " + list + ": unknown export '" + item + "' (pc2, obj, ply, vtu, or none)");
+    if (!find_export_format(item))
+      throw InputError("--export " + list + ": unknown export '" + item + "' (" + export_format_names() + ", or none)");
+    if (std::find(o.exports.begin(), o.exports.end(), item) == o.exports.end()) o.exports.push_back(item);
   }
 }
 
@@ -209,115 +207,139 @@ Eigen::MatrixX3i split_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i
   return out;
 }
 
-std::string frame_name(const char* prefix, int k, const char* ext) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%s%05d%s", prefix, k, ext);
-  return buf;
-}
+// --- The steps of render_trajectory ---
 
-}  // namespace
+// Every input of a render, checked; nothing is written yet.
+struct Inputs {
+  fem::Scene scene;
+  RenderSettings settings;   // the scene's render block
+  Trajectory traj;
+  int width = 0, height = 0;  // pixels
+  double fps = 0;             // output frames per simulated second: frame k at t = k / fps
+  int total = 0;              // output frames of the whole path
+  int first = 0, last = 0;    // inclusive range of output frames rendered
+};
 
-RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
-  const auto t0 = Clock::now();
-  RenderStats stats;
-  // --- inputs ---
-  const fem::Scene scene = fem::load_scene(o.scene);
-  const RenderSettings settings = parse_render_settings(scene.render, scene.file.string());
-  const int W = o.width ? *o.width : settings.width.value_or(1280);
-  const int H = o.height ? *o.height : settings.height.value_or(720);
+// Loads and checks the scene, the image size, the trajectory, the frame range, the output folder
+// and the plot drivers, in that order. Throws InputError.
+Inputs check_inputs(const RenderOptions& o) {
+  Inputs in;
+  in.scene = fem::load_scene(o.scene);
+  in.settings = parse_render_settings(in.scene.render, in.scene.file.string());
+  in.width = o.width ? *o.width : in.settings.width.value_or(1280);
+  in.height = o.height ? *o.height : in.settings.height.value_or(720);
   const auto check_side = [](const char* opt, int v) {
     if (v < kMinImageSide || v > kMaxImageSide)
       throw InputError(std::string(opt) + " " + std::to_string(v) + ": must be in [" + std::to_string(kMinImageSide) +
                        ", " + std::to_string(kMaxImageSide) + "] pixels");
   };
-  check_side("--width", W);
-  check_side("--height", H);
-  if (static_cast<long long>(W) * H > 100'000'000LL)
-    throw InputError("--width × --height: " + std::to_string(W) + "x" + std::to_string(H) +
+  check_side("--width", in.width);
+  check_side("--height", in.height);
+  if (static_cast<long long>(in.width) * in.height > 100'000'000LL)
+    throw InputError("--width × --height: " + std::to_string(in.width) + "x" + std::to_string(in.height) +
                      " is more than 100 megapixels");
   if (o.samples < 1 || o.samples > 64) throw InputError("samples: must be in [1, 64]");
 
-  const Trajectory traj = load_trajectory(o.trajectory);
-  check_trajectory_matches_scene(traj, scene);
+  in.traj = load_trajectory(o.trajectory);
+  check_trajectory_matches_scene(in.traj, in.scene);
 
-  const double fps = o.fps ? *o.fps : settings.fps.value_or(traj.fps);
-  const double duration = traj.duration();
-  const int total = static_cast<int>(std::floor(duration * fps + 1e-6)) + 1;
-  int first = 0, last = total - 1;
+  in.fps = o.fps ? *o.fps : in.settings.fps.value_or(in.traj.fps);
+  in.total = static_cast<int>(std::floor(in.traj.duration() * in.fps + 1e-6)) + 1;
+  in.first = 0;
+  in.last = in.total - 1;
   if (o.frames) {
-    first = o.frames->first;
-    last = o.frames->second;
-    if (last >= total)
-      throw InputError("--frames " + std::to_string(first) + "-" + std::to_string(last) + ": the path has " +
-                       std::to_string(total) + " frames (0-" + std::to_string(total - 1) + ")");
+    in.first = o.frames->first;
+    in.last = o.frames->second;
+    if (in.last >= in.total)
+      throw InputError("--frames " + std::to_string(in.first) + "-" + std::to_string(in.last) + ": the path has " +
+                       std::to_string(in.total) + " frames (0-" + std::to_string(in.total - 1) + ")");
   }
-  stats.total_frames = total;
-  stats.fps = fps;
 
-  // Output folder: created if missing (its parent must exist), then checked for writing.
-  const fs::path out = o.output;
-  check_output_folder(out);
-  const bool plots = o.plots;
-  if (plots && !plot_drivers_available())
+  // Output folder: created later if missing (its parent must exist), then checked for writing.
+  check_output_folder(o.output);
+  if (o.plots && !plot_drivers_available())
     throw InputError("volume.png: PLplot's cairo drivers are missing (Debian: install plplot-driver-cairo)");
+  return in;
+}
 
-  // Objects: high-res surfaces bound to the coarse rest meshes.
-  std::vector<Object> objects(scene.objects.size());
+// Object i of the scene: its high-resolution surface placed by its transform and bound to the
+// trajectory's coarse rest mesh (a tet-mesh object: the boundary of that mesh, drawn directly),
+// turned outwards when closed, and its faces for drawing. Its colour is set by load_objects.
+Object load_object(const fem::SceneObject& so, const Trajectory& traj, int i, Progress* progress) {
+  Object ob;
+  ob.name = so.name;
+  ob.rigid = so.rigid;
+  ob.offset = traj.objects[static_cast<size_t>(i)].offset;
+  ob.vertices = traj.objects[static_cast<size_t>(i)].vertices;
+  const meshing::TetMesh rest = traj.rest_mesh(i);
+  ob.T = rest.T;
+  const Eigen::MatrixX3i coarse_faces = boundary_faces(rest.T);
+  ob.coarse_edges = unique_edges(coarse_faces);
+  ob.direct = meshing::is_tet_format(so.mesh);
+  if (ob.direct) {
+    ob.rest = rest.V;
+    ob.F = coarse_faces;
+  } else {
+    if (progress) progress->stage("loading " + so.name);
+    meshing::LoadOptions lo;
+    lo.keep_order = true;
+    meshing::SurfaceMesh s = meshing::load_surface(so.mesh, lo);
+    const Eigen::Affine3d A = so.transform.affine();
+    for (Eigen::Index v = 0; v < s.V.rows(); ++v) s.V.row(v) = (A * Eigen::Vector3d(s.V.row(v).transpose())).transpose();
+    if (A.linear().determinant() < 0) s.F.col(1).swap(s.F.col(2));  // a mirroring transform keeps outward faces
+    ob.rest = std::move(s.V);
+    ob.F = std::move(s.F);
+    ob.binding = ffd::bind_surface(ob.rest, rest, ffd::BindOptions{}, progress, so.mesh.filename().string());
+  }
+  // A closed, consistently oriented surface is drawn with back faces culled; turned outwards first.
+  ob.closed = is_closed_oriented(ob.F);
+  if (ob.closed) {
+    double vol = 0;
+    for (Eigen::Index f = 0; f < ob.F.rows(); ++f)
+      vol += Eigen::Vector3d(ob.rest.row(ob.F(f, 0))).dot(
+          Eigen::Vector3d(ob.rest.row(ob.F(f, 1))).cross(Eigen::Vector3d(ob.rest.row(ob.F(f, 2)))));
+    if (vol < 0) ob.F.col(1).swap(ob.F.col(2));
+  }
+  // Tet-mesh objects (boxes, plates) are drawn with sharp edges; surfaces smooth everywhere.
+  if (ob.direct)
+    ob.draw_F = split_creases(ob.rest, ob.F, 40.0, ob.draw_source);
+  else
+    ob.draw_F = ob.F;
+  return ob;
+}
+
+// Every object of the scene (load_object), coloured: the MTL colour of an OBJ surface, else the
+// palette of its kind in scene order.
+std::vector<Object> load_objects(const fem::Scene& scene, const Trajectory& traj, Progress* progress) {
+  std::vector<Object> objects;
   int deformable_count = 0, rigid_count = 0;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const fem::SceneObject& so = scene.objects[i];
-    Object& ob = objects[i];
-    ob.name = so.name;
-    ob.rigid = so.rigid;
-    ob.offset = traj.objects[i].offset;
-    ob.vertices = traj.objects[i].vertices;
-    const meshing::TetMesh rest = traj.rest_mesh(static_cast<int>(i));
-    ob.T = rest.T;
-    const Eigen::MatrixX3i coarse_faces = boundary_faces(rest.T);
-    ob.coarse_edges = unique_edges(coarse_faces);
-    ob.direct = meshing::is_tet_format(so.mesh);
-    if (ob.direct) {
-      ob.rest = rest.V;
-      ob.F = coarse_faces;
-    } else {
-      if (progress) progress->stage("loading " + so.name);
-      meshing::LoadOptions lo;
-      lo.keep_order = true;
-      meshing::SurfaceMesh s = meshing::load_surface(so.mesh, lo);
-      const Eigen::Affine3d A = so.transform.affine();
-      for (Eigen::Index v = 0; v < s.V.rows(); ++v) s.V.row(v) = (A * Eigen::Vector3d(s.V.row(v).transpose())).transpose();
-      if (A.linear().determinant() < 0) s.F.col(1).swap(s.F.col(2));  // a mirroring transform keeps outward faces
-      ob.rest = std::move(s.V);
-      ob.F = std::move(s.F);
-      ob.binding = ffd::bind_surface(ob.rest, rest, ffd::BindOptions{}, progress, so.mesh.filename().string());
-    }
-    // A closed, consistently oriented surface is drawn with back faces culled; turned outwards first.
-    ob.closed = is_closed_oriented(ob.F);
-    if (ob.closed) {
-      double vol = 0;
-      for (Eigen::Index f = 0; f < ob.F.rows(); ++f)
-        vol += Eigen::Vector3d(ob.rest.row(ob.F(f, 0))).dot(
-            Eigen::Vector3d(ob.rest.row(ob.F(f, 1))).cross(Eigen::Vector3d(ob.rest.row(ob.F(f, 2)))));
-      if (vol < 0) ob.F.col(1).swap(ob.F.col(2));
-    }
-    // Tet-mesh objects (boxes, plates) are drawn with sharp edges; surfaces smooth everywhere.
-    if (ob.direct)
-      ob.draw_F = split_creases(ob.rest, ob.F, 40.0, ob.draw_source);
-    else
-      ob.draw_F = ob.F;
+    Object ob = load_object(so, traj, static_cast<int>(i), progress);
     const std::optional<Eigen::Vector3f> mtl = ob.direct ? std::nullopt : obj_material_colour(so.mesh);
     ob.colour = mtl ? *mtl : so.rigid ? rigid_colour(rigid_count) : palette(deformable_count);
     (so.rigid ? rigid_count : deformable_count)++;
-    stats.surface_triangles += ob.F.rows();
+    objects.push_back(std::move(ob));
   }
+  return objects;
+}
 
-  // One pass over the trajectory: volumes (plot) and the bounds of the motion (camera, shadows).
-  std::vector<std::vector<double>> volume(objects.size());
+// What one pass over every trajectory frame gives.
+struct Motion {
+  std::vector<std::vector<double>> volume;  // per object and trajectory frame: change from frame 0 (%)
+  Eigen::AlignedBox3d view_bounds;          // rest surfaces and coarse motion, grown by 5 %, down to the floor
+};
+
+// Reads every trajectory frame once: the objects' volumes (plot) and the bounds of the motion
+// (camera, shadows). Throws InputError on a bad frame file.
+Motion scan_trajectory(const Trajectory& traj, const std::vector<Object>& objects, Progress* progress) {
+  Motion m;
+  m.volume.resize(objects.size());
   std::vector<double> rest_volume(objects.size());
   Eigen::AlignedBox3d bounds;
   for (const Object& ob : objects)
     for (Eigen::Index v = 0; v < ob.rest.rows(); ++v) bounds.extend(Eigen::Vector3d(ob.rest.row(v).transpose()));
-  Eigen::MatrixX3d X, X1;
+  Eigen::MatrixX3d X;
   if (progress) progress->stage("reading the trajectory", traj.frames);
   for (int f = 0; f < traj.frames; ++f) {
     traj.read_frame(f, X);
@@ -326,7 +348,7 @@ RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
       const Eigen::MatrixX3d Xb = X.middleRows(ob.offset, ob.vertices);
       const double vol = tet_volume(ob.T, Xb);
       if (f == 0) rest_volume[b] = vol;
-      volume[b].push_back(rest_volume[b] > 0 ? 100.0 * (vol / rest_volume[b] - 1.0) : 0.0);
+      m.volume[b].push_back(rest_volume[b] > 0 ? 100.0 * (vol / rest_volume[b] - 1.0) : 0.0);
       for (Eigen::Index v = 0; v < Xb.rows(); ++v) bounds.extend(Eigen::Vector3d(Xb.row(v).transpose()));
     }
     if (progress) progress->update(f + 1);
@@ -336,33 +358,32 @@ RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
   const Eigen::Vector3d grow = 0.05 * bounds.diagonal();
   bounds.min() -= grow;
   bounds.max() += grow;
-  Eigen::AlignedBox3d view_bounds = bounds;
+  m.view_bounds = bounds;
   if (traj.floor) {
     // Keep the floor contact in view.
-    view_bounds.min().y() = std::min(view_bounds.min().y(), *traj.floor);
+    m.view_bounds.min().y() = std::min(m.view_bounds.min().y(), *traj.floor);
   }
+  return m;
+}
 
-  // GL context and scene.
-  std::unique_ptr<GlContext> ctx = create_gl_context(o.gl);
-  stats.gl = ctx->description();
-  RendererOptions ro;
-  ro.width = W;
-  ro.height = H;
-  ro.samples = o.samples;
-  Renderer renderer(*ctx, ro);
-  stats.width = W;
-  stats.height = H;
-  stats.samples = renderer.samples();
-  renderer.set_floor(scene.floor);
+// Floor, bounds and camera (the scene's, else framing the motion), and every object's mesh (and
+// with `coarse` its wireframe) added to `renderer`.
+void set_up_scene(Renderer& renderer, std::vector<Object>& objects, const Inputs& in,
+                  const Eigen::AlignedBox3d& view_bounds, bool coarse) {
+  renderer.set_floor(in.scene.floor);
   renderer.set_bounds(view_bounds);
-  renderer.set_camera(settings.camera ? *settings.camera : frame_bounds(view_bounds, double(W) / H));
+  renderer.set_camera(in.settings.camera ? *in.settings.camera
+                                         : frame_bounds(view_bounds, double(in.width) / in.height));
   for (Object& ob : objects) {
     const int drawn = static_cast<int>(ob.draw_source.size() ? ob.draw_source.size() : ob.rest.rows());
     ob.mesh_id = renderer.add_mesh(ob.draw_F, drawn, ob.colour, ob.rigid ? 0.6f : 0.25f, ob.closed);
-    if (o.coarse) ob.lines_id = renderer.add_lines(ob.coarse_edges, ob.vertices, Eigen::Vector3f(0.08f, 0.1f, 0.2f));
+    if (coarse) ob.lines_id = renderer.add_lines(ob.coarse_edges, ob.vertices, Eigen::Vector3f(0.08f, 0.1f, 0.2f));
   }
+}
 
-  // Output folder and export streams (after every check).
+// Creates the output folder (after every check) and checks that it is writable; a folder created
+// here is removed again when it is not. Throws InputError.
+void create_output_folder(const fs::path& out) {
   std::error_code ec;
   const bool created = !fs::exists(out, ec);
   fs::create_directories(out, ec);
@@ -373,128 +394,178 @@ RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
     if (created) fs::remove(out, ec);
     throw;
   }
-  const fs::path exp = out / "export";
-  if (o.pc2 || o.obj || o.ply || o.vtu) {
-    for (const char* sub : {"obj", "ply", "vtu"}) {
-      const bool on = (sub[0] == 'o' && o.obj) || (sub[0] == 'p' && o.ply) || (sub[0] == 'v' && o.vtu);
-      if (on) fs::create_directories(exp / sub, ec);
-    }
-    fs::create_directories(exp, ec);
-    if (ec) throw InputError(exp.string() + ": cannot create the directory: " + ec.message());
-  }
-  const int count = last - first + 1;
-  std::vector<std::unique_ptr<Pc2Writer>> pc2(objects.size());
-  if (o.pc2)
-    for (size_t b = 0; b < objects.size(); ++b) {
-      meshing::SurfaceMesh rest{objects[b].rest, objects[b].F};
-      meshing::save_surface(exp / (objects[b].name + ".obj"), rest);
-      pc2[b] = std::make_unique<Pc2Writer>(exp / (objects[b].name + ".pc2"), static_cast<int>(objects[b].rest.rows()),
-                                           count, static_cast<float>(first), 1.0f);
-    }
-  std::vector<std::vector<std::pair<double, std::string>>> pvd(objects.size());
-  stats.setup_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
-  // --- frames ---
+// Creates `folder` (OUT/export) if there is any exporter, and begins every exporter on the objects
+// and the frame range. Throws InputError.
+void begin_exports(const std::vector<std::unique_ptr<Exporter>>& exporters, const fs::path& folder,
+                   const std::vector<Object>& objects, const Inputs& in) {
+  if (exporters.empty()) return;
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec) throw InputError(folder.string() + ": cannot create the directory: " + ec.message());
+  ExportContext c;
+  c.folder = folder;
+  for (const Object& ob : objects) c.objects.push_back(ExportObject{ob.name, ob.rest, ob.F, ob.T});
+  c.first_frame = in.first;
+  c.last_frame = in.last;
+  c.frame_count = in.last - in.first + 1;
+  c.fps = in.fps;
+  for (const auto& e : exporters) e->begin(c);
+}
+
+// The coarse state of every object (all of a frame's vertices) at output frame k, t = k / fps:
+// interpolated linearly between the two trajectory frames around t, reusing the frames already read
+// when k grows one by one.
+class StateSampler {
+ public:
+  StateSampler(const Trajectory& traj, double fps) : traj_(traj), fps_(fps) {}
+  // Throws InputError on a bad frame file.
+  const Eigen::MatrixX3d& at(int k) {
+    const double s = std::min<double>(traj_.frames - 1, k / fps_ * traj_.fps);
+    int i0 = static_cast<int>(std::floor(s + 1e-9));
+    i0 = std::clamp(i0, 0, traj_.frames - 1);
+    const double a = std::clamp(s - i0, 0.0, 1.0);
+    const int i1 = std::min(i0 + 1, traj_.frames - 1);
+    if (loaded0_ != i0) {
+      if (loaded1_ == i0) {
+        std::swap(X0_, X1_);
+      } else {
+        traj_.read_frame(i0, X0_);
+      }
+      loaded0_ = i0;
+      loaded1_ = -1;
+    }
+    if (a > 1e-9 && loaded1_ != i1) {
+      traj_.read_frame(i1, X1_);
+      loaded1_ = i1;
+    }
+    state_ = a > 1e-9 ? Eigen::MatrixX3d((1 - a) * X0_ + a * X1_) : X0_;
+    return state_;
+  }
+
+ private:
+  const Trajectory& traj_;
+  double fps_;
+  Eigen::MatrixX3d X0_, X1_, state_;  // trajectory frames loaded0_ and loaded1_ (-1: none), the state
+  int loaded0_ = -1, loaded1_ = -1;
+};
+
+// Moves every object to `state`: its coarse vertices, its surface (FFD replay; a tet-mesh object's
+// surface is its coarse mesh) and the normals, and hands them to the renderer.
+void pose_objects(std::vector<Object>& objects, const Eigen::MatrixX3d& state, Renderer& renderer) {
+  for (Object& ob : objects) {
+    ob.coarse = state.middleRows(ob.offset, ob.vertices);
+    if (ob.direct)
+      ob.surface = ob.coarse;
+    else
+      replay(ob.binding, ob.coarse, ob.surface);
+    if (ob.draw_source.size()) {
+      ob.drawn.resize(ob.draw_source.size(), 3);
+      for (Eigen::Index i = 0; i < ob.draw_source.size(); ++i) ob.drawn.row(i) = ob.surface.row(ob.draw_source(i));
+      ob.normals = ffd::vertex_normals(ob.drawn, ob.draw_F);
+      renderer.update_mesh(ob.mesh_id, ob.drawn, ob.normals);
+    } else {
+      ob.normals = ffd::vertex_normals(ob.surface, ob.draw_F);
+      renderer.update_mesh(ob.mesh_id, ob.surface, ob.normals);
+    }
+    if (ob.lines_id >= 0) renderer.update_lines(ob.lines_id, ob.coarse);
+  }
+}
+
+// The frame loop: every output frame of the range posed, drawn and queued for PNG encoding (unless
+// --no-png) and handed to the exporters; then the last PNG waited for and the exporters finished.
+// Sets stats.rendered and the loop's times. Throws InputError.
+void render_frames(const RenderOptions& o, const Inputs& in, std::vector<Object>& objects, Renderer& renderer,
+                   const std::vector<std::unique_ptr<Exporter>>& exporters, RenderStats& stats) {
   const auto t1 = Clock::now();
   const std::clock_t c1 = std::clock();
   PngWriter writer(2, 1);
   Image image;
-  int loaded0 = -1, loaded1 = -1;
-  Eigen::MatrixX3d state;
+  StateSampler sampler(in.traj, in.fps);
+  std::vector<ExportState> states;
+  const int count = in.last - in.first + 1;
   double draw_s = 0, wait_s = 0;  // drawing + read-back, waiting for the encoder
-  for (int k = first; k <= last; ++k) {
-    // The coarse state at t = k / fps, interpolated linearly between trajectory frames.
-    const double s = std::min<double>(traj.frames - 1, k / fps * traj.fps);
-    int i0 = static_cast<int>(std::floor(s + 1e-9));
-    i0 = std::clamp(i0, 0, traj.frames - 1);
-    const double a = std::clamp(s - i0, 0.0, 1.0);
-    const int i1 = std::min(i0 + 1, traj.frames - 1);
-    if (loaded0 != i0) {
-      if (loaded1 == i0) {
-        std::swap(X, X1);
-      } else {
-        traj.read_frame(i0, X);
-      }
-      loaded0 = i0;
-      loaded1 = -1;
-    }
-    if (a > 1e-9 && loaded1 != i1) {
-      traj.read_frame(i1, X1);
-      loaded1 = i1;
-    }
-    state = a > 1e-9 ? Eigen::MatrixX3d((1 - a) * X + a * X1) : X;
-    const double t = k / fps;
-    for (size_t b = 0; b < objects.size(); ++b) {
-      Object& ob = objects[b];
-      ob.coarse = state.middleRows(ob.offset, ob.vertices);
-      if (ob.direct)
-        ob.surface = ob.coarse;
-      else
-        replay(ob.binding, ob.coarse, ob.surface);
-      if (ob.draw_source.size()) {
-        ob.drawn.resize(ob.draw_source.size(), 3);
-        for (Eigen::Index i = 0; i < ob.draw_source.size(); ++i) ob.drawn.row(i) = ob.surface.row(ob.draw_source(i));
-        ob.normals = ffd::vertex_normals(ob.drawn, ob.draw_F);
-        renderer.update_mesh(ob.mesh_id, ob.drawn, ob.normals);
-      } else {
-        ob.normals = ffd::vertex_normals(ob.surface, ob.draw_F);
-        renderer.update_mesh(ob.mesh_id, ob.surface, ob.normals);
-      }
-      if (ob.lines_id >= 0) renderer.update_lines(ob.lines_id, ob.coarse);
-    }
+  for (int k = in.first; k <= in.last; ++k) {
+    pose_objects(objects, sampler.at(k), renderer);
     if (o.png) {
       const auto d0 = Clock::now();
       writer.recycle(image);
       renderer.draw(image);
       const auto d1 = Clock::now();
-      writer.push(out / frame_name("frame_", k, ".png"), std::move(image));
+      writer.push(o.output / frame_file_name("frame_", k, ".png"), std::move(image));
       draw_s += std::chrono::duration<double>(d1 - d0).count();
       wait_s += std::chrono::duration<double>(Clock::now() - d1).count();
     }
-    for (size_t b = 0; b < objects.size(); ++b) {
-      Object& ob = objects[b];
-      if (pc2[b]) pc2[b]->append(ob.surface);
-      if (o.obj || o.ply) {
-        meshing::SurfaceMesh m{ob.surface, ob.F};
-        if (o.obj) meshing::save_surface(exp / "obj" / frame_name((ob.name + "_").c_str(), k, ".obj"), m);
-        if (o.ply) meshing::save_surface(exp / "ply" / frame_name((ob.name + "_").c_str(), k, ".ply"), m);
-      }
-      if (o.vtu) {
-        meshing::TetMesh tm;
-        tm.V = ob.coarse;
-        tm.T = ob.T;
-        const std::string rel = "vtu/" + frame_name((ob.name + "_").c_str(), k, ".vtu");
-        meshing::save_tet_mesh(exp / rel, tm);
-        pvd[b].emplace_back(t, rel);
-      }
+    if (!exporters.empty()) {
+      states.clear();
+      for (const Object& ob : objects) states.push_back(ExportState{ob.surface, ob.coarse});
+      for (const auto& e : exporters) e->frame(k, k / in.fps, states);
     }
     ++stats.rendered;
     if (o.on_frame)
-      o.on_frame(FrameProgress{k - first + 1, count, std::chrono::duration<double>(Clock::now() - t1).count()});
+      o.on_frame(FrameProgress{k - in.first + 1, count, std::chrono::duration<double>(Clock::now() - t1).count()});
   }
   writer.finish();
-  for (auto& p : pc2)
-    if (p) p->close();
-  if (o.vtu)
-    for (size_t b = 0; b < objects.size(); ++b) write_pvd(exp / (objects[b].name + ".pvd"), pvd[b]);
+  for (const auto& e : exporters) e->finish();
   stats.frame_seconds = std::chrono::duration<double>(Clock::now() - t1).count();
   stats.frame_cpu_seconds = double(std::clock() - c1) / CLOCKS_PER_SEC;
   spdlog::debug("render: {} frames in {:.3f} s: drawing and read-back {:.3f} s, waiting for the PNG encoder {:.3f} s",
                 stats.rendered, stats.frame_seconds, draw_s, wait_s);
+}
 
-  // --- plot: volume change of every deformable object (every object if none is deformable) ---
-  if (plots) {
-    LinePlot plot;
-    plot.title = "Volume change along the path (" + scene.file.stem().string() + ")";
-    plot.x_label = "time (s)";
-    plot.y_label = "volume change (%)";
-    for (int f = 0; f < traj.frames; ++f) plot.x.push_back(f / traj.fps);
-    for (size_t b = 0; b < objects.size(); ++b)
-      if (!objects[b].rigid || deformable_count == 0)
-        plot.series.push_back(PlotSeries{objects[b].name, volume[b], objects[b].colour});
-    save_plot(out / "volume.png", plot);
-    save_plot(out / "volume.svg", plot);
-  }
+// volume.png and volume.svg in `out`: the volume change of every deformable object (every object
+// if none is deformable) along the whole path. Throws InputError.
+void write_volume_plots(const fs::path& out, const Inputs& in, const std::vector<Object>& objects, const Motion& m) {
+  const bool any_deformable = std::any_of(objects.begin(), objects.end(), [](const Object& ob) { return !ob.rigid; });
+  LinePlot plot;
+  plot.title = "Volume change along the path (" + in.scene.file.stem().string() + ")";
+  plot.x_label = "time (s)";
+  plot.y_label = "volume change (%)";
+  for (int f = 0; f < in.traj.frames; ++f) plot.x.push_back(f / in.traj.fps);
+  for (size_t b = 0; b < objects.size(); ++b)
+    if (!objects[b].rigid || !any_deformable)
+      plot.series.push_back(PlotSeries{objects[b].name, m.volume[b], objects[b].colour});
+  save_plot(out / "volume.png", plot);
+  save_plot(out / "volume.svg", plot);
+}
+
+}  // namespace
+
+RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
+  return render_trajectory(o, {}, progress);
+}
+
+RenderStats render_trajectory(const RenderOptions& o, std::vector<std::unique_ptr<Exporter>> more, Progress* progress) {
+  const auto t0 = Clock::now();
+  std::vector<std::unique_ptr<Exporter>> exporters = make_exporters(o.exports);
+  for (auto& e : more) exporters.push_back(std::move(e));
+  const Inputs in = check_inputs(o);
+  std::vector<Object> objects = load_objects(in.scene, in.traj, progress);
+  const Motion motion = scan_trajectory(in.traj, objects, progress);
+
+  std::unique_ptr<GlContext> ctx = create_gl_context(o.gl);
+  RendererOptions ro;
+  ro.width = in.width;
+  ro.height = in.height;
+  ro.samples = o.samples;
+  Renderer renderer(*ctx, ro);
+  set_up_scene(renderer, objects, in, motion.view_bounds, o.coarse);
+
+  create_output_folder(o.output);
+  begin_exports(exporters, o.output / "export", objects, in);
+
+  RenderStats stats;
+  stats.width = in.width;
+  stats.height = in.height;
+  stats.samples = renderer.samples();
+  stats.gl = ctx->description();
+  stats.total_frames = in.total;
+  stats.fps = in.fps;
+  for (const Object& ob : objects) stats.surface_triangles += ob.F.rows();
+  stats.setup_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  render_frames(o, in, objects, renderer, exporters, stats);
+  if (o.plots) write_volume_plots(o.output, in, objects, motion);
   return stats;
 }
 

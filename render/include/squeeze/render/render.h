@@ -3,17 +3,20 @@
 //
 //   RenderOptions o;
 //   o.scene = "scenes/bunny.json"; o.trajectory = "out/bunny"; o.output = "out/bunny/frames";
+//   o.exports = {"pc2", "vtu"};
 //   RenderStats s = render_trajectory(o, &progress);
 //
 // Output folder (docs/render.md): frame_00000.png … (k = output frame, t = k / fps), volume.png,
-// volume.svg, and with exports export/NAME.obj + export/NAME.pc2, export/obj/NAME_00000.obj,
-// export/ply/NAME_00000.ply, export/vtu/NAME_00000.vtu + export/NAME.pvd.
+// volume.svg, and export/ with what each chosen export format writes (export_formats.h: pc2, obj,
+// ply, vtu; each an Exporter, exporter.h).
 #pragma once
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "squeeze/render/gl_context.h"
 
@@ -22,6 +25,8 @@ class Progress;
 }
 
 namespace squeeze::render {
+
+class Exporter;
 
 /// Per-frame progress of render_trajectory.
 struct FrameProgress {
@@ -39,7 +44,7 @@ struct RenderOptions {
   bool coarse = false;                         // overlay the coarse tet meshes as wireframes
   bool png = true;                             // write frame PNGs (false: exports and plots only)
   bool plots = true;                           // write volume.png and volume.svg
-  bool pc2 = false, obj = false, ply = false, vtu = false;  // exports
+  std::vector<std::string> exports;            // export formats by registered name (export_formats.h); default: none
   GlBackend gl = GlBackend::osmesa;            // context backend
   int samples = 4;                             // MSAA samples
   std::function<void(const FrameProgress&)> on_frame;  // called after each frame (may be empty)
@@ -60,8 +65,9 @@ struct RenderStats {
 /// Parses "A-B" (inclusive, 0 <= A <= B) or "A" into a range. Throws InputError ("--frames x: ...").
 std::pair<int, int> parse_frame_range(const std::string& text);
 
-/// Sets the export flags of `options` from a comma-separated list of pc2, obj, ply, vtu ("" or
-/// "none": no export). Throws InputError ("--export LIST: unknown export 'x' (pc2, obj, ply, vtu)").
+/// Adds to options.exports the formats of `list`, comma-separated names of the registered export
+/// formats (export_formats(): pc2, obj, ply, vtu; a repeated name counts once); "" or "none": no
+/// export. Throws InputError ("--export LIST: unknown export 'x' (pc2, obj, ply, vtu, or none)").
 void parse_exports(const std::string& list, RenderOptions& options);
 
 /// Renders a trajectory of a scene. Every input is checked before anything is written: scene and
@@ -69,7 +75,14 @@ void parse_exports(const std::string& list, RenderOptions& options);
 /// (kMinImageSide..kMaxImageSide and the GL limit), frame range (within 0..total-1), output folder
 /// (created if missing; must be writable). Throws InputError with one line naming the file or
 /// option and the problem. Files are written atomically (no half-written PNG is ever left).
-/// `progress` (may be null) gets the loading and binding stages.
+/// `progress` (may be null) gets the loading and binding stages. The exports named in
+/// options.exports go into OUT/export/ (an unknown name throws InputError, before anything is
+/// written); an exception mid-way leaves no export file half-written (exporter.h).
 RenderStats render_trajectory(const RenderOptions& options, Progress* progress = nullptr);
+
+/// The same, driving `more` exporters (begun, fed every frame and finished like the registered
+/// ones, after them) besides those named in options.exports: formats that are not registered.
+RenderStats render_trajectory(const RenderOptions& options, std::vector<std::unique_ptr<Exporter>> more,
+                              Progress* progress = nullptr);
 
 }  // namespace squeeze::render

@@ -1,11 +1,13 @@
-// squeeze::render — exports for other tools: Blender point caches (.pc2) and ParaView collections (.pvd).
+// squeeze::render — `--export pc2`: Blender point caches (.pc2) of the high-resolution surfaces.
 #pragma once
 #include <Eigen/Core>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
-#include <utility>
 #include <vector>
+
+#include "squeeze/render/exporter.h"
 
 namespace squeeze::render {
 
@@ -33,8 +35,17 @@ class Pc2Writer {
   std::vector<float> row_;
 };
 
-/// Writes a ParaView collection (.pvd) indexing `datasets` = (time in s, file path relative to the
-/// .pvd), through a temporary file. Throws InputError.
-void write_pvd(const std::filesystem::path& path, const std::vector<std::pair<double, std::string>>& datasets);
+/// `--export pc2`, per object: export/NAME.obj, the rest surface (world coordinates, m; our OBJ
+/// writer keeps the vertex order), written by begin(); export/NAME.pc2, one sample per frame of the
+/// range (start frame: the range's first, sample rate 1), renamed into place by finish().
+class Pc2Exporter final : public Exporter {
+ public:
+  void begin(const ExportContext& context) override;
+  void frame(int k, double t, const std::vector<ExportState>& states) override;
+  void finish() override;
+
+ private:
+  std::vector<std::unique_ptr<Pc2Writer>> writers_;  // per object
+};
 
 }  // namespace squeeze::render

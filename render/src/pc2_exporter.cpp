@@ -1,11 +1,10 @@
-#include "squeeze/render/exports.h"
+#include "squeeze/render/pc2_exporter.h"
 
 #include <cstring>
-#include <fstream>
-#include <iomanip>
 
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
+#include "squeeze/meshing/surface_io.h"
 
 namespace squeeze::render {
 namespace fs = std::filesystem;
@@ -71,18 +70,21 @@ void Pc2Writer::close() {
   }
 }
 
-void write_pvd(const fs::path& path, const std::vector<std::pair<double, std::string>>& datasets) {
-  write_atomically(path, [&](const fs::path& tmp) {
-    std::ofstream o(tmp);
-    o << "<?xml version=\"1.0\"?>\n"
-         "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-         "  <Collection>\n";
-    o << std::setprecision(9);
-    for (const auto& [t, file] : datasets)
-      o << "    <DataSet timestep=\"" << t << "\" group=\"\" part=\"0\" file=\"" << file << "\"/>\n";
-    o << "  </Collection>\n</VTKFile>\n";
-    if (!o) throw InputError(path.string() + ": write failed");
-  });
+void Pc2Exporter::begin(const ExportContext& c) {
+  writers_.clear();
+  for (const ExportObject& ob : c.objects) {
+    meshing::save_surface(c.folder / (ob.name + ".obj"), meshing::SurfaceMesh{ob.rest, ob.faces});
+    writers_.push_back(std::make_unique<Pc2Writer>(c.folder / (ob.name + ".pc2"), static_cast<int>(ob.rest.rows()),
+                                                   c.frame_count, static_cast<float>(c.first_frame), 1.0f));
+  }
+}
+
+void Pc2Exporter::frame(int, double, const std::vector<ExportState>& states) {
+  for (size_t b = 0; b < writers_.size(); ++b) writers_[b]->append(states[b].surface);
+}
+
+void Pc2Exporter::finish() {
+  for (auto& w : writers_) w->close();
 }
 
 }  // namespace squeeze::render
