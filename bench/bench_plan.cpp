@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "squeeze/fem/scene.h"
 #include "squeeze/plan/evaluate.h"
 
 using namespace squeeze;
@@ -63,14 +64,40 @@ void BM_Plan(benchmark::State& st) {
   }
 }
 
+// Issue 15: what building a scene once saves. BM_SceneBuild: build_scene of a bundled scene (meshes
+// from the cache, bodies, materials, pins, stable step, prepared rest data), what `squeeze run`
+// did up to 7 times before. BM_SceneCopy: a copy of the built SceneWorld, what planning, replay
+// and metrics each take now (rest data shared; the copy's own scratch is made at its first step).
+std::string bundled(const std::string& name) { return std::string(SQUEEZE_SOURCE_DIR) + "/scenes/" + name + ".json"; }
+
+void BM_SceneBuild(benchmark::State& st, const std::string& name) {
+  const fem::Scene scene = fem::load_scene(bundled(name));
+  fem::build_scene(scene);  // fills the mesh cache if needed
+  for (auto _ : st) benchmark::DoNotOptimize(fem::build_scene(scene));
+}
+
+void BM_SceneCopy(benchmark::State& st, const std::string& name) {
+  const fem::SceneWorld w = fem::build_scene(fem::load_scene(bundled(name)));
+  for (auto _ : st) {
+    fem::SceneWorld copy = w;
+    benchmark::DoNotOptimize(copy);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
+  for (const char* name : {"body_parts", "barriers2"}) {
+    benchmark::RegisterBenchmark((std::string("BM_SceneBuild/") + name).c_str(), BM_SceneBuild, std::string(name))
+        ->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark((std::string("BM_SceneCopy/") + name).c_str(), BM_SceneCopy, std::string(name))
+        ->Unit(benchmark::kMillisecond);
+  }
   auto* b = benchmark::RegisterBenchmark("BM_Plan", BM_Plan)->ArgName("seed")->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
   for (int s = 1; s <= seeds(); ++s) b->Arg(s);
   benchmark::RunSpecifiedBenchmarks();
-  if (rows.empty()) return 0;
+  if (rows.empty()) return 0;  // e.g. --benchmark_filter=BM_Scene
   std::vector<double> t, rate;
   int solved = 0;
   double worst_volume = 0, iterations = 0, seconds = 0;
