@@ -3,20 +3,21 @@
 #include <algorithm>
 
 #include "squeeze/common/error.h"
-#include "squeeze/render/pc2_exporter.h"
-#include "squeeze/render/surface_frames_exporter.h"
-#include "squeeze/render/vtu_exporter.h"
 
 namespace squeeze::render {
 
+// The registry: one line names every export format, in the order of the help text. Each NAME is
+// defined in its exporter's source (render/src/*_exporter.cpp) as `ExportFormat NAME_export_format()`.
+#define SQUEEZE_EXPORT_FORMATS(X) X(pc2) X(obj) X(ply) X(vtu)
+
+#define SQUEEZE_DECLARE_FORMAT(NAME) ExportFormat NAME##_export_format();
+SQUEEZE_EXPORT_FORMATS(SQUEEZE_DECLARE_FORMAT)
+#undef SQUEEZE_DECLARE_FORMAT
+
 const std::vector<ExportFormat>& export_formats() {
-  // One line per format: {name, one-line description, factory}.
-  static const std::vector<ExportFormat> formats = {
-      {"pc2", "rest OBJ + Blender point cache per object", [] { return std::make_unique<Pc2Exporter>(); }},
-      {"obj", "deformed surface per frame and object", [] { return std::make_unique<SurfaceFramesExporter>("obj"); }},
-      {"ply", "the same as PLY, single precision", [] { return std::make_unique<SurfaceFramesExporter>("ply"); }},
-      {"vtu", "coarse tet meshes per frame + .pvd for ParaView", [] { return std::make_unique<VtuExporter>(); }},
-  };
+#define SQUEEZE_FORMAT_ENTRY(NAME) NAME##_export_format(),
+  static const std::vector<ExportFormat> formats = {SQUEEZE_EXPORT_FORMATS(SQUEEZE_FORMAT_ENTRY)};
+#undef SQUEEZE_FORMAT_ENTRY
   return formats;
 }
 

@@ -1,3 +1,4 @@
+#include "squeeze/render/export_formats.h"
 #include "squeeze/render/pc2_exporter.h"
 
 #include <cstring>
@@ -85,6 +86,10 @@ void Pc2Exporter::frame(int, double, const std::vector<ExportState>& states) {
 
 void Pc2Exporter::finish() {
   for (auto& w : writers_) w->close();
+}
+
+ExportFormat pc2_export_format() {
+  return {"pc2", "rest OBJ + Blender point cache per object", [] { return std::make_unique<Pc2Exporter>(); }};
 }
 
 }  // namespace squeeze::render

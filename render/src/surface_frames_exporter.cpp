@@ -1,3 +1,4 @@
+#include "squeeze/render/export_formats.h"
 #include "squeeze/render/surface_frames_exporter.h"
 
 #include <system_error>
@@ -28,6 +29,14 @@ void SurfaceFramesExporter::frame(int k, double, const std::vector<ExportState>&
   for (size_t b = 0; b < names_.size(); ++b)
     meshing::save_surface(folder_ / frame_file_name(names_[b] + "_", k, "." + extension_),
                           meshing::SurfaceMesh{states[b].surface, faces_[b]});
+}
+
+ExportFormat obj_export_format() {
+  return {"obj", "deformed surface per frame and object", [] { return std::make_unique<SurfaceFramesExporter>("obj"); }};
+}
+
+ExportFormat ply_export_format() {
+  return {"ply", "the same as PLY, single precision", [] { return std::make_unique<SurfaceFramesExporter>("ply"); }};
 }
 
 }  // namespace squeeze::render

@@ -1,3 +1,4 @@
+#include "squeeze/render/export_formats.h"
 #include "squeeze/render/vtu_exporter.h"
 
 #include <fstream>
@@ -52,6 +53,10 @@ void VtuExporter::frame(int k, double t, const std::vector<ExportState>& states)
 
 void VtuExporter::finish() {
   for (size_t b = 0; b < names_.size(); ++b) write_pvd(folder_ / (names_[b] + ".pvd"), datasets_[b]);
+}
+
+ExportFormat vtu_export_format() {
+  return {"vtu", "coarse tet meshes per frame + .pvd for ParaView", [] { return std::make_unique<VtuExporter>(); }};
 }
 
 }  // namespace squeeze::render

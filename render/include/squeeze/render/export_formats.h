@@ -2,9 +2,10 @@
 // `squeeze run` (parse_exports in render.h), its help text and the "unknown export" message are
 // made from this list, and render_trajectory makes its exporters from it by name.
 //
-// To add a format: write its Exporter (exporter.h) in its own header and source under render/
-// (sources listed in render/CMakeLists.txt), then add one line to the list in
-// render/src/export_formats.cpp (docs/render.md, "To add an export format").
+// To add a format: its Exporter (exporter.h) in its own source render/src/NAME_exporter.cpp, which
+// also defines `ExportFormat NAME_export_format()` ({name, description, factory}); that file in
+// render/CMakeLists.txt; and NAME in the one registration line of render/src/export_formats.cpp
+// (docs/render.md, "To add an export format"). A header for the class is optional.
 #pragma once
 #include <functional>
 #include <memory>
