@@ -15,7 +15,7 @@
 #include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_io.h"
-#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tet_geometry.h"
 
 namespace squeeze::cli {
 namespace fs = std::filesystem;

@@ -13,7 +13,10 @@
 #include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_io.h"
-#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tet_cleanup.h"
+#include "squeeze/meshing/tet_faces.h"
+#include "squeeze/meshing/tet_geometry.h"
+#include "squeeze/meshing/tet_locator.h"
 #include "squeeze/meshing/winding_number.h"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "squeeze/common/error.h"
-#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tet_cleanup.h"
 
 namespace squeeze::fem {
 namespace {
