@@ -38,7 +38,7 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       "mesh",
       "Decompose a surface into convex shells and tetrahedralize them into one coarse tetrahedral mesh.\n"
       "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
-      "non-manifold scans are fine. OUT: .mesh (Medit), .msh (Gmsh 2.2), .vtk, .vtu or .node/.ele (TetGen).\n"
+      "non-manifold scans are fine. OUT: " + meshing::tet_format_list(true) + ".\n"
       "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");
   cmd->add_option("INPUT", args->input, "Input surface")->required();
   cmd->add_option("-o,--output", args->output, "Output tetrahedral mesh; the format follows the extension")->required();
@@ -87,7 +87,7 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
     }
     // Fail fast, before any work, on outputs that cannot be written.
     if (!meshing::is_tet_format(a.output))
-      throw InputError(a.output + ": unknown tetrahedral mesh format (use .mesh, .msh, .vtk, .vtu or .node/.ele)");
+      throw InputError(a.output + ": unknown tetrahedral mesh format (use " + meshing::tet_format_list() + ")");
     check_output_directory(a.output);
     if (!a.shells.empty()) {
       if (!meshing::is_surface_format(a.shells))
