@@ -71,7 +71,8 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                   "Degrees: Mesh_3's sliver perturber and exuder work on tetrahedra with a smaller dihedral angle "
                   "(without --target-tets: 6)")
       ->capture_default_str();
-  cmd->add_option("--shells", args->shells, "Also write the convex shells as one surface file (.off, .obj, .ply, .stl, ...)");
+  cmd->add_option("--shells", args->shells,
+                  "Also write the convex shells as one surface file (" + meshing::surface_format_examples() + ")");
   cmd->add_option("--report", args->report, "Also write a JSON report (input, hulls, tets, quality, coverage, seconds)");
 
   return [args, &global, target, facet, sliver]() -> int {
@@ -91,7 +92,7 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
     check_output_directory(a.output);
     if (!a.shells.empty()) {
       if (!meshing::is_surface_format(a.shells))
-        throw InputError(a.shells + ": unknown surface format (use .off, .obj, .ply, .stl, .gltf, .glb, ...)");
+        throw InputError(a.shells + ": unknown surface format (use " + meshing::surface_format_examples() + ")");
       check_output_directory(a.shells);
     }
     if (!a.report.empty()) check_output_directory(a.report);
