@@ -15,7 +15,7 @@
 #include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_io.h"
-#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tet_geometry.h"
 
 namespace squeeze::cli {
 namespace fs = std::filesystem;
@@ -55,7 +55,7 @@ Runner add_deform_command(CLI::App& app, const Global& global) {
     const auto start = std::chrono::steady_clock::now();
     // Fail fast, before any work, on outputs that cannot be written.
     if (!meshing::is_surface_format(a.output))
-      throw InputError(a.output + ": unknown surface format (use .off, .obj, .ply, .stl, .glb, ...)");
+      throw InputError(a.output + ": unknown surface format (use " + meshing::surface_format_examples() + ")");
     check_output_directory(a.output);
 
     meshing::LoadOptions load;

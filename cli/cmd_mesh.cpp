@@ -38,7 +38,7 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       "mesh",
       "Decompose a surface into convex shells and tetrahedralize them into one coarse tetrahedral mesh.\n"
       "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
-      "non-manifold scans are fine. OUT: .mesh (Medit), .msh (Gmsh 2.2), .vtk, .vtu or .node/.ele (TetGen).\n"
+      "non-manifold scans are fine. OUT: " + meshing::tet_format_list(true) + ".\n"
       "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");
   cmd->add_option("INPUT", args->input, "Input surface")->required();
   cmd->add_option("-o,--output", args->output, "Output tetrahedral mesh; the format follows the extension")->required();
@@ -71,7 +71,8 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                   "Degrees: Mesh_3's sliver perturber and exuder work on tetrahedra with a smaller dihedral angle "
                   "(without --target-tets: 6)")
       ->capture_default_str();
-  cmd->add_option("--shells", args->shells, "Also write the convex shells as one surface file (.off, .obj, .ply, .stl, ...)");
+  cmd->add_option("--shells", args->shells,
+                  "Also write the convex shells as one surface file (" + meshing::surface_format_examples() + ")");
   cmd->add_option("--report", args->report, "Also write a JSON report (input, hulls, tets, quality, coverage, seconds)");
 
   return [args, &global, target, facet, sliver]() -> int {
@@ -87,11 +88,11 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
     }
     // Fail fast, before any work, on outputs that cannot be written.
     if (!meshing::is_tet_format(a.output))
-      throw InputError(a.output + ": unknown tetrahedral mesh format (use .mesh, .msh, .vtk, .vtu or .node/.ele)");
+      throw InputError(a.output + ": unknown tetrahedral mesh format (use " + meshing::tet_format_list() + ")");
     check_output_directory(a.output);
     if (!a.shells.empty()) {
       if (!meshing::is_surface_format(a.shells))
-        throw InputError(a.shells + ": unknown surface format (use .off, .obj, .ply, .stl, .gltf, .glb, ...)");
+        throw InputError(a.shells + ": unknown surface format (use " + meshing::surface_format_examples() + ")");
       check_output_directory(a.shells);
     }
     if (!a.report.empty()) check_output_directory(a.report);

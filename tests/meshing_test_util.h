@@ -1,6 +1,6 @@
 // Helpers shared by the meshing tests (issue 3): running the `squeeze` binary, reading OFF files
 // without the library, and checking the contracts of `squeeze mesh` on a written tetrahedral mesh
-// with code that is independent of the library's own measures (tet_quality.h, TetLocator).
+// with code that is independent of the library's own measures (tet_geometry.h, tet_faces.h, tet_quality.h, TetLocator).
 #pragma once
 #include <gtest/gtest.h>
 #include <sys/wait.h>

@@ -174,6 +174,46 @@ TEST(FemBody, MassesAndRestData) {
   EXPECT_NO_THROW(Body(ball, m));
 }
 
+TEST(FemBody, SurfaceIsTheBoxSurfaceOutward) {
+  // A Kuhn box of 2×1×3 cells: 4 (n0 n1 + n1 n2 + n0 n2) = 44 outward surface triangles, every other
+  // tet face shared with exactly one neighbor. Its tets' corners are reordered by even permutations
+  // (same orientation), so that every local face is on the boundary somewhere.
+  const Vector3d lo(-0.5, 0.0, 0.25), hi(0.5, 0.3, 1.0);
+  TetMesh mesh = box_tet_mesh(lo, hi, Eigen::Vector3i(2, 1, 3));
+  const int even[3][4] = {{0, 1, 2, 3}, {1, 2, 0, 3}, {2, 3, 0, 1}};
+  for (Eigen::Index t = 0; t < mesh.T.rows(); ++t) {
+    const Eigen::RowVector4i r = mesh.T.row(t);
+    const int* e = even[t % 3];
+    mesh.T.row(t) << r(e[0]), r(e[1]), r(e[2]), r(e[3]);
+  }
+  const Body b(mesh, Material{});  // throws if a tet were inverted
+  ASSERT_EQ(b.F.rows(), 44);
+  const Vector3d centre = 0.5 * (lo + hi);
+  double area = 0;
+  for (Eigen::Index f = 0; f < b.F.rows(); ++f) {
+    const Vector3d p0 = b.rest.row(b.F(f, 0)), p1 = b.rest.row(b.F(f, 1)), p2 = b.rest.row(b.F(f, 2));
+    const Vector3d n = (p1 - p0).cross(p2 - p0);
+    area += 0.5 * n.norm();
+    EXPECT_GT(n.dot((p0 + p1 + p2) / 3.0 - centre), 0.0) << "triangle " << f << " points inward";
+  }
+  const Vector3d d = hi - lo;
+  EXPECT_NEAR(area, 2 * (d.x() * d.y() + d.y() * d.z() + d.x() * d.z()), 1e-12);
+  int boundary = 0, locals = 0;
+  for (int t = 0; t < b.tets(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_NE(b.boundary_face(t, k) >= 0, b.neighbor(t, k) >= 0) << t << ' ' << k;
+      boundary += b.boundary_face(t, k) >= 0;
+      if (b.boundary_face(t, k) >= 0) locals |= 1 << k;
+    }
+  EXPECT_EQ(boundary, 44);
+  EXPECT_EQ(locals, 15) << "every local face must be on the boundary somewhere";
+  for (int v = 0; v < b.vertices(); ++v) {
+    const Vector3d p = b.rest.row(v);
+    const bool on_box = ((p - lo).cwiseAbs().minCoeff() < 1e-12) || ((p - hi).cwiseAbs().minCoeff() < 1e-12);
+    EXPECT_EQ(b.on_boundary[static_cast<size_t>(v)] != 0, on_box) << "vertex " << v;
+  }
+}
+
 TEST(FemWorld, RestIsEquilibrium) {
   World w(no_gravity());
   w.add_body(Body(cube(1.0, 2), Material{}));

@@ -20,7 +20,7 @@
 #include "squeeze/ffd/ffd.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_io.h"
-#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tet_geometry.h"
 
 namespace {
 

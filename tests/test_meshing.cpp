@@ -2,7 +2,9 @@
 // winding numbers, orientation, surface and tetrahedral I/O. Geometry is built in the tests.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 #include <set>
 
 #include "meshing_test_util.h"
@@ -13,7 +15,10 @@
 #include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_io.h"
-#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tet_cleanup.h"
+#include "squeeze/meshing/tet_faces.h"
+#include "squeeze/meshing/tet_geometry.h"
+#include "squeeze/meshing/tet_locator.h"
 #include "squeeze/meshing/winding_number.h"
 
 namespace {
@@ -386,6 +391,213 @@ TEST(MeshingPipeline, DegenerateInputIsAnInputError) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Tetrahedron geometry and faces (tet_geometry.h, tet_faces.h), checked against measures of
+// meshing_test_util.h and geometry built here.
+
+/// The 12 even permutations of a tetrahedron's 4 corners (they keep its orientation).
+constexpr int kEvenPermutations[12][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0},
+                                          {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 2, 0, 3}, {2, 0, 1, 3},
+                                          {1, 3, 2, 0}, {3, 1, 0, 2}, {2, 1, 3, 0}, {3, 0, 2, 1}};
+
+/// [0,n]³ in unit cells, each split into 6 tetrahedra along its main diagonal (Kuhn), positively
+/// oriented by the test's own volume; tetrahedron t's corners are then listed in the even order
+/// t mod 12, so that every local face k lies on the boundary somewhere.
+TetMesh kuhn_box(int n) {
+  TetMesh m;
+  const int s = n + 1;
+  auto id = [&](int i, int j, int k) { return (k * s + j) * s + i; };
+  m.V.resize(s * s * s, 3);
+  for (int k = 0; k < s; ++k)
+    for (int j = 0; j < s; ++j)
+      for (int i = 0; i < s; ++i) m.V.row(id(i, j, k)) << i, j, k;
+  const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  m.T.resize(6 * n * n * n, 4);
+  int t = 0;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        for (const auto& p : perm) {
+          int c[3] = {i, j, k}, v[4];
+          v[0] = id(c[0], c[1], c[2]);
+          for (int q = 0; q < 3; ++q) {
+            ++c[p[q]];
+            v[q + 1] = id(c[0], c[1], c[2]);
+          }
+          const Eigen::Vector3d a = m.V.row(v[0]), b = m.V.row(v[1]), cc = m.V.row(v[2]), d = m.V.row(v[3]);
+          if (tet_signed_volume(a, b, cc, d) < 0) std::swap(v[2], v[3]);
+          const int* e = kEvenPermutations[t % 12];
+          m.T.row(t++) << v[e[0]], v[e[1]], v[e[2]], v[e[3]];
+        }
+  return m;
+}
+
+TEST(MeshingTetGeometry, VolumeIsTheSignedSixthOfTheTripleProduct) {
+  const Eigen::RowVector3d o(0, 0, 0), x(1, 0, 0), y(0, 1, 0), z(0, 0, 1);
+  EXPECT_EQ(squeeze::meshing::tet_volume(o, x, y, z), 1.0 / 6.0);
+  EXPECT_EQ(squeeze::meshing::tet_volume(o, x, z, y), -1.0 / 6.0);
+  EXPECT_EQ(squeeze::meshing::tet_volume(o, x, y, x + y), 0.0);
+  std::mt19937 g(5);
+  std::uniform_real_distribution<double> u(-3, 3);
+  for (int i = 0; i < 100; ++i) {
+    Eigen::Vector3d p[4];
+    for (auto& q : p) q << u(g), u(g), u(g);
+    // Bit for bit the test's own expression (fem and the renderer rely on one arithmetic).
+    EXPECT_EQ(squeeze::meshing::tet_volume(p[0].transpose(), p[1].transpose(), p[2].transpose(), p[3].transpose()),
+              tet_signed_volume(p[0], p[1], p[2], p[3]));
+  }
+  const TetMesh box = kuhn_box(3);
+  const Eigen::VectorXd v = squeeze::meshing::tet_volumes(box);
+  ASSERT_EQ(v.size(), box.T.rows());
+  EXPECT_NEAR(v.sum(), 27.0, 1e-12);
+  EXPECT_NEAR(v.minCoeff(), 1.0 / 6.0, 1e-15);
+  EXPECT_NEAR(v.maxCoeff(), 1.0 / 6.0, 1e-15);
+}
+
+TEST(MeshingTetGeometry, OrientPositivelyFlipsOnlyInvertedTetrahedra) {
+  TetMesh m = kuhn_box(2);
+  const Eigen::MatrixX4i T = m.T;
+  for (Eigen::Index t = 0; t < m.T.rows(); t += 3) std::swap(m.T(t, 0), m.T(t, 1));
+  squeeze::meshing::orient_positively(m);
+  EXPECT_GT(squeeze::meshing::tet_volumes(m).minCoeff(), 0.0);
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
+    if (t % 3) {
+      EXPECT_EQ(m.T.row(t), T.row(t)) << "tet " << t << " was positive and must stay as it was";
+    } else {  // the same vertices, the same tetrahedron
+      std::array<int, 4> a{m.T(t, 0), m.T(t, 1), m.T(t, 2), m.T(t, 3)}, b{T(t, 0), T(t, 1), T(t, 2), T(t, 3)};
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      EXPECT_EQ(a, b);
+    }
+  }
+}
+
+TEST(MeshingTetGeometry, DihedralAnglesComeInEdgeTableOrder) {
+  // A tetrahedron with six different dihedral angles.
+  const Eigen::Vector3d p[4] = {{0, 0, 0}, {2, 0, 0}, {0.3, 1.1, 0}, {0.5, 0.4, 0.9}};
+  const auto a = squeeze::meshing::dihedral_angles(p[0].transpose(), p[1].transpose(), p[2].transpose(), p[3].transpose());
+  for (int e = 0; e < 6; ++e) {
+    const int i = squeeze::meshing::kTetEdge[e][0], j = squeeze::meshing::kTetEdge[e][1];
+    int o[2], q = 0;
+    for (int k = 0; k < 4; ++k)
+      if (k != i && k != j) o[q++] = k;
+    EXPECT_NEAR(a[static_cast<size_t>(e)], dihedral_at(p[i], p[j], p[o[0]], p[o[1]]), 1e-9) << "edge " << i << j;
+  }
+  // Either orientation, the same angles (at the same edges: 01 02 03 12 13 23 become 01 03 02 13 12 32).
+  const auto b = squeeze::meshing::dihedral_angles(p[0].transpose(), p[1].transpose(), p[3].transpose(), p[2].transpose());
+  const int same_edge[6] = {0, 2, 1, 4, 3, 5};
+  for (int e = 0; e < 6; ++e) EXPECT_NEAR(b[static_cast<size_t>(same_edge[e])], a[static_cast<size_t>(e)], 1e-9) << e;
+}
+
+TEST(MeshingTetFaces, FaceTableIsOutwardOnAPositiveTetrahedron) {
+  std::mt19937 g(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 50; ++trial) {
+    Eigen::Vector3d p[4];
+    for (auto& q : p) q << u(g), u(g), u(g);
+    if (tet_signed_volume(p[0], p[1], p[2], p[3]) < 0) std::swap(p[2], p[3]);
+    for (int k = 0; k < 4; ++k) {
+      const int* f = squeeze::meshing::kTetFace[k];
+      // Face k is the three vertices other than k ...
+      std::set<int> others{0, 1, 2, 3};
+      others.erase(k);
+      EXPECT_EQ(std::set<int>(f, f + 3), others) << "face " << k;
+      // ... with its normal pointing away from vertex k (out of the tetrahedron).
+      const Eigen::Vector3d n = (p[f[1]] - p[f[0]]).cross(p[f[2]] - p[f[0]]);
+      EXPECT_LT(n.dot(p[k] - p[f[0]]), 0.0) << "face " << k << " points inward";
+    }
+  }
+  // The edge table: the six pairs i < j, in lexicographic order.
+  std::vector<std::pair<int, int>> edges;
+  for (const auto& e : squeeze::meshing::kTetEdge) edges.emplace_back(e[0], e[1]);
+  EXPECT_EQ(edges, (std::vector<std::pair<int, int>>{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}));
+}
+
+TEST(MeshingTetFaces, BoundaryOfAKuhnBoxIsItsSurfaceTriangles) {
+  for (int n : {1, 2, 3}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const TetMesh m = kuhn_box(n);
+    ASSERT_GT(squeeze::meshing::tet_volumes(m).minCoeff(), 0.0);
+    const squeeze::meshing::TetFaces f = squeeze::meshing::tet_faces(m.T);
+    const Eigen::Index nt = m.T.rows();
+    // Exactly the 12 n² surface triangles: on the box, outward, half a unit square each, distinct.
+    ASSERT_EQ(f.boundary.rows(), 12 * n * n);
+    EXPECT_EQ(f.interior, (4 * nt - 12 * n * n) / 2);
+    EXPECT_EQ(f.overshared, 0);
+    std::set<std::array<int, 3>> seen;
+    std::array<int, 3> previous{-1, -1, -1};
+    for (Eigen::Index b = 0; b < f.boundary.rows(); ++b) {
+      const Eigen::Vector3d a = m.V.row(f.boundary(b, 0)), c1 = m.V.row(f.boundary(b, 1)), c2 = m.V.row(f.boundary(b, 2));
+      const Eigen::Vector3d normal = (c1 - a).cross(c2 - a);
+      EXPECT_NEAR(normal.norm(), 1.0, 1e-12);  // area ½
+      int on_side = 0;
+      for (int axis = 0; axis < 3; ++axis)
+        for (double side : {0.0, double(n)})
+          if (a(axis) == side && c1(axis) == side && c2(axis) == side) {
+            ++on_side;
+            EXPECT_GT(normal(axis) * (side == 0.0 ? -1.0 : 1.0), 0.5) << "triangle " << b << " points inward";
+          }
+      EXPECT_EQ(on_side, 1) << "triangle " << b << " is not on the box surface";
+      std::array<int, 3> key{f.boundary(b, 0), f.boundary(b, 1), f.boundary(b, 2)};
+      std::sort(key.begin(), key.end());
+      EXPECT_TRUE(seen.insert(key).second) << "triangle " << b << " twice";
+      EXPECT_LT(previous, key) << "rows are ordered by their sorted vertex triples";
+      previous = key;
+    }
+    EXPECT_EQ(squeeze::meshing::boundary_faces(m.T), f.boundary);
+    // boundary_face and neighbor: every face of every tet is exactly one of the two, consistently.
+    ASSERT_EQ(f.boundary_face.rows(), nt);
+    ASSERT_EQ(f.neighbor.rows(), nt);
+    int boundary_refs = 0;
+    std::set<int> boundary_locals;
+    for (Eigen::Index t = 0; t < nt; ++t)
+      for (int k = 0; k < 4; ++k) {
+        const int* lf = squeeze::meshing::kTetFace[k];
+        const int b = f.boundary_face(t, k), o = f.neighbor(t, k);
+        EXPECT_NE(b >= 0, o >= 0) << "tet " << t << " face " << k;
+        if (b >= 0) {
+          ++boundary_refs;
+          boundary_locals.insert(k);
+          EXPECT_EQ(f.boundary.row(b), Eigen::RowVector3i(m.T(t, lf[0]), m.T(t, lf[1]), m.T(t, lf[2])));
+        } else if (o >= 0) {
+          std::set<int> mine{m.T(t, lf[0]), m.T(t, lf[1]), m.T(t, lf[2])}, theirs;
+          for (int q = 0; q < 4; ++q) theirs.insert(m.T(o, q));
+          for (int v : mine) EXPECT_TRUE(theirs.count(v)) << "tet " << o << " does not share face " << k << " of " << t;
+          int back = 0;
+          for (int q = 0; q < 4; ++q) back += f.neighbor(o, q) == t;
+          EXPECT_EQ(back, 1) << "neighbor is not symmetric at tet " << t;
+        }
+      }
+    EXPECT_EQ(boundary_refs, 12 * n * n);
+    EXPECT_EQ(boundary_locals.size(), 4u) << "every row of the face table must be tested on the boundary";
+  }
+}
+
+TEST(MeshingTetFaces, OversharedFacesAndComponents) {
+  // Three tetrahedra on one triangle (0,1,2): non-manifold, one component; a fourth touching the
+  // others at vertices only is a component of its own.
+  TetMesh m;
+  m.V.resize(8, 3);
+  m.V << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2, 0.2, 1, 0.3, 0.2, -1, 0.2, 0.3, 2, 5, 5, 5, 5, 6, 5;
+  m.T.resize(4, 4);
+  m.T << 0, 1, 2, 3, 0, 2, 1, 4, 0, 1, 2, 5, 3, 6, 7, 5;
+  const squeeze::meshing::TetFaces f = squeeze::meshing::tet_faces(m.T);
+  EXPECT_EQ(f.overshared, 1);
+  EXPECT_EQ(f.interior, 0);
+  EXPECT_EQ(f.boundary.rows(), 4 * 4 - 3);
+  EXPECT_EQ(f.neighbor, Eigen::MatrixX4i::Constant(4, 4, -1));  // an overshared face connects nothing
+  Eigen::VectorXi C;
+  EXPECT_EQ(squeeze::meshing::tet_components(m, C), 2);
+  EXPECT_EQ(C, Eigen::Vector4i(0, 0, 0, 1));
+  // Without the third, the first two share an interior face: neighbors.
+  TetMesh two = m;
+  two.T = m.T.topRows(2);
+  const squeeze::meshing::TetFaces g = squeeze::meshing::tet_faces(two.T);
+  EXPECT_EQ(g.interior, 1);
+  EXPECT_EQ(g.neighbor(0, 3), 1);  // face opposite vertex 3 of tet 0 is (0,1,2)
+  EXPECT_EQ(g.neighbor(1, 3), 0);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Tetrahedral formats.
 
 TetMesh kuhn_cube() {
@@ -483,6 +695,61 @@ TEST(MeshingTetIO, Errors) {
                                          "$Elements\n0\n$EndElements\n";
   }
   EXPECT_THROW(squeeze::meshing::load_tet_mesh(dir / "notets.msh"), InputError);
+  EXPECT_TRUE(temporaries_in(dir.path()).empty());
+}
+
+TEST(MeshingTetIO, TheFormatTableRoundTripsEveryFormatAndNamesThemInErrors) {
+  TempDir dir("tetformats");
+  const TetMesh m = kuhn_cube();
+  const auto& formats = squeeze::meshing::tet_formats();
+  ASSERT_GE(formats.size(), 5u);
+  std::set<std::string> all;
+  const std::string list = squeeze::meshing::tet_format_list();
+  for (const auto& f : formats) {
+    ASSERT_FALSE(f.extensions.empty());
+    ASSERT_TRUE(f.read && f.write) << f.extensions[0];
+    EXPECT_FALSE(f.description.empty()) << f.extensions[0];
+    for (const std::string& e : f.extensions) {
+      SCOPED_TRACE(e);
+      EXPECT_TRUE(all.insert(e).second) << "extension in two formats";
+      EXPECT_EQ(e[0], '.');
+      EXPECT_TRUE(std::none_of(e.begin(), e.end(), [](unsigned char c) { return std::isupper(c); }));
+      EXPECT_NE(list.find(e), std::string::npos) << list;
+      std::string upper = e;
+      std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
+      // Any extension of the format, in either case, is the format ...
+      for (const std::string& name : {"t" + e, "T" + upper}) {
+        EXPECT_EQ(squeeze::meshing::find_tet_format(name), &f) << name;
+        EXPECT_TRUE(squeeze::meshing::is_tet_format(name)) << name;
+      }
+      // ... and the mesh comes back as written, through save/load and through the table's entry.
+      const fs::path p = dir / ("s_" + upper.substr(1) + upper);
+      squeeze::meshing::save_tet_mesh(p, m);
+      for (const TetMesh& back : {squeeze::meshing::load_tet_mesh(p), f.read(p)}) {
+        EXPECT_TRUE(back.V == m.V);
+        EXPECT_TRUE(back.T == m.T);
+        EXPECT_TRUE(back.label == m.label);
+      }
+      const fs::path q = dir / ("w_" + e.substr(1) + e);
+      f.write(q, m);
+      const TetMesh back = squeeze::meshing::load_tet_mesh(q);
+      EXPECT_TRUE(back.V == m.V && back.T == m.T && back.label == m.label);
+    }
+  }
+  // A surface format is not a tet format, and the errors list every format.
+  EXPECT_EQ(squeeze::meshing::find_tet_format("x.off"), nullptr);
+  EXPECT_EQ(squeeze::meshing::find_tet_format("mesh"), nullptr);  // a name, not an extension
+  for (auto call : {+[](const fs::path& p) { squeeze::meshing::save_tet_mesh(p, TetMesh{}); },
+                    +[](const fs::path& p) { squeeze::meshing::load_tet_mesh(p); }}) {
+    try {
+      call(dir / "x.xyz");
+      ADD_FAILURE() << "no error for x.xyz";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("'.xyz' (use " + list + ")"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(list, ".mesh, .msh, .vtk, .vtu or .node/.ele");
+  EXPECT_EQ(squeeze::meshing::tet_format_list(true), ".mesh (Medit), .msh (Gmsh 2.2), .vtk, .vtu or .node/.ele (TetGen)");
   EXPECT_TRUE(temporaries_in(dir.path()).empty());
 }
 
@@ -643,6 +910,31 @@ TEST(MeshingSurfaceIO, RoundTripsThroughAssimpFormats) {
   const auto tmp = temporaries_in(dir.path());
   EXPECT_TRUE(tmp.empty()) << "left behind: " << (tmp.empty() ? "" : tmp.front());
   EXPECT_THROW(squeeze::meshing::save_surface(dir / "e.nosuchformat", s), InputError);
+}
+
+TEST(MeshingSurfaceIO, OwnFormatsInEitherCaseAndTheMessageList) {
+  TempDir dir("surfown");
+  const SurfaceMesh s = read_off(data("elephant.off"));
+  const std::string examples = squeeze::meshing::surface_format_examples();
+  EXPECT_EQ(examples, ".off, .obj, .ply, .stl, .gltf, .glb, ...");
+  for (const std::string name : {"e.off", "E.OFF", "e.obj", "E.Obj"}) {
+    SCOPED_TRACE(name);
+    EXPECT_TRUE(squeeze::meshing::is_surface_format(name));
+    squeeze::meshing::save_surface(dir / name, s);
+    // Our writers: every vertex in order at full precision, so keep_order gives the mesh back.
+    squeeze::meshing::LoadOptions keep;
+    keep.keep_order = true;
+    const SurfaceMesh back = squeeze::meshing::load_surface(dir / name, keep);
+    EXPECT_TRUE(back.V == s.V);
+    EXPECT_TRUE(back.F == s.F);
+  }
+  EXPECT_FALSE(squeeze::meshing::is_surface_format("e.nosuchformat"));
+  try {
+    squeeze::meshing::save_surface(dir / "e.nosuchformat", s);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("(use " + examples + ")"), std::string::npos) << e.what();
+  }
 }
 
 TEST(MeshingSurfaceIO, BadFilesAreInputErrors) {

@@ -3,6 +3,7 @@
 // and rows, trajectory, the cube coming to rest, bad input through the binary).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 
 #include "meshing_test_util.h"
@@ -260,6 +261,29 @@ TEST_F(SceneTest, SurfaceMeshesAreMeshedOnceAndCached) {
   // A different tet count is another entry.
   object_tet_mesh(off, 100, &hit);
   EXPECT_FALSE(hit);
+}
+
+TEST_F(SceneTest, EveryTetFormatIsLoadedAsItIsNotMeshed) {
+  // The scene loader asks meshing's format table: a mesh in any tet format (any case) is used
+  // directly, never sent to the surface mesher (which would fail on it, or cache it).
+  const squeeze::meshing::TetMesh cube = box_tet_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), Eigen::Vector3i(2, 1, 3));
+  int n = 0;
+  for (const auto& format : squeeze::meshing::tet_formats())
+    for (const std::string& e : format.extensions) {
+      SCOPED_TRACE(e);
+      std::string upper = e;
+      std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
+      for (const std::string& ext : {e, upper}) {
+        const fs::path p = dir_->path() / ("cube" + std::to_string(n++) + ext);
+        squeeze::meshing::save_tet_mesh(p, cube);
+        bool hit = true;
+        const squeeze::meshing::TetMesh m = object_tet_mesh(p, 200, &hit);
+        EXPECT_FALSE(hit);
+        EXPECT_EQ(m.V, cube.V);
+        EXPECT_EQ(m.T, cube.T);
+      }
+    }
+  EXPECT_FALSE(fs::exists(dir_->path() / "cache")) << "a tet mesh went to the mesher";
 }
 
 std::vector<std::string> split(const std::string& line) {

@@ -6,14 +6,12 @@
 #include <string>
 
 #include "squeeze/common/error.h"
-#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tet_cleanup.h"
+#include "squeeze/meshing/tet_faces.h"
+#include "squeeze/meshing/tet_geometry.h"
 
 namespace squeeze::fem {
 namespace {
-
-// Faces of tet (v0,v1,v2,v3), face k opposite vertex k, oriented outward for a positive tet.
-constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 
 void check_material(const Material& mat, bool rigid) {
   if (!rigid && !(mat.density > 0))
@@ -53,8 +51,7 @@ Body::Body(const meshing::TetMesh& mesh, const Material& mat, bool is_rigid, con
 
   V0.resize(nt);
   for (int t = 0; t < nt; ++t) {
-    const Eigen::Vector3d a = rest.row(T(t, 0)), b = rest.row(T(t, 1)), c = rest.row(T(t, 2)), d = rest.row(T(t, 3));
-    V0(t) = (b - a).dot((c - a).cross(d - a)) / 6.0;
+    V0(t) = meshing::tet_volume(rest.row(T(t, 0)), rest.row(T(t, 1)), rest.row(T(t, 2)), rest.row(T(t, 3)));
     if (!(V0(t) > 0))
       throw InputError("fem body: tetrahedron " + std::to_string(t) + " has a non-positive volume " +
                        std::to_string(V0(t)));
@@ -64,7 +61,7 @@ Body::Body(const meshing::TetMesh& mesh, const Material& mat, bool is_rigid, con
   std::vector<std::pair<int, int>> e;
   e.reserve(static_cast<size_t>(nt) * 6);
   for (int t = 0; t < nt; ++t)
-    for (const auto& ke : kEdge) {
+    for (const auto& ke : meshing::kTetEdge) {
       int i = T(t, ke[0]), j = T(t, ke[1]);
       if (i > j) std::swap(i, j);
       e.emplace_back(i, j);
@@ -82,7 +79,7 @@ Body::Body(const meshing::TetMesh& mesh, const Material& mat, bool is_rigid, con
   // Rest volume represented by each edge: each tet shares its volume equally among its 6 edges.
   edge_volume = Eigen::VectorXd::Zero(D0.size());
   for (int t = 0; t < nt; ++t)
-    for (const auto& ke : kEdge) {
+    for (const auto& ke : meshing::kTetEdge) {
       int i = T(t, ke[0]), j = T(t, ke[1]);
       if (i > j) std::swap(i, j);
       const auto it = std::lower_bound(e.begin(), e.end(), std::make_pair(i, j));
@@ -99,45 +96,14 @@ Body::Body(const meshing::TetMesh& mesh, const Material& mat, bool is_rigid, con
   std::stable_sort(inc.begin(), inc.end(), [](auto& a, auto& b) { return a.first < b.first; });
   build_csr(nv, inc, edge_start, edge_code);
 
-  // Face adjacency and boundary.
-  struct FaceRef {
-    std::array<int, 3> key;
-    int code;
-  };
-  std::vector<FaceRef> f;
-  f.reserve(static_cast<size_t>(nt) * 4);
-  for (int t = 0; t < nt; ++t)
-    for (int k = 0; k < 4; ++k) {
-      std::array<int, 3> key{T(t, kFace[k][0]), T(t, kFace[k][1]), T(t, kFace[k][2])};
-      std::sort(key.begin(), key.end());
-      f.push_back({key, 4 * t + k});
-    }
-  std::sort(f.begin(), f.end(), [](const FaceRef& a, const FaceRef& b) {
-    return a.key != b.key ? a.key < b.key : a.code < b.code;
-  });
-  neighbor = Eigen::MatrixX4i::Constant(nt, 4, -1);
-  boundary_face = Eigen::MatrixX4i::Constant(nt, 4, -1);
-  std::vector<std::array<int, 3>> faces;
-  for (size_t i = 0; i < f.size();) {
-    size_t j = i + 1;
-    while (j < f.size() && f[j].key == f[i].key) ++j;
-    if (j - i == 1) {
-      const int t = f[i].code / 4, k = f[i].code % 4;
-      boundary_face(t, k) = static_cast<int>(faces.size());
-      faces.push_back({T(t, kFace[k][0]), T(t, kFace[k][1]), T(t, kFace[k][2])});
-    } else if (j - i == 2) {
-      neighbor(f[i].code / 4, f[i].code % 4) = f[i + 1].code / 4;
-      neighbor(f[i + 1].code / 4, f[i + 1].code % 4) = f[i].code / 4;
-    }  // faces shared by three or more tets (non-manifold) are left unconnected
-    i = j;
-  }
-  F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  // Face adjacency and boundary (faces shared by three or more tets are left unconnected).
+  meshing::TetFaces faces = meshing::tet_faces(T);
+  neighbor = std::move(faces.neighbor);
+  boundary_face = std::move(faces.boundary_face);
+  F = std::move(faces.boundary);
   on_boundary.assign(static_cast<size_t>(nv), 0);
-  for (size_t k = 0; k < faces.size(); ++k)
-    for (int c = 0; c < 3; ++c) {
-      F(k, c) = faces[k][c];
-      on_boundary[faces[k][c]] = 1;
-    }
+  for (Eigen::Index k = 0; k < F.rows(); ++k)
+    for (int c = 0; c < 3; ++c) on_boundary[F(k, c)] = 1;
   set_material(mat);
 }
 
@@ -252,11 +218,8 @@ double Body::total_volume() const { return V0.sum(); }
 
 double volume(const Body& body, const Eigen::Ref<const RowMatrixX3d>& X) {
   double v = 0;
-  for (int t = 0; t < body.tets(); ++t) {
-    const Eigen::Vector3d a = X.row(body.T(t, 0)), b = X.row(body.T(t, 1)), c = X.row(body.T(t, 2)),
-                          d = X.row(body.T(t, 3));
-    v += (b - a).dot((c - a).cross(d - a)) / 6.0;
-  }
+  for (int t = 0; t < body.tets(); ++t)
+    v += meshing::tet_volume(X.row(body.T(t, 0)), X.row(body.T(t, 1)), X.row(body.T(t, 2)), X.row(body.T(t, 3)));
   return v;
 }
 
@@ -289,11 +252,7 @@ meshing::TetMesh box_tet_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& 
           }
           m.T.row(t++) << v[0], v[1], v[2], v[3];
         }
-  for (int r = 0; r < m.T.rows(); ++r) {
-    const Eigen::Vector3d a = m.V.row(m.T(r, 0)), b = m.V.row(m.T(r, 1)), c = m.V.row(m.T(r, 2)),
-                          d = m.V.row(m.T(r, 3));
-    if ((b - a).dot((c - a).cross(d - a)) < 0) std::swap(m.T(r, 2), m.T(r, 3));
-  }
+  meshing::orient_positively(m);
   return m;
 }
 

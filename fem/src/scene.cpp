@@ -31,12 +31,6 @@ std::string num(double x) { return format_number(x); }
 
 namespace {
 
-bool is_tet_mesh_file(const fs::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".mesh" || ext == ".msh" || ext == ".vtk" || ext == ".vtu" || ext == ".node" || ext == ".ele";
-}
-
 // Two independent 64-bit hashes (FNV-1a and a multiply-xorshift mix) = 128 bits of cache key.
 struct Hash128 {
   std::uint64_t a = 1469598103934665603ULL, b = 0x9E3779B97F4A7C15ULL;
@@ -252,7 +246,7 @@ fs::path mesh_cache_dir() {
 
 meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progress* progress) {
   if (cache_hit) *cache_hit = false;
-  if (is_tet_mesh_file(mesh)) return meshing::load_tet_mesh(mesh);
+  if (meshing::is_tet_format(mesh)) return meshing::load_tet_mesh(mesh);
   meshing::MeshOptions options;
   options.tetrahedralize.target_tets = tets;
   options.check_self_intersection = false;

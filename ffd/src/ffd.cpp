@@ -14,7 +14,7 @@
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/surface.h"
-#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tet_locator.h"
 
 namespace squeeze::ffd {
 

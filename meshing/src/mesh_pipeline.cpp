@@ -9,6 +9,7 @@
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/tet_locator.h"
 
 namespace squeeze::meshing {
 namespace {

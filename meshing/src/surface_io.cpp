@@ -175,6 +175,57 @@ void read_off_in_order(const fs::path& path, std::vector<std::array<double, 3>>&
   }
 }
 
+// Our own OFF writer: assimp 5.2 has no OFF exporter, and OFF is the format of our test corpus.
+void write_off(const fs::path& path, const SurfaceMesh& mesh) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path.string() + ": cannot open for writing");
+  out.precision(17);
+  out << "OFF\n" << mesh.V.rows() << ' ' << mesh.F.rows() << " 0\n";
+  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i)
+    out << mesh.V(i, 0) << ' ' << mesh.V(i, 1) << ' ' << mesh.V(i, 2) << '\n';
+  for (Eigen::Index i = 0; i < mesh.F.rows(); ++i)
+    out << "3 " << mesh.F(i, 0) << ' ' << mesh.F(i, 1) << ' ' << mesh.F(i, 2) << '\n';
+  if (!out) throw InputError(path.string() + ": write failed");
+}
+
+// Our own OBJ writer: full precision, and every vertex in order (assimp's exporter re-indexes).
+void write_obj(const fs::path& path, const SurfaceMesh& mesh) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path.string() + ": cannot open for writing");
+  out.precision(17);
+  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i)
+    out << "v " << mesh.V(i, 0) << ' ' << mesh.V(i, 1) << ' ' << mesh.V(i, 2) << '\n';
+  for (Eigen::Index i = 0; i < mesh.F.rows(); ++i)
+    out << "f " << mesh.F(i, 0) + 1 << ' ' << mesh.F(i, 1) + 1 << ' ' << mesh.F(i, 2) + 1 << '\n';
+  if (!out) throw InputError(path.string() + ": write failed");
+}
+
+// The surface formats squeeze reads or writes with its own code; every other extension is
+// assimp's (any format it imports; any it exports, see assimp_format_id). To add a format: its
+// reader and/or writer in this file and one line here.
+struct OwnSurfaceFormat {
+  const char* extension;  // lower case, with the dot
+  // Reader in file order and double precision (vertices as written, polygons as fans), or null.
+  void (*read)(const fs::path& path, std::vector<std::array<double, 3>>& pts, std::vector<std::array<int, 3>>& tris);
+  bool read_always;  // the reader serves every load; false: only LoadOptions::keep_order (assimp otherwise)
+  // Writer: full precision, every vertex of V in order; null: assimp exports the format.
+  void (*write)(const fs::path& path, const SurfaceMesh& mesh);
+};
+
+constexpr OwnSurfaceFormat kOwnSurfaceFormats[] = {
+    // OFF: ours in all modes (assimp reads it in single precision, and reports no NaN).
+    {".off", read_off_in_order, true, write_off},
+    // OBJ: ours to keep the file's vertex order (assimp duplicates vertices per face corner);
+    // assimp's otherwise (materials, groups, welding).
+    {".obj", read_obj_in_order, false, write_obj},
+};
+
+const OwnSurfaceFormat* own_surface_format(const std::string& ext) {
+  for (const OwnSurfaceFormat& f : kOwnSurfaceFormats)
+    if (ext == f.extension) return &f;
+  return nullptr;
+}
+
 }  // namespace
 
 SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
@@ -189,11 +240,9 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
   }
   std::vector<std::array<double, 3>> pts;
   std::vector<std::array<int, 3>> tris;
-  const std::string ext = lower(path.extension().string());
-  if (options.keep_order && ext == ".obj") {
-    read_obj_in_order(path, pts, tris);
-  } else if (ext == ".off") {  // ours in all modes: double precision, and NaN is reported
-    read_off_in_order(path, pts, tris);
+  const OwnSurfaceFormat* own = own_surface_format(lower(path.extension().string()));
+  if (own && own->read && (own->read_always || options.keep_order)) {
+    own->read(path, pts, tris);
   } else {
     Assimp::Importer importer;
     // Keep only triangles; polygons are triangulated, points and lines dropped.
@@ -269,31 +318,6 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
 
 namespace {
 
-// Our own OFF writer: assimp 5.2 has no OFF exporter, and OFF is the format of our test corpus.
-void write_off(const fs::path& path, const SurfaceMesh& mesh) {
-  std::ofstream out(path);
-  if (!out) throw InputError(path.string() + ": cannot open for writing");
-  out.precision(17);
-  out << "OFF\n" << mesh.V.rows() << ' ' << mesh.F.rows() << " 0\n";
-  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i)
-    out << mesh.V(i, 0) << ' ' << mesh.V(i, 1) << ' ' << mesh.V(i, 2) << '\n';
-  for (Eigen::Index i = 0; i < mesh.F.rows(); ++i)
-    out << "3 " << mesh.F(i, 0) << ' ' << mesh.F(i, 1) << ' ' << mesh.F(i, 2) << '\n';
-  if (!out) throw InputError(path.string() + ": write failed");
-}
-
-// Our own OBJ writer: full precision, and every vertex in order (assimp's exporter re-indexes).
-void write_obj(const fs::path& path, const SurfaceMesh& mesh) {
-  std::ofstream out(path);
-  if (!out) throw InputError(path.string() + ": cannot open for writing");
-  out.precision(17);
-  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i)
-    out << "v " << mesh.V(i, 0) << ' ' << mesh.V(i, 1) << ' ' << mesh.V(i, 2) << '\n';
-  for (Eigen::Index i = 0; i < mesh.F.rows(); ++i)
-    out << "f " << mesh.F(i, 0) + 1 << ' ' << mesh.F(i, 1) + 1 << ' ' << mesh.F(i, 2) + 1 << '\n';
-  if (!out) throw InputError(path.string() + ": write failed");
-}
-
 std::string assimp_format_id(const std::string& ext) {
   Assimp::Exporter exporter;
   std::string fallback;
@@ -312,14 +336,13 @@ std::string assimp_format_id(const std::string& ext) {
 
 void save_surface(const fs::path& path, const SurfaceMesh& mesh) {
   const std::string ext = lower(path.extension().string().empty() ? "" : path.extension().string().substr(1));
-  if (ext == "off" || ext == "obj") {
-    write_atomically(path, [&](const fs::path& tmp) { ext == "off" ? write_off(tmp, mesh) : write_obj(tmp, mesh); });
+  if (const OwnSurfaceFormat* own = own_surface_format("." + ext); own && own->write) {
+    write_atomically(path, [&](const fs::path& tmp) { own->write(tmp, mesh); });
     return;
   }
   const std::string format = assimp_format_id(ext);
   if (format.empty())
-    throw InputError(path.string() + ": unknown output format '." + ext +
-                     "' (use .off, .obj, .ply, .stl, .gltf, .glb, ...)");
+    throw InputError(path.string() + ": unknown output format '." + ext + "' (use " + surface_format_examples() + ")");
   aiScene scene;
   scene.mRootNode = new aiNode();
   scene.mMaterials = new aiMaterial*[1]{new aiMaterial()};
@@ -377,7 +400,15 @@ void save_surface(const fs::path& path, const SurfaceMesh& mesh) {
 
 bool is_surface_format(const fs::path& path) {
   const std::string ext = lower(path.extension().string().empty() ? "" : path.extension().string().substr(1));
-  return ext == "off" || ext == "obj" || !assimp_format_id(ext).empty();
+  const OwnSurfaceFormat* own = own_surface_format("." + ext);
+  return (own && own->write) || !assimp_format_id(ext).empty();
+}
+
+std::string surface_format_examples() {
+  std::string list;
+  for (const OwnSurfaceFormat& f : kOwnSurfaceFormats)
+    if (f.write) list += std::string(f.extension) + ", ";
+  return list + ".ply, .stl, .gltf, .glb, ...";  // a few of assimp's
 }
 
 }  // namespace squeeze::meshing

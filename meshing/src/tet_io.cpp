@@ -448,41 +448,70 @@ TetMesh read_tetgen(const fs::path& p) {
   return r.finish(base);
 }
 
+// ---- writing through temporaries ---------------------------------------------------------------
+
+using FileWriter = void (*)(const fs::path& tmp, const fs::path& target, const TetMesh& m);
+
+// A one-file format's writer: W writes the temporary, renamed to `path` at the end.
+template <FileWriter W>
+void write_one(const fs::path& path, const TetMesh& m) {
+  write_atomically(path, [&](const fs::path& tmp) { W(tmp, path, m); });
+}
+
+void write_tetgen(const fs::path& path, const TetMesh& m) {
+  write_one<write_tetgen_node>(fs::path(path).replace_extension(".node"), m);
+  write_one<write_tetgen_ele>(fs::path(path).replace_extension(".ele"), m);
+}
+
+[[noreturn]] void unknown_format(const fs::path& path) {
+  throw InputError(path.string() + ": unknown tetrahedral mesh format '" + ext_of(path) + "' (use " +
+                   tet_format_list() + ")");
+}
+
 }  // namespace
 
-bool is_tet_format(const fs::path& path) {
+const std::vector<TetFormat>& tet_formats() {
+  // One line per format: extensions, short name, description, reader, writer.
+  static const std::vector<TetFormat> formats{
+      {{".mesh"}, "Medit", "Medit (INRIA), ASCII, MeshVersionFormatted 1", read_medit, write_one<write_medit>},
+      {{".msh"}, "Gmsh 2.2", "Gmsh 2.2 ASCII (element type 4 = 4-node tetrahedron)", read_gmsh, write_one<write_gmsh>},
+      {{".vtk"}, "", "VTK legacy ASCII unstructured grid (cell type 10)", read_vtk, write_one<write_vtk>},
+      {{".vtu"}, "", "VTK XML unstructured grid, ASCII", read_vtu, write_one<write_vtu>},
+      {{".node", ".ele"}, "TetGen", "TetGen .node/.ele pair, 0-based", read_tetgen, write_tetgen},
+  };
+  return formats;
+}
+
+const TetFormat* find_tet_format(const fs::path& path) {
   const std::string e = ext_of(path);
-  return e == ".mesh" || e == ".msh" || e == ".vtk" || e == ".vtu" || e == ".node" || e == ".ele";
+  for (const TetFormat& f : tet_formats())
+    if (std::find(f.extensions.begin(), f.extensions.end(), e) != f.extensions.end()) return &f;
+  return nullptr;
+}
+
+bool is_tet_format(const fs::path& path) { return find_tet_format(path) != nullptr; }
+
+std::string tet_format_list(bool names) {
+  const auto& formats = tet_formats();
+  std::string list;
+  for (size_t i = 0; i < formats.size(); ++i) {
+    if (i > 0) list += i + 1 == formats.size() ? " or " : ", ";
+    for (size_t k = 0; k < formats[i].extensions.size(); ++k) list += (k ? "/" : "") + formats[i].extensions[k];
+    if (names && !formats[i].name.empty()) list += " (" + formats[i].name + ")";
+  }
+  return list;
 }
 
 void save_tet_mesh(const fs::path& path, const TetMesh& mesh) {
-  const std::string e = ext_of(path);
-  using Writer = void (*)(const fs::path&, const fs::path&, const TetMesh&);
-  auto one = [&](const fs::path& target, Writer w) {
-    write_atomically(target, [&](const fs::path& tmp) { w(tmp, target, mesh); });
-  };
-  if (e == ".mesh") return one(path, write_medit);
-  if (e == ".msh") return one(path, write_gmsh);
-  if (e == ".vtk") return one(path, write_vtk);
-  if (e == ".vtu") return one(path, write_vtu);
-  if (e == ".node" || e == ".ele") {
-    one(fs::path(path).replace_extension(".node"), write_tetgen_node);
-    one(fs::path(path).replace_extension(".ele"), write_tetgen_ele);
-    return;
-  }
-  throw InputError(path.string() + ": unknown tetrahedral mesh format '" + e +
-                   "' (use .mesh, .msh, .vtk, .vtu or .node/.ele)");
+  const TetFormat* f = find_tet_format(path);
+  if (!f) unknown_format(path);
+  f->write(path, mesh);
 }
 
 TetMesh load_tet_mesh(const fs::path& path) {
-  const std::string e = ext_of(path);
-  if (e == ".mesh") return read_medit(path);
-  if (e == ".msh") return read_gmsh(path);
-  if (e == ".vtk") return read_vtk(path);
-  if (e == ".vtu") return read_vtu(path);
-  if (e == ".node" || e == ".ele") return read_tetgen(path);
-  throw InputError(path.string() + ": unknown tetrahedral mesh format '" + e +
-                   "' (use .mesh, .msh, .vtk, .vtu or .node/.ele)");
+  const TetFormat* f = find_tet_format(path);
+  if (!f) unknown_format(path);
+  return f->read(path);
 }
 
 }  // namespace squeeze::meshing

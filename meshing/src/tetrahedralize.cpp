@@ -25,7 +25,10 @@
 
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
-#include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/tet_cleanup.h"
+#include "squeeze/meshing/tet_faces.h"
+#include "squeeze/meshing/tet_geometry.h"
+#include "squeeze/meshing/tet_locator.h"
 
 namespace squeeze::meshing {
 namespace {

@@ -8,7 +8,6 @@
 #include <cmath>
 #include <ctime>
 #include <fstream>
-#include <map>
 #include <sstream>
 
 #include "squeeze/common/atomic_file.h"
@@ -17,6 +16,8 @@
 #include "squeeze/fem/scene.h"
 #include "squeeze/ffd/ffd.h"
 #include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/tet_faces.h"
+#include "squeeze/meshing/tet_geometry.h"
 #include "squeeze/meshing/tet_io.h"
 #include "squeeze/render/export_formats.h"
 #include "squeeze/render/exporter.h"
@@ -59,27 +60,6 @@ std::pair<int, int> parse_frame_range(const std::string& text) {
 
 namespace {
 
-// Outward boundary triangles of a positively oriented tet mesh (faces used by one tet only).
-Eigen::MatrixX3i boundary_faces(const Eigen::MatrixX4i& T) {
-  static const int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-  std::map<std::array<int, 3>, std::pair<int, std::array<int, 3>>> faces;
-  for (Eigen::Index t = 0; t < T.rows(); ++t)
-    for (const auto& f : kFace) {
-      std::array<int, 3> tri{T(t, f[0]), T(t, f[1]), T(t, f[2])};
-      std::array<int, 3> key = tri;
-      std::sort(key.begin(), key.end());
-      auto [it, inserted] = faces.emplace(key, std::make_pair(1, tri));
-      if (!inserted) ++it->second.first;
-    }
-  std::vector<std::array<int, 3>> out;
-  for (const auto& [key, v] : faces)
-    if (v.first == 1) out.push_back(v.second);
-  Eigen::MatrixX3i F(static_cast<Eigen::Index>(out.size()), 3);
-  for (size_t i = 0; i < out.size(); ++i)
-    for (int c = 0; c < 3; ++c) F(static_cast<Eigen::Index>(i), c) = out[i][static_cast<size_t>(c)];
-  return F;
-}
-
 Eigen::MatrixX2i unique_edges(const Eigen::MatrixX3i& F) {
   std::vector<std::pair<int, int>> e;
   for (Eigen::Index f = 0; f < F.rows(); ++f)
@@ -95,12 +75,11 @@ Eigen::MatrixX2i unique_edges(const Eigen::MatrixX3i& F) {
   return E;
 }
 
-double tet_volume(const Eigen::MatrixX4i& T, const Eigen::MatrixX3d& X) {
+// Volume of the tetrahedra T at positions X (units³).
+double mesh_volume(const Eigen::MatrixX4i& T, const Eigen::MatrixX3d& X) {
   double v = 0;
-  for (Eigen::Index t = 0; t < T.rows(); ++t) {
-    const Eigen::Vector3d a = X.row(T(t, 0)), b = X.row(T(t, 1)), c = X.row(T(t, 2)), d = X.row(T(t, 3));
-    v += (b - a).dot((c - a).cross(d - a)) / 6.0;
-  }
+  for (Eigen::Index t = 0; t < T.rows(); ++t)
+    v += meshing::tet_volume(X.row(T(t, 0)), X.row(T(t, 1)), X.row(T(t, 2)), X.row(T(t, 3)));
   return v;
 }
 
@@ -273,7 +252,7 @@ Object load_object(const fem::SceneObject& so, const Trajectory& traj, int i, Pr
   ob.vertices = traj.objects[static_cast<size_t>(i)].vertices;
   const meshing::TetMesh rest = traj.rest_mesh(i);
   ob.T = rest.T;
-  const Eigen::MatrixX3i coarse_faces = boundary_faces(rest.T);
+  const Eigen::MatrixX3i coarse_faces = meshing::boundary_faces(rest.T);
   ob.coarse_edges = unique_edges(coarse_faces);
   ob.direct = meshing::is_tet_format(so.mesh);
   if (ob.direct) {
@@ -346,7 +325,7 @@ Motion scan_trajectory(const Trajectory& traj, const std::vector<Object>& object
     for (size_t b = 0; b < objects.size(); ++b) {
       const Object& ob = objects[b];
       const Eigen::MatrixX3d Xb = X.middleRows(ob.offset, ob.vertices);
-      const double vol = tet_volume(ob.T, Xb);
+      const double vol = mesh_volume(ob.T, Xb);
       if (f == 0) rest_volume[b] = vol;
       m.volume[b].push_back(rest_volume[b] > 0 ? 100.0 * (vol / rest_volume[b] - 1.0) : 0.0);
       for (Eigen::Index v = 0; v < Xb.rows(); ++v) bounds.extend(Eigen::Vector3d(Xb.row(v).transpose()));

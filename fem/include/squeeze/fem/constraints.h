@@ -59,6 +59,9 @@ inline double volume_constraint(const Vec3& p0, const Vec3& p1, const Vec3& p2, 
                                 Vec3 grad[4]) {
   const Vec3 a = p1 - p0, b = p2 - p0, c = p3 - p0;
   const Vec3 bc = b.cross(c);
+  // The expression of meshing::tet_volume (tet_geometry.h), kept here rather than called: bc is
+  // shared with the gradient below, and this is the hot kernel whose order volume_forces_pair
+  // repeats bit for bit.
   const double V = a.dot(bc) / 6.0;
   if (grad) {
     const double s = 1.0 / (6.0 * V0);

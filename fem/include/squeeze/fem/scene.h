@@ -98,7 +98,7 @@ Scene parse_scene(const std::string& json_text, const std::filesystem::path& fil
 std::filesystem::path mesh_cache_dir();
 
 /// The coarse tetrahedral mesh of an object in its model units (before the transform): loaded
-/// directly if `mesh` is a tet mesh (.mesh, .msh, .vtk, .vtu, .node, .ele), otherwise made by the
+/// directly if `mesh` is a tet mesh (meshing::is_tet_format: .mesh, .msh, ...), otherwise made by the
 /// meshing pipeline with target_tets = tets and cached as CACHE/meshes/HASH.mesh, HASH being a
 /// 128-bit hash of the file's bytes and every meshing option. `cache_hit` (optional) tells
 /// whether the cache served it. Throws InputError "PATH: problem".

@@ -1,6 +1,10 @@
-// squeeze::meshing — reading and writing triangle surfaces through assimp.
+// squeeze::meshing — reading and writing triangle surfaces: through assimp, and by squeeze's own
+// readers and writers for the formats in the table of meshing/src/surface_io.cpp (OFF, OBJ).
+// To add a format assimp lacks (or reads or writes badly): its reader and/or writer in
+// surface_io.cpp and one line in that table.
 #pragma once
 #include <filesystem>
+#include <string>
 
 #include "squeeze/meshing/surface.h"
 
@@ -37,7 +41,12 @@ SurfaceMesh load_surface(const std::filesystem::path& path, const LoadOptions& o
 /// unreferenced ones too); the other formats by assimp, in single precision (ai_real is float).
 void save_surface(const std::filesystem::path& path, const SurfaceMesh& mesh);
 
-/// Whether save_surface can write a file with this extension (checked before long work).
+/// Whether save_surface can write a file with this extension, case-insensitive (checked before
+/// long work).
 bool is_surface_format(const std::filesystem::path& path);
+
+/// The writable extensions for messages: squeeze's own (.off, .obj), then a few of assimp's:
+/// ".off, .obj, .ply, .stl, .gltf, .glb, ...".
+std::string surface_format_examples();
 
 }  // namespace squeeze::meshing

@@ -54,7 +54,7 @@ struct TetrahedralizeStats {
 /// result is conforming: shells that meet share vertices and faces, every interior face has
 /// exactly two tetrahedra. Tetrahedra come out positively oriented; each is labelled with the
 /// (1-based) shell that holds its centroid; unused vertices are dropped.
-/// Boundary tetrahedra with a dihedral angle below min_dihedral are peeled off (tet_quality.h).
+/// Boundary tetrahedra with a dihedral angle below min_dihedral are peeled off (tet_cleanup.h).
 ///   cover  #C by 3 points the mesh must hold (within coverage_tolerance × diagonal, 99.9% of
 ///          them; the pipeline passes the input's vertices), or nullptr: the shells' corners
 /// Throws InputError if shells is empty or target_tets < 1; returns an empty mesh if Mesh_3

@@ -1,0 +1,37 @@
+// squeeze::meshing — clean-ups of tetrahedral meshes after Mesh_3 (tetrahedralize.cpp): unused
+// vertices, boundary slivers, points sticking out of the boundary.
+#pragma once
+#include <Eigen/Core>
+
+#include "squeeze/meshing/tet_mesh.h"
+
+namespace squeeze::meshing {
+
+/// Drops the vertices no tetrahedron uses and renumbers T; the others keep their order.
+///   mesh  V #V by 3, T #T by 4 (modified in place; label unchanged)
+void remove_unused_vertices(TetMesh& mesh);
+
+/// Repeatedly removes the tetrahedra with a face on the boundary and a dihedral angle below
+/// `min_degrees` (flat boundary slivers add no volume worth keeping), in up to 16 passes since
+/// peeling exposes new boundary tetrahedra; it never removes the last one. Interior slivers are
+/// left alone. Vertices are kept (remove_unused_vertices drops the orphans).
+///   mesh         V #V by 3, T #T by 4 positively oriented, label #T or empty (modified in place)
+///   min_degrees  dihedral-angle threshold (degrees)
+/// Returns how many tetrahedra were removed.
+int peel_boundary_slivers(TetMesh& mesh, double min_degrees);
+
+/// Moves boundary vertices outward (along their area-weighted normals) until the points P lie
+/// inside the mesh or within `tolerance` of it: every point farther out pushes the three vertices of
+/// its nearest boundary face by a share of its distance. A move is halved, then dropped, where a
+/// tetrahedron would become inverted or get a dihedral angle below min(min_degrees, its own before).
+/// Local moves cover a coarse mesh's chords at far less volume than dilating everything. Up to
+/// `iterations` rounds; deterministic (any thread count).
+///   mesh         V #V by 3 (units, modified in place), T #T by 4 positively oriented
+///   P            #P by 3 points to cover (units)
+///   tolerance    distance a point may stay outside (units)
+///   min_degrees  dihedral-angle bound of moved tetrahedra (degrees)
+/// Returns how many vertex moves were made.
+int inflate_to_cover(TetMesh& mesh, const Eigen::MatrixX3d& P, double tolerance, double min_degrees,
+                     int iterations = 6);
+
+}  // namespace squeeze::meshing

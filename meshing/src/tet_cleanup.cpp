@@ -1,0 +1,175 @@
+#include "squeeze/meshing/tet_cleanup.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <tbb/parallel_for.h>
+
+#include "squeeze/meshing/point_triangle_distance.h"
+#include "squeeze/meshing/tet_faces.h"
+#include "squeeze/meshing/tet_geometry.h"
+#include "squeeze/meshing/tet_locator.h"
+
+namespace squeeze::meshing {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+double min_dihedral_of(const TetMesh& m, int t) {
+  const auto a = dihedral_angles(m.V.row(m.T(t, 0)), m.V.row(m.T(t, 1)), m.V.row(m.T(t, 2)), m.V.row(m.T(t, 3)));
+  return *std::min_element(a.begin(), a.end());
+}
+
+}  // namespace
+
+void remove_unused_vertices(TetMesh& m) {
+  std::vector<int> map(static_cast<size_t>(m.V.rows()), -1);
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k) map[m.T(t, k)] = 0;
+  int n = 0;
+  for (auto& x : map)
+    if (x == 0) x = n++;
+  Eigen::MatrixX3d V(n, 3);
+  for (size_t i = 0; i < map.size(); ++i)
+    if (map[i] >= 0) V.row(map[i]) = m.V.row(static_cast<Eigen::Index>(i));
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k) m.T(t, k) = map[m.T(t, k)];
+  m.V = std::move(V);
+}
+
+int peel_boundary_slivers(TetMesh& m, double min_degrees) {
+  int removed = 0;
+  for (int pass = 0; pass < 16; ++pass) {
+    const Eigen::MatrixX4i boundary_face = tet_faces(m.T).boundary_face;
+    std::vector<int> keep;
+    keep.reserve(static_cast<size_t>(m.T.rows()));
+    for (int t = 0; t < m.T.rows(); ++t)
+      if (!(boundary_face.row(t).maxCoeff() >= 0 && min_dihedral_of(m, t) < min_degrees)) keep.push_back(t);
+    if (keep.size() == static_cast<size_t>(m.T.rows()) || keep.empty()) break;
+    removed += static_cast<int>(m.T.rows()) - static_cast<int>(keep.size());
+    Eigen::MatrixX4i T(static_cast<Eigen::Index>(keep.size()), 4);
+    Eigen::VectorXi L(m.label.size() ? static_cast<Eigen::Index>(keep.size()) : 0);
+    for (size_t i = 0; i < keep.size(); ++i) {
+      T.row(static_cast<Eigen::Index>(i)) = m.T.row(keep[i]);
+      if (L.size()) L(static_cast<Eigen::Index>(i)) = m.label(keep[i]);
+    }
+    m.T = std::move(T);
+    m.label = std::move(L);
+  }
+  return removed;
+}
+
+int inflate_to_cover(TetMesh& m, const Eigen::MatrixX3d& P, double tolerance, double min_degrees, int iterations) {
+  int moves = 0;
+  const Eigen::Index nv = m.V.rows();
+  // Tets around each vertex (CSR).
+  std::vector<int> start(static_cast<size_t>(nv) + 1, 0), items;
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k) ++start[static_cast<size_t>(m.T(t, k)) + 1];
+  for (size_t i = 0; i < static_cast<size_t>(nv); ++i) start[i + 1] += start[i];
+  items.resize(static_cast<size_t>(start.back()));
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+      for (int k = 0; k < 4; ++k) items[static_cast<size_t>(fill[static_cast<size_t>(m.T(t, k))]++)] = static_cast<int>(t);
+  }
+  for (int round = 0; round < iterations; ++round) {
+    const TetFaces faces = tet_faces(m.T);
+    const Eigen::Index nb = faces.boundary.rows();
+    if (nb == 0) break;
+    // Points outside by more than the tolerance, and their distance.
+    const TetLocator locator(m);
+    std::vector<double> dist(static_cast<size_t>(P.rows()), 0.0);
+    tbb::parallel_for(Eigen::Index(0), P.rows(), [&](Eigen::Index i) {
+      if (locator.locate(P.row(i)) < 0) locator.nearest(P.row(i), &dist[static_cast<size_t>(i)]);
+    });
+    std::vector<Eigen::Index> out;
+    for (Eigen::Index i = 0; i < P.rows(); ++i)
+      if (dist[static_cast<size_t>(i)] > tolerance) out.push_back(i);
+    if (out.empty()) break;
+    // Boundary face normals and vertex normals (area weighted).
+    std::vector<Vec3> fn(static_cast<size_t>(nb));
+    std::vector<Vec3> vn(static_cast<size_t>(nv), Vec3::Zero());
+    for (Eigen::Index f = 0; f < nb; ++f) {
+      const Vec3 a = m.V.row(faces.boundary(f, 0)).transpose(), b = m.V.row(faces.boundary(f, 1)).transpose(),
+                 c = m.V.row(faces.boundary(f, 2)).transpose();
+      const Vec3 n = (b - a).cross(c - a);
+      for (int k = 0; k < 3; ++k) vn[static_cast<size_t>(faces.boundary(f, k))] += n;
+      const double len = n.norm();
+      fn[static_cast<size_t>(f)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
+    }
+    for (auto& n : vn)
+      if (n.norm() > 0) n.normalize();
+    // Nearest boundary face of every point outside (ties to the lowest index).
+    std::vector<int> face(out.size(), 0);
+    tbb::parallel_for(size_t(0), out.size(), [&](size_t i) {
+      const Vec3 p = P.row(out[i]).transpose();
+      double best = INFINITY;
+      for (Eigen::Index f = 0; f < nb; ++f) {
+        const double d = point_triangle_distance(p, m.V.row(faces.boundary(f, 0)).transpose(),
+                                                 m.V.row(faces.boundary(f, 1)).transpose(),
+                                                 m.V.row(faces.boundary(f, 2)).transpose());
+        if (d < best) best = d, face[i] = static_cast<int>(f);
+      }
+    });
+    std::vector<double> push(static_cast<size_t>(nv), 0.0);
+    const double push_share = 0.6;  // of the distance, per round (measured: 1.0 inflates more)
+    for (size_t i = 0; i < out.size(); ++i) {
+      const int f = face[i];
+      for (int k = 0; k < 3; ++k) {
+        const int v = faces.boundary(f, k);
+        // Barycentric share: the face vertex nearest the point moves the most; later rounds
+        // finish what a short push leaves (pushing all three by the full distance inflates).
+        const double along = std::max(0.5, vn[static_cast<size_t>(v)].dot(fn[static_cast<size_t>(f)]));
+        push[static_cast<size_t>(v)] = std::max(push[static_cast<size_t>(v)], push_share * dist[static_cast<size_t>(out[i])] / along);
+      }
+    }
+    // Apply, halving (then dropping) moves that would spoil a tetrahedron.
+    std::vector<int> moved;
+    for (Eigen::Index v = 0; v < nv; ++v)
+      if (push[static_cast<size_t>(v)] > 0) moved.push_back(static_cast<int>(v));
+    if (moved.empty()) break;
+    const Eigen::MatrixX3d before = m.V;
+    std::vector<double> scale(static_cast<size_t>(nv), 1.0);
+    auto tet_ok = [&](int t) {
+      const Eigen::RowVector3d a = m.V.row(m.T(t, 0)), b = m.V.row(m.T(t, 1)), c = m.V.row(m.T(t, 2)), d = m.V.row(m.T(t, 3));
+      if (!(tet_volume(a, b, c, d) > 0)) return false;
+      const auto now = dihedral_angles(a, b, c, d);
+      const auto old = dihedral_angles(before.row(m.T(t, 0)), before.row(m.T(t, 1)), before.row(m.T(t, 2)),
+                                       before.row(m.T(t, 3)));
+      const double lo = std::min(min_degrees, *std::min_element(old.begin(), old.end()));
+      return *std::min_element(now.begin(), now.end()) >= lo;
+    };
+    bool ok = false;
+    for (int attempt = 0; attempt < 8 && !ok; ++attempt) {
+      for (int v : moved)
+        m.V.row(v) = before.row(v) + scale[static_cast<size_t>(v)] * push[static_cast<size_t>(v)] * vn[static_cast<size_t>(v)].transpose();
+      ok = true;
+      for (int v : moved) {
+        if (scale[static_cast<size_t>(v)] == 0.0) continue;
+        for (int j = start[static_cast<size_t>(v)]; j < start[static_cast<size_t>(v) + 1]; ++j) {
+          const int t = items[static_cast<size_t>(j)];
+          if (tet_ok(t)) continue;
+          ok = false;
+          for (int k = 0; k < 4; ++k) {
+            double& sc = scale[static_cast<size_t>(m.T(t, k))];
+            sc = attempt >= 3 ? 0.0 : 0.5 * sc;
+          }
+        }
+      }
+    }
+    if (!ok) {
+      m.V = before;
+      break;
+    }
+    int made = 0;
+    for (int v : moved) made += scale[static_cast<size_t>(v)] > 0;
+    moves += made;
+    if (made == 0) break;
+  }
+  return moves;
+}
+
+}  // namespace squeeze::meshing
