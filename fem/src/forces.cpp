@@ -239,6 +239,36 @@ void assemble_forces(const World& w, const State& s, const RowMatrixX3d* externa
   });
 }
 
+std::vector<Penetration> find_penetrations(const World& w, const State& s, ForceWorkspace& workspace) {
+  const WorldData& d = w.data();
+  check_rows(d, s, nullptr);
+  ForceWorkspace::Impl& ws = workspace.impl();
+  ws.fit(d);
+  ws.stats = StepStats{};
+  const WorldOptions& o = w.options();
+  std::vector<Penetration> out;
+  if (!o.collisions || d.bodies.empty()) return out;
+  ws.X_all.topRows(d.rows) = s.x;
+  const std::vector<Contact> contacts = ws.hash->find(ws.X_all, d.T_all, d.filter, o.parallel.detection_tets);
+  ws.stats.contacts = static_cast<int>(contacts.size());
+  if (contacts.empty()) return out;
+  std::vector<Penetration> pens = penetration_depths(d.scene, ws.X_all, contacts, o.parallel.border_vertices);
+  ws.stats.colliding_vertices = static_cast<int>(pens.size());
+  for (Penetration& p : pens)
+    if (p.depth > 0) {
+      ws.stats.max_depth = std::max(ws.stats.max_depth, p.depth);
+      out.push_back(std::move(p));
+    }
+  return out;
+}
+
+Eigen::Vector4i collision_tet(const World& w, int tet) { return w.data().T_all.row(tet).transpose(); }
+
+Eigen::Vector3d collision_vertex_position(const World& w, const State& s, int g) {
+  const WorldData& d = w.data();
+  return g < d.rows ? Eigen::Vector3d(s.x.row(g).transpose()) : Eigen::Vector3d(d.X_rest_all.row(g).transpose());
+}
+
 void detect_contacts(const World& w, const State& s, ForceWorkspace& workspace) {
   const WorldData& d = w.data();
   check_rows(d, s, nullptr);

@@ -9,7 +9,7 @@
 
 // The registry: one line names every integrator. Each NAME is defined in fem/src/NAME.cpp as
 // `std::unique_ptr<TimeIntegrator> make_NAME_integrator()`.
-#define SQUEEZE_INTEGRATORS(X) X(verlet)
+#define SQUEEZE_INTEGRATORS(X) X(verlet) X(implicit)
 
 namespace squeeze::fem {
 

@@ -1,6 +1,7 @@
 #include "squeeze/fem/scene.h"
 
 #include "squeeze/fem/constraints.h"
+#include "squeeze/fem/integrator.h"
 
 #include <algorithm>
 #include <atomic>
@@ -86,10 +87,20 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
   const Checker c{file.string()};
   const json j = parse_json(text, file.string());
   const fs::path base = file.has_parent_path() ? file.parent_path() : fs::path(".");
-  c.keys(j, "", {"time_step", "gravity", "floor", "bounds", "contact", "self_collision", "objects", "goal",
+  c.keys(j, "", {"integrator", "time_step", "gravity", "floor", "bounds", "contact", "self_collision", "objects", "goal",
                  "description", "planner", "render"});
   Scene s;
   s.file = file;
+  if (j.contains("integrator")) {
+    s.integrator = c.string(j["integrator"], "integrator");
+    try {
+      make_integrator(s.integrator);
+    } catch (const InputError&) {
+      std::string list;
+      for (const std::string& n : integrator_names()) list += (list.empty() ? "\"" : ", \"") + n + "\"";
+      c.fail("integrator", "must be one of " + list + ", got \"" + s.integrator + "\"");
+    }
+  }
   if (j.contains("time_step") && !(j["time_step"].is_string() && j["time_step"] == "auto"))
     s.time_step = c.positive(j["time_step"], "time_step");
   if (j.contains("gravity")) s.gravity = c.vec3(j["gravity"], "gravity");
@@ -325,6 +336,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
   wo.self_collision = scene.self_collision;
   wo.cap_contact_stiffness = true;  // contact never sets the stable step
   wo.h = scene.time_step.value_or(1e-3);
+  wo.integrator = scene.integrator;
   World world(wo);
   std::vector<meshing::TetMesh> meshes;
   std::vector<double> rest_volume;
@@ -397,7 +409,9 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
                          "].box: holds no vertex of '" + o.name + "' at rest");
     }
   }
-  const double h = scene.time_step ? *scene.time_step : stable_time_step(world);
+  const double h = scene.time_step ? *scene.time_step
+                   : scene.integrator == "implicit" ? 1.0 / 30
+                                                    : stable_time_step(world);
   if (!scene.time_step && h < 1e-6)
     throw InputError(file + ": time_step: the stable step of these meshes is only " + num(h) +
                      " s (tiny or flat tetrahedra, or very stiff materials): set time_step, another tets count, or a "

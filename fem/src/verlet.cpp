@@ -41,6 +41,8 @@ void VerletIntegrator::step(const World& w, State& s, const RowMatrixX3d* extern
     }
   });
   s.time += h;
+  ++stats_.steps;
+  ++stats_.substeps;
 }
 
 }  // namespace

@@ -201,4 +201,73 @@ SQUEEZE_FEM_INLINE void volume_forces_pair(const double* x, const double* v, con
 }
 #endif
 
+// ---------------------------------------------------------------------------------------------
+// Hessians (IPC Toolkit style: value, gradient and Hessian of one element), for the implicit
+// integrator (integrator.h, "implicit"). Each exact Hessian is tested against finite differences
+// of the gradient (tests/test_fem.cpp, FemKernels.*HessianMatchesFiniteDifferences); the solver
+// uses the positive semi-definite variants, which keep Newton's directions descent directions.
+
+/// ∂²E_D/∂p_j² (3×3, J/m²) of E_D = ½ k C_D² (eq. 3): k/D0² (d̂d̂ᵀ + (1 − D0/|d|)(I − d̂d̂ᵀ)), d = p_j − p_i.
+/// The edge's 6×6 Hessian over (p_i, p_j) is [[H, −H], [−H, H]]. psd: the transverse factor
+/// (1 − D0/|d|), negative for a compressed edge, is clamped at 0 (the nearest positive
+/// semi-definite matrix of this form). A zero-length edge gets k/D0² · I.
+inline Eigen::Matrix3d distance_hessian(const Vec3& pi, const Vec3& pj, double D0, double k, bool psd) {
+  const Vec3 d = pj - pi;
+  const double len = d.norm();
+  const double s = k / (D0 * D0);
+  if (!(len > 0)) return s * Eigen::Matrix3d::Identity();
+  const Vec3 n = d / len;
+  double t = 1.0 - D0 / len;
+  if (psd && t < 0) t = 0;
+  const Eigen::Matrix3d nn = n * n.transpose();
+  return s * (nn + t * (Eigen::Matrix3d::Identity() - nn));
+}
+
+/// Cross-product matrix: skew(u) w = u × w.
+inline Eigen::Matrix3d skew(const Vec3& u) {
+  Eigen::Matrix3d S;
+  S << 0, -u.z(), u.y(), u.z(), 0, -u.x(), -u.y(), u.x(), 0;
+  return S;
+}
+
+/// Exact Hessian (12×12 over (p0, p1, p2, p3), J/m²) of E_V = ½ k C_V² (eq. 4):
+/// k (∇C ∇Cᵀ + C ∇²C), with ∇²C = ∇²V / V0 and V = ⅙ a·(b×c), a = p1 − p0, b = p2 − p0, c = p3 − p0:
+/// ∂²V/∂a∂b = −⅙ skew(c), ∂²V/∂a∂c = ⅙ skew(b), ∂²V/∂b∂c = −⅙ skew(a), no diagonal blocks.
+/// Indefinite where C ≠ 0; the solver uses volume_hessian_gn.
+inline Eigen::Matrix<double, 12, 12> volume_hessian(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3,
+                                                    double V0, double k) {
+  Vec3 g[4];
+  const double C = volume_constraint(p0, p1, p2, p3, V0, g);
+  Eigen::Matrix<double, 12, 1> G;
+  for (int i = 0; i < 4; ++i) G.segment<3>(3 * i) = g[i];
+  Eigen::Matrix<double, 12, 12> H = k * G * G.transpose();
+  const Vec3 a = p1 - p0, b = p2 - p0, c = p3 - p0;
+  // Blocks over (a, b, c) = (p1, p2, p3), then p0 = −(sum) by the chain rule.
+  Eigen::Matrix3d B[3][3];
+  B[0][0] = B[1][1] = B[2][2] = Eigen::Matrix3d::Zero();
+  B[0][1] = -skew(c) / 6.0;
+  B[0][2] = skew(b) / 6.0;
+  B[1][2] = -skew(a) / 6.0;
+  B[1][0] = B[0][1].transpose();
+  B[2][0] = B[0][2].transpose();
+  B[2][1] = B[1][2].transpose();
+  const double w = k * C / V0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      H.block<3, 3>(3 * (i + 1), 3 * (j + 1)) += w * B[i][j];
+      H.block<3, 3>(0, 3 * (j + 1)) -= w * B[i][j];
+      H.block<3, 3>(3 * (i + 1), 0) -= w * B[i][j];
+      H.block<3, 3>(0, 0) += w * B[i][j];
+    }
+  return H;
+}
+
+/// Gauss–Newton Hessian of E_V: k ∇C ∇Cᵀ (12×12, positive semi-definite, rank 1), the exact one
+/// without the C ∇²C term. grad: the four ∂C/∂p_k (1/m).
+inline Eigen::Matrix<double, 12, 12> volume_hessian_gn(const Vec3 grad[4], double k) {
+  Eigen::Matrix<double, 12, 1> G;
+  for (int i = 0; i < 4; ++i) G.segment<3>(3 * i) = grad[i];
+  return k * G * G.transpose();
+}
+
 }  // namespace squeeze::fem

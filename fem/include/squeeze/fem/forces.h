@@ -16,8 +16,10 @@
 #pragma once
 #include <Eigen/Core>
 #include <memory>
+#include <vector>
 
 #include "squeeze/fem/body.h"
+#include "squeeze/fem/collision.h"
 #include "squeeze/fem/state.h"
 
 namespace squeeze::fem {
@@ -64,5 +66,15 @@ void assemble_forces(const World& world, const State& s, const RowMatrixX3d* ext
 
 /// The collision pass alone: the contacts of state s in ws.stats(), no forces.
 void detect_contacts(const World& world, const State& s, ForceWorkspace& ws);
+
+/// The collision pass of state s: every colliding vertex with a penetration depth > 0
+/// (collision.h, Penetration), in detection order; ws.stats() as detect_contacts. Indices are in
+/// the world's collision numbering: vertex and tet-corner indices below world.state_rows() are
+/// state rows, the others rigid vertices (collision_vertex_positions gives every position).
+std::vector<Penetration> find_penetrations(const World& world, const State& s, ForceWorkspace& ws);
+
+/// Corners of tet `tet` (collision numbering) and the position of collision vertex `g` in state s.
+Eigen::Vector4i collision_tet(const World& world, int tet);
+Eigen::Vector3d collision_vertex_position(const World& world, const State& s, int g);
 
 }  // namespace squeeze::fem

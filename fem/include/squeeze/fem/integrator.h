@@ -6,8 +6,10 @@
 // steps. World::step calls the world's integrator (WorldOptions::integrator, World::set_integrator).
 //
 // Registered integrators (make_integrator):
-//   "verlet"  the paper's explicit Verlet step (Rodriguez 2006 Sec. IV-B; Teschner 2004 Sec. 4),
-//             fem/src/verlet.cpp
+//   "verlet"    the paper's explicit Verlet step (Rodriguez 2006 Sec. IV-B; Teschner 2004 Sec. 4),
+//               fem/src/verlet.cpp
+//   "implicit"  backward Euler, the same model's incremental potential minimised by Newton's
+//               method (implicit.h), fem/src/implicit.cpp
 //
 // To add one: a class deriving from TimeIntegrator in its own file fem/src/NAME.cpp defining
 // `std::unique_ptr<TimeIntegrator> make_NAME_integrator()`, that file in fem/CMakeLists.txt, and NAME
@@ -24,6 +26,15 @@ namespace squeeze::fem {
 
 class World;
 
+/// What an integrator did so far (World::integrator().stats(); `-v` reports it).
+struct IntegratorStats {
+  long long steps = 0;          // step() calls
+  long long substeps = 0;       // solves: substeps of the implicit integrator, steps of Verlet
+  long long iterations = 0;     // Newton iterations (implicit)
+  long long not_converged = 0;  // substeps that stopped at the iteration limit
+  long long contact_rounds = 0; // extra solves after new contacts were found at a result
+};
+
 class TimeIntegrator {
  public:
   virtual ~TimeIntegrator() = default;
@@ -35,6 +46,12 @@ class TimeIntegrator {
   /// world is prepared (World::step does it); ws is the scratch of this thread. Pinned vertices
   /// keep their positions with zero velocity.
   virtual void step(const World& world, State& s, const RowMatrixX3d* external, ForceWorkspace& ws) = 0;
+  /// Counters since construction (or reset_stats).
+  const IntegratorStats& stats() const { return stats_; }
+  void reset_stats() { stats_ = IntegratorStats{}; }
+
+ protected:
+  IntegratorStats stats_;
 };
 
 /// The registered integrator names, in registration order.

@@ -68,7 +68,8 @@ struct SceneGoal {
 /// A parsed, validated scene.
 struct Scene {
   std::filesystem::path file;              // the scene file as given
-  std::optional<double> time_step;         // s; default: stable step derived from the meshes
+  std::string integrator = "verlet";       // "verlet" (the paper's) or "implicit" (integrator.h)
+  std::optional<double> time_step;         // s; default ("auto"): per integrator, see auto_time_step
   Eigen::Vector3d gravity{0, -9.81, 0};    // m/s²
   std::optional<double> floor = 0.0;       // m, height of the floor y >= floor; null: no floor
   std::optional<Eigen::AlignedBox3d> bounds;  // m; default: derived (see build_scene)

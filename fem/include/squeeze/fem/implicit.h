@@ -1,0 +1,48 @@
+// squeeze::fem — the implicit time integrator ("implicit" in the integrator registry): backward
+// Euler for the same model as the paper's Verlet step (Teschner 2004 distance and volume energies,
+// their damping, gravity, pins, rigid objects, the floor and the penalty contacts). Each step
+// minimises the incremental potential (Martin et al., "Example-based elastic materials", 2011;
+// Gast et al., "Optimization integrator for large time steps", TVCG 2015):
+//
+//   G(x) = ½ ‖x − y‖²_M / h² + E(x) + D(x),   y = x_n + h v_n + h² M⁻¹ (m g + f_ext),
+//   v_{n+1} = (x − x_n) / h,
+//
+// E the elastic energies (constraints.h, eqs. 3–4) plus the penalty energies ½ k_c d² of the
+// contacts and the floor, D the dissipation potentials of the damping terms: for an element,
+// ½ (k_d / h) (∇C(x_n)·(x − x_n))² (Teschner's damping force −k_d (∇C·v) ∇C with the gradient taken
+// at the start of the step); for a contact, ½ (c_c / h) (r·(Δx_p − Σ b_k Δx_k))²; for the floor,
+// ½ (c_c / h) min(0, Δy)². Contacts are detected at x_n and linearised there (depth
+// d(x) = d_0 − r·((x_p − x_p⁰) − Σ b_k (x_k − x_k⁰))); after a converged solve they are detected again at
+// the result and new ones join the minimisation (contact_rounds).
+//
+// Solver: Newton's method with a backtracking line search on G. The Hessian is made positive
+// definite term by term (the compressed-edge and the volume curvature terms dropped: distance_hessian
+// with psd, volume_hessian_gn) and factorised by a sparse LDLᵀ (Eigen's SimplicialLDLT, AMD
+// ordering, sequential: bit-identical results whatever the number of threads).
+//
+// Substeps (accuracy): a step of h is split into k equal substeps so that no free vertex is
+// predicted to move more than motion_fraction of its object's mean edge length per substep
+// (|v| h + ½ |g + f_ext / m| h²); a substep whose solution moved a vertex more than twice that is
+// redone as two halves. This keeps contacts resolved at any h: the nominal time step (the scene's
+// "auto": one frame interval, scene.h) is chosen for the motion one wants to see, not for stability.
+#pragma once
+#include <memory>
+
+#include "squeeze/fem/integrator.h"
+
+namespace squeeze::fem {
+
+struct ImplicitOptions {
+  int max_newton_iterations = 40;  // per substep; a substep that does not converge keeps its last iterate (counted)
+  double tolerance = 1e-6;         // converged when the Newton step's largest component is below tolerance × the
+                                   // object's mean edge length
+  double motion_fraction = 0.25;   // largest predicted motion per substep, in mean edge lengths of the object
+  int max_substeps = 1024;         // substeps of one step at most
+  int contact_rounds = 3;          // re-detections of contacts after a converged solve (0: detect at x_n only)
+};
+
+/// The implicit integrator with these options (make_integrator("implicit") uses the defaults).
+/// Throws InputError if an option is out of range.
+std::unique_ptr<TimeIntegrator> make_implicit_integrator(const ImplicitOptions& options);
+
+}  // namespace squeeze::fem

@@ -1,0 +1,559 @@
+// The implicit integrator: backward Euler by minimising the incremental potential (implicit.h).
+#include "squeeze/fem/implicit.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "squeeze/common/error.h"
+#include "squeeze/fem/constraints.h"
+#include "squeeze/fem/world.h"
+#include "world_data.h"
+
+namespace squeeze::fem {
+namespace {
+
+using Mat3 = Eigen::Matrix3d;
+using SpMat = Eigen::SparseMatrix<double>;
+
+// A symmetric matrix of 3×3 blocks over the free vertices, stored as its lower triangle in Eigen's
+// compressed column format (for SimplicialLDLT<..., Lower>). The pattern is built once from the
+// block pairs; blocks are then added in place.
+class BlockMatrix {
+ public:
+  // n blocks per side; pairs (I, J) with I > J (duplicates allowed). Returns true if the pattern
+  // differs from the previous one (the factorisation must be analysed again).
+  bool build(int n, std::vector<std::pair<int, int>> pairs) {
+    std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
+      return a.second != b.second ? a.second < b.second : a.first < b.first;  // by column, then row
+    });
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    if (n == n_ && pairs == pairs_) return false;
+    n_ = n;
+    pairs_ = std::move(pairs);
+    // Columns: block column J has its diagonal block, then its off-diagonal blocks by row.
+    col_start_.assign(static_cast<size_t>(n) + 1, 0);
+    for (const auto& p : pairs_) ++col_start_[p.second + 1];
+    for (int J = 0; J < n; ++J) col_start_[J + 1] += col_start_[J];
+    const int N = 3 * n;
+    A_.resize(N, N);
+    std::vector<int> outer(static_cast<size_t>(N) + 1, 0);
+    std::vector<int> inner;
+    inner.reserve(static_cast<size_t>(6 * n + 9 * pairs_.size()));
+    diag_base_.assign(static_cast<size_t>(3 * n), 0);
+    off_base_.assign(3 * pairs_.size(), 0);
+    for (int J = 0; J < n; ++J)
+      for (int b = 0; b < 3; ++b) {
+        const int c = 3 * J + b;
+        outer[c] = static_cast<int>(inner.size());
+        diag_base_[static_cast<size_t>(c)] = static_cast<int>(inner.size());
+        for (int a = b; a < 3; ++a) inner.push_back(3 * J + a);
+        for (int q = col_start_[J]; q < col_start_[J + 1]; ++q) {
+          off_base_[3 * static_cast<size_t>(q) + b] = static_cast<int>(inner.size());
+          for (int a = 0; a < 3; ++a) inner.push_back(3 * pairs_[q].first + a);
+        }
+      }
+    outer[N] = static_cast<int>(inner.size());
+    A_.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
+    std::copy(outer.begin(), outer.end(), A_.outerIndexPtr());
+    std::copy(inner.begin(), inner.end(), A_.innerIndexPtr());
+    std::fill(A_.valuePtr(), A_.valuePtr() + inner.size(), 0.0);
+    return true;
+  }
+  // Index of the off-diagonal block (I, J), I > J, or -1.
+  int find(int I, int J) const {
+    const auto first = pairs_.begin() + col_start_[J], last = pairs_.begin() + col_start_[J + 1];
+    const auto it = std::lower_bound(first, last, std::make_pair(I, J),
+                                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    return it != last && it->first == I ? static_cast<int>(it - pairs_.begin()) : -1;
+  }
+  void zero() { std::fill(A_.valuePtr(), A_.valuePtr() + A_.nonZeros(), 0.0); }
+  // Adds the lower part of the symmetric block H to the diagonal block of vertex I.
+  void add_diag(int I, const Mat3& H) {
+    double* v = A_.valuePtr();
+    for (int b = 0; b < 3; ++b) {
+      double* col = v + diag_base_[3 * static_cast<size_t>(I) + b];
+      for (int a = b; a < 3; ++a) col[a - b] += H(a, b);
+    }
+  }
+  // Adds H as block (I, J) of the full matrix (and implicitly Hᵀ as (J, I)); I != J.
+  void add(int I, int J, const Mat3& H) {
+    if (I < J) return add_off(find(J, I), H.transpose());
+    add_off(find(I, J), H);
+  }
+  void add_off(int id, const Mat3& H) {
+    double* v = A_.valuePtr();
+    for (int b = 0; b < 3; ++b) {
+      double* col = v + off_base_[3 * static_cast<size_t>(id) + b];
+      for (int a = 0; a < 3; ++a) col[a] += H(a, b);
+    }
+  }
+  const SpMat& matrix() const { return A_; }
+
+ private:
+  int n_ = -1;
+  std::vector<std::pair<int, int>> pairs_;  // (I, J), I > J, sorted by column then row
+  std::vector<int> col_start_;             // per block column J: its pairs [col_start_[J], col_start_[J+1])
+  std::vector<int> diag_base_;             // per scalar column of a diagonal block: offset of its first entry
+  std::vector<int> off_base_;              // per off-diagonal block and column b: offset of its first entry
+  SpMat A_;
+};
+
+// A contact of the step, linearised where it was detected: over its stencil (the penetrating
+// vertex p and the 4 corners of the penetrated tet) with weights w = (1, −b_0, …, −b_3), the depth
+// is d(x) = c0 − Σ_s w_s r·x_s over the free rows of the stencil (fixed ones, rigid or pinned, are
+// folded into c0). Its energy is ½ k max(0, d)², its dissipation ½ (c / h) (Σ_s w_s r·(x_s − x_s^n))².
+struct LinearContact {
+  int row[5];           // state rows of the stencil, −1 where fixed
+  double w[5];          // 1, −b_0, …, −b_3
+  Vec3 r;               // unit direction out of the penetrated object
+  double c0 = 0;        // m
+  double k = 0, c = 0;  // N/m, N·s/m
+  int vertex = -1;      // collision index of p (a vertex is in the set once)
+};
+
+class ImplicitIntegrator : public TimeIntegrator {
+ public:
+  explicit ImplicitIntegrator(const ImplicitOptions& o) : o_(o) {}
+  const char* name() const override { return "implicit"; }
+  std::unique_ptr<TimeIntegrator> clone() const override { return std::make_unique<ImplicitIntegrator>(o_); }
+  void step(const World& world, State& s, const RowMatrixX3d* external, ForceWorkspace& ws) override;
+
+ private:
+  void fit(const World& w);
+  int substeps_for(const World& w, const State& s, const RowMatrixX3d* external, double h) const;
+  void substep(const World& w, State& s, const RowMatrixX3d* external, ForceWorkspace& ws, double h, int depth);
+  void add_contacts(const World& w, const std::vector<Penetration>& pens, const RowMatrixX3d& x);
+  void solve(const World& w, double h, RowMatrixX3d& x);
+  double potential(const World& w, const RowMatrixX3d& x, double h) const;
+  void gradient(const World& w, const RowMatrixX3d& x, double h, Eigen::VectorXd& g) const;
+  void assemble(const World& w, const RowMatrixX3d& x, double h, bool exact);
+  void build_pattern(const World& w);
+
+  ImplicitOptions o_;
+  std::uint64_t version_ = 0;
+  std::vector<int> free_;        // per state row: its free index, or −1 (pinned)
+  std::vector<int> free_rows_;   // per free index: its state row
+  Eigen::VectorXd edge_scale_;   // per state row: mean edge length of its object (m)
+  RowMatrixX3d row_gravity_;     // per state row: the gravity acting on it (m/s²)
+  // The substep's data.
+  RowMatrixX3d xn_, y_;                     // start of the substep, inertial target
+  std::vector<Vec3> edge_g_;                // per edge: ∂C/∂p_j at x_n (its damping)
+  std::vector<std::array<Vec3, 4>> tet_g_;  // per tet: ∂C/∂p_k at x_n (its damping)
+  std::vector<LinearContact> contacts_;
+  std::vector<char> floor_damped_;          // per state row: below the floor at x_n
+  BlockMatrix H_;
+  Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
+  bool analysed_ = false;
+};
+
+void ImplicitIntegrator::fit(const World& w) {
+  const WorldData& d = w.data();
+  if (version_ == d.version) return;
+  version_ = d.version;
+  free_.assign(static_cast<size_t>(d.rows), -1);
+  free_rows_.clear();
+  for (int i = 0; i < d.rows; ++i)
+    if (d.inv_mass(i) > 0) {
+      free_[i] = static_cast<int>(free_rows_.size());
+      free_rows_.push_back(i);
+    }
+  edge_scale_.setConstant(d.rows, 1.0);
+  row_gravity_.setZero(d.rows, 3);
+  for (size_t b = 0; b < d.bodies.size(); ++b) {
+    const int r0 = d.state_row[b];
+    if (r0 < 0) continue;
+    const Body& B = d.bodies[b];
+    const double L = B.mean_edge_length() > 0 ? B.mean_edge_length() : 1.0;
+    const Vec3 g = w.gravity_of(static_cast<int>(b));
+    for (int i = r0; i < r0 + B.vertices(); ++i) {
+      edge_scale_(i) = L;
+      row_gravity_.row(i) = g.transpose();
+    }
+  }
+  analysed_ = false;
+}
+
+int ImplicitIntegrator::substeps_for(const World& w, const State& s, const RowMatrixX3d* ext, double h) const {
+  const WorldData& d = w.data();
+  double need = 1;
+  for (int i : free_rows_) {
+    Vec3 a = row_gravity_.row(i).transpose();
+    if (ext) a += d.inv_mass(i) * Vec3(ext->row(i).transpose());
+    const double motion = s.v.row(i).norm() * h + 0.5 * a.norm() * h * h;
+    need = std::max(need, motion / (o_.motion_fraction * edge_scale_(i)));
+  }
+  if (!std::isfinite(need)) return o_.max_substeps;
+  return static_cast<int>(std::min<double>(o_.max_substeps, std::ceil(need - 1e-9)));
+}
+
+void ImplicitIntegrator::step(const World& w, State& s, const RowMatrixX3d* ext, ForceWorkspace& ws) {
+  fit(w);
+  const double H = w.time_step(), t0 = s.time;
+  const int k = std::max(1, substeps_for(w, s, ext, H));
+  for (int i = 0; i < k; ++i) substep(w, s, ext, ws, H / k, 0);
+  s.time = t0 + H;
+  ++stats_.steps;
+}
+
+void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* ext, ForceWorkspace& ws, double h,
+                                 int depth) {
+  const WorldData& d = w.data();
+  const WorldOptions& o = w.options();
+  const State before = s;
+  damp_deformation(w, s, h);
+  xn_ = s.x;
+  // The inertial target y = x_n + h v_n + h² (g + f_ext / m) of the free rows; fixed rows stay.
+  y_ = xn_;
+  for (int i : free_rows_) {
+    Vec3 a = row_gravity_.row(i).transpose();
+    if (ext) a += d.inv_mass(i) * Vec3(ext->row(i).transpose());
+    y_.row(i) += (h * Vec3(s.v.row(i).transpose()) + (h * h) * a).transpose();
+  }
+  // Damping gradients at x_n.
+  edge_g_.resize(d.edges.size());
+  for (size_t e = 0; e < d.edges.size(); ++e) {
+    const auto& E = d.edges[e];
+    distance_constraint(Vec3(xn_.row(E.i).transpose()), Vec3(xn_.row(E.j).transpose()), E.D0, &edge_g_[e]);
+  }
+  tet_g_.resize(d.tet_elems.size());
+  for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+    const auto& T = d.tet_elems[t];
+    volume_constraint(Vec3(xn_.row(T.v[0]).transpose()), Vec3(xn_.row(T.v[1]).transpose()),
+                      Vec3(xn_.row(T.v[2]).transpose()), Vec3(xn_.row(T.v[3]).transpose()), T.V0, tet_g_[t].data());
+  }
+  floor_damped_.assign(static_cast<size_t>(d.rows), 0);
+  if (o.floor)
+    for (int i = 0; i < d.rows; ++i) floor_damped_[i] = xn_(i, 1) < o.floor_height;
+  // Contacts at x_n, the solve; contacts found at the result join and the solve goes on.
+  contacts_.clear();
+  State probe = s;
+  if (o.collisions) add_contacts(w, find_penetrations(w, probe, ws), xn_);
+  RowMatrixX3d x = y_;
+  solve(w, h, x);
+  for (int round = 0; round < o_.contact_rounds && o.collisions; ++round) {
+    probe.x = x;
+    const size_t count = contacts_.size();
+    add_contacts(w, find_penetrations(w, probe, ws), x);
+    if (contacts_.size() == count) break;
+    ++stats_.contact_rounds;
+    solve(w, h, x);
+  }
+  // Motion check: a substep that moved a vertex more than twice the allowed fraction is redone as
+  // two halves (a contact or an elastic snap that the prediction did not see).
+  double worst = 0;
+  for (int i : free_rows_) worst = std::max(worst, (x.row(i) - xn_.row(i)).norm() / edge_scale_(i));
+  if (!(worst <= 2 * o_.motion_fraction) && depth < 8) {
+    s = before;
+    substep(w, s, ext, ws, h / 2, depth + 1);
+    substep(w, s, ext, ws, h / 2, depth + 1);
+    return;
+  }
+  for (int i = 0; i < d.rows; ++i) {
+    if (free_[i] < 0) {
+      s.v.row(i).setZero();
+      continue;
+    }
+    s.v.row(i) = (x.row(i) - xn_.row(i)) / h;
+    s.x.row(i) = x.row(i);
+  }
+  s.time += h;
+  ++stats_.substeps;
+}
+
+void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetration>& pens, const RowMatrixX3d& x) {
+  const WorldData& d = w.data();
+  const WorldOptions& o = w.options();
+  const int rows = d.rows;
+  std::vector<char> have(static_cast<size_t>(d.X_rest_all.rows()), 0);
+  for (const LinearContact& c : contacts_) have[c.vertex] = 1;
+  for (const Penetration& p : pens) {
+    if (!(p.depth > 0) || have[p.vertex]) continue;
+    have[p.vertex] = 1;
+    LinearContact c;
+    const int g[5] = {p.vertex, d.T_all(p.tet, 0), d.T_all(p.tet, 1), d.T_all(p.tet, 2), d.T_all(p.tet, 3)};
+    c.w[0] = 1;
+    for (int k = 0; k < 4; ++k) c.w[k + 1] = -p.bary[k];
+    c.r = p.direction;
+    // Coefficients as the explicit contact force takes them (World::contact_scale).
+    if (!o.cap_contact_stiffness) {
+      c.k = o.contact_stiffness;
+      c.c = o.contact_damping;
+    } else if (p.vertex < rows) {
+      c.k = d.contact_k(p.vertex);
+      c.c = d.contact_c(p.vertex);
+    } else {
+      for (int k = 0; k < 4; ++k)
+        if (g[k + 1] < rows) c.k += p.bary[k] * d.contact_k(g[k + 1]), c.c += p.bary[k] * d.contact_c(g[k + 1]);
+    }
+    bool any_free = false;
+    double q = 0;  // Σ w r·x over the free rows of the stencil, at the detection point
+    for (int s = 0; s < 5; ++s) {
+      c.row[s] = g[s] < rows && free_[g[s]] >= 0 ? g[s] : -1;
+      if (c.row[s] >= 0) {
+        any_free = true;
+        q += c.w[s] * c.r.dot(Vec3(x.row(c.row[s]).transpose()));
+      }
+    }
+    if (!any_free) continue;
+    c.c0 = p.depth + q;
+    c.vertex = p.vertex;
+    contacts_.push_back(c);
+  }
+}
+
+// Σ_s w_s r·X_s over the free rows of a contact's stencil.
+inline double stencil_dot(const LinearContact& c, const RowMatrixX3d& X) {
+  double q = 0;
+  for (int s = 0; s < 5; ++s)
+    if (c.row[s] >= 0) q += c.w[s] * c.r.dot(Vec3(X.row(c.row[s]).transpose()));
+  return q;
+}
+
+double ImplicitIntegrator::potential(const World& w, const RowMatrixX3d& x, double h) const {
+  const WorldData& d = w.data();
+  const WorldOptions& o = w.options();
+  double G = 0;
+  for (int i : free_rows_) G += 0.5 * d.mass(i) * (x.row(i) - y_.row(i)).squaredNorm() / (h * h);
+  for (size_t e = 0; e < d.edges.size(); ++e) {
+    const auto& E = d.edges[e];
+    const Vec3 xi = x.row(E.i).transpose(), xj = x.row(E.j).transpose();
+    G += distance_energy(xi, xj, E.D0, E.k);
+    if (E.kd > 0) {
+      const double q = edge_g_[e].dot((xj - Vec3(xn_.row(E.j).transpose())) - (xi - Vec3(xn_.row(E.i).transpose())));
+      G += 0.5 * E.kd / h * q * q;
+    }
+  }
+  for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+    const auto& T = d.tet_elems[t];
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
+    G += volume_energy(p[0], p[1], p[2], p[3], T.V0, T.k);
+    if (T.kd > 0) {
+      double q = 0;
+      for (int k = 0; k < 4; ++k) q += tet_g_[t][k].dot(p[k] - Vec3(xn_.row(T.v[k]).transpose()));
+      G += 0.5 * T.kd / h * q * q;
+    }
+  }
+  for (const LinearContact& c : contacts_) {
+    const double depth = c.c0 - stencil_dot(c, x);
+    if (depth > 0) G += 0.5 * c.k * depth * depth;
+    const double q = stencil_dot(c, x) - stencil_dot(c, xn_);
+    G += 0.5 * c.c / h * q * q;
+  }
+  if (o.floor)
+    for (int i : free_rows_) {
+      const double pen = o.floor_height - x(i, 1);
+      if (pen > 0) G += 0.5 * d.contact_k(i) * pen * pen;
+      if (floor_damped_[i]) {
+        const double dy = std::min(0.0, x(i, 1) - xn_(i, 1));
+        G += 0.5 * d.contact_c(i) / h * dy * dy;
+      }
+    }
+  return G;
+}
+
+void ImplicitIntegrator::gradient(const World& w, const RowMatrixX3d& x, double h, Eigen::VectorXd& g) const {
+  const WorldData& d = w.data();
+  const WorldOptions& o = w.options();
+  RowMatrixX3d Gr = RowMatrixX3d::Zero(d.rows, 3);
+  auto add = [&](int row, const Vec3& v) { Gr.row(row) += v.transpose(); };
+  for (size_t e = 0; e < d.edges.size(); ++e) {
+    const auto& E = d.edges[e];
+    const Vec3 xi = x.row(E.i).transpose(), xj = x.row(E.j).transpose();
+    Vec3 gj;
+    const double C = distance_constraint(xi, xj, E.D0, &gj);
+    Vec3 f = E.k * C * gj;  // ∂E/∂x_j; ∂E/∂x_i = −f
+    if (E.kd > 0) {
+      const double q = edge_g_[e].dot((xj - Vec3(xn_.row(E.j).transpose())) - (xi - Vec3(xn_.row(E.i).transpose())));
+      f += (E.kd / h * q) * edge_g_[e];
+    }
+    add(E.j, f);
+    add(E.i, -f);
+  }
+  for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+    const auto& T = d.tet_elems[t];
+    Vec3 p[4], gk[4];
+    for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
+    const double C = volume_constraint(p[0], p[1], p[2], p[3], T.V0, gk);
+    double q = 0;
+    if (T.kd > 0)
+      for (int k = 0; k < 4; ++k) q += tet_g_[t][k].dot(p[k] - Vec3(xn_.row(T.v[k]).transpose()));
+    for (int k = 0; k < 4; ++k) add(T.v[k], T.k * C * gk[k] + (T.kd / h * q) * tet_g_[t][k]);
+  }
+  for (const LinearContact& c : contacts_) {
+    const double depth = c.c0 - stencil_dot(c, x);
+    const double q = stencil_dot(c, x) - stencil_dot(c, xn_);
+    // ∂/∂x_s of ½k d² = −k d w_s r; of ½(c/h) q² = (c/h) q w_s r.
+    const double a = (depth > 0 ? -c.k * depth : 0.0) + c.c / h * q;
+    for (int s = 0; s < 5; ++s)
+      if (c.row[s] >= 0) add(c.row[s], (a * c.w[s]) * c.r);
+  }
+  g.resize(3 * static_cast<Eigen::Index>(free_rows_.size()));
+  for (size_t f = 0; f < free_rows_.size(); ++f) {
+    const int i = free_rows_[f];
+    Vec3 gi = Gr.row(i).transpose() + d.mass(i) / (h * h) * Vec3((x.row(i) - y_.row(i)).transpose());
+    if (o.floor) {
+      const double pen = o.floor_height - x(i, 1);
+      if (pen > 0) gi.y() -= d.contact_k(i) * pen;
+      if (floor_damped_[i]) gi.y() += d.contact_c(i) / h * std::min(0.0, x(i, 1) - xn_(i, 1));
+    }
+    g.segment<3>(3 * static_cast<Eigen::Index>(f)) = gi;
+  }
+}
+
+void ImplicitIntegrator::build_pattern(const World& w) {
+  const WorldData& d = w.data();
+  std::vector<std::pair<int, int>> pairs;
+  pairs.reserve(d.edges.size() + 10 * contacts_.size());
+  auto pair = [&](int ri, int rj) {
+    const int a = free_[ri], b = free_[rj];
+    if (a < 0 || b < 0 || a == b) return;
+    pairs.emplace_back(std::max(a, b), std::min(a, b));
+  };
+  for (const auto& E : d.edges) pair(E.i, E.j);  // every pair of a tet's corners is an edge
+  for (const LinearContact& c : contacts_)
+    for (int s = 0; s < 5; ++s)
+      for (int t = s + 1; t < 5; ++t)
+        if (c.row[s] >= 0 && c.row[t] >= 0) pair(c.row[s], c.row[t]);
+  if (H_.build(static_cast<int>(free_rows_.size()), std::move(pairs))) analysed_ = false;
+}
+
+void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double h, bool exact) {
+  const WorldData& d = w.data();
+  const WorldOptions& o = w.options();
+  H_.zero();
+  for (size_t f = 0; f < free_rows_.size(); ++f) {
+    const int i = free_rows_[f];
+    Mat3 M = (d.mass(i) / (h * h)) * Mat3::Identity();
+    if (o.floor) {
+      if (x(i, 1) < o.floor_height) M(1, 1) += d.contact_k(i);
+      if (floor_damped_[i] && x(i, 1) < xn_(i, 1)) M(1, 1) += d.contact_c(i) / h;
+    }
+    H_.add_diag(static_cast<int>(f), M);
+  }
+  // A symmetric element block matrix over rows (each pair of rows gets H(a, b)).
+  auto scatter = [&](int n, const int* rows, auto&& block) {
+    for (int a = 0; a < n; ++a) {
+      const int A = rows[a] >= 0 ? free_[rows[a]] : -1;  // −1: a fixed vertex (rigid or pinned)
+      if (A < 0) continue;
+      H_.add_diag(A, block(a, a));
+      for (int b = a + 1; b < n; ++b) {
+        const int B = rows[b] >= 0 ? free_[rows[b]] : -1;
+        if (B >= 0) H_.add(B, A, block(b, a));
+      }
+    }
+  };
+  for (size_t e = 0; e < d.edges.size(); ++e) {
+    const auto& E = d.edges[e];
+    Mat3 He = distance_hessian(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact);
+    if (E.kd > 0) He += (E.kd / h) * edge_g_[e] * edge_g_[e].transpose();
+    const int rows[2] = {E.i, E.j};
+    scatter(2, rows, [&](int a, int b) -> Mat3 { return a == b ? He : Mat3(-He); });
+  }
+  for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+    const auto& T = d.tet_elems[t];
+    Vec3 p[4], gk[4];
+    for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
+    volume_constraint(p[0], p[1], p[2], p[3], T.V0, gk);
+    const double damp = T.kd / h;
+    Eigen::Matrix<double, 12, 12> HV;
+    if (exact) HV = volume_hessian(p[0], p[1], p[2], p[3], T.V0, T.k);
+    scatter(4, T.v, [&](int a, int b) -> Mat3 {
+      Mat3 B = exact ? Mat3(HV.block<3, 3>(3 * a, 3 * b)) : Mat3(T.k * gk[a] * gk[b].transpose());
+      if (damp > 0) B += damp * tet_g_[t][a] * tet_g_[t][b].transpose();
+      return B;
+    });
+  }
+  for (const LinearContact& c : contacts_) {
+    const double depth = c.c0 - stencil_dot(c, x);
+    const double k = (depth > 0 ? c.k : 0.0) + c.c / h;
+    if (!(k > 0)) continue;
+    const Mat3 rr = c.r * c.r.transpose();
+    scatter(5, c.row, [&](int a, int b) -> Mat3 { return (k * c.w[a] * c.w[b]) * rr; });
+  }
+}
+
+void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
+  if (free_rows_.empty()) return;
+  build_pattern(w);
+  const WorldData& d = w.data();
+  Eigen::VectorXd g, dx;
+  RowMatrixX3d trial;
+  const double tol = o_.tolerance;
+  // The largest |v_f| / edge scale over the free vertices of a per-vertex vector v (3 per vertex).
+  auto largest = [&](const Eigen::VectorXd& v, bool force) {
+    double m = 0;
+    for (size_t f = 0; f < free_rows_.size(); ++f) {
+      const int i = free_rows_[f];
+      double n = v.segment<3>(3 * static_cast<Eigen::Index>(f)).norm() / edge_scale_(i);
+      if (force) n *= h * h / d.mass(i);  // a force → the displacement it causes within a step
+      m = std::max(m, n);
+    }
+    return m;
+  };
+  bool converged = false;
+  for (int it = 0; it < o_.max_newton_iterations; ++it) {
+    gradient(w, x, h, g);
+    // Converged when the residual force would move no vertex by tolerance × its edge scale.
+    if (largest(g, true) < tol) {
+      converged = true;
+      break;
+    }
+    ++stats_.iterations;
+    // Newton's direction with the exact Hessian, where it is a descent direction; else with the
+    // positive semi-definite Hessian (distance_hessian psd, volume_hessian_gn).
+    bool ok = false;
+    for (int exact = 1; exact >= 0 && !ok; --exact) {
+      assemble(w, x, h, exact == 1);
+      if (!analysed_) {
+        ldlt_.analyzePattern(H_.matrix());
+        analysed_ = true;
+      }
+      ldlt_.factorize(H_.matrix());
+      if (ldlt_.info() != Eigen::Success) continue;
+      dx = ldlt_.solve(-g);
+      ok = dx.allFinite() && g.dot(dx) < 0;
+    }
+    if (!ok) break;
+    const double step = largest(dx, false);
+    // Backtracking line search on G (Armijo).
+    const double G0 = potential(w, x, h), slope = g.dot(dx);
+    double alpha = 1;
+    for (int ls = 0; ls < 30; ++ls) {
+      trial = x;
+      for (size_t f = 0; f < free_rows_.size(); ++f)
+        trial.row(free_rows_[f]) += alpha * dx.segment<3>(3 * static_cast<Eigen::Index>(f)).transpose();
+      if (potential(w, trial, h) <= G0 + 1e-4 * alpha * slope) break;
+      alpha *= 0.5;
+    }
+    x = trial;
+    if (alpha * step < tol) {
+      converged = true;
+      break;
+    }
+  }
+  if (!converged) ++stats_.not_converged;
+}
+
+}  // namespace
+
+std::unique_ptr<TimeIntegrator> make_implicit_integrator(const ImplicitOptions& o) {
+  if (o.max_newton_iterations < 1) throw InputError("implicit integrator: max_newton_iterations must be >= 1");
+  if (!(o.tolerance > 0)) throw InputError("implicit integrator: tolerance must be > 0");
+  if (!(o.motion_fraction > 0)) throw InputError("implicit integrator: motion_fraction must be > 0");
+  if (o.max_substeps < 1) throw InputError("implicit integrator: max_substeps must be >= 1");
+  if (o.contact_rounds < 0) throw InputError("implicit integrator: contact_rounds must be >= 0");
+  return std::make_unique<ImplicitIntegrator>(o);
+}
+
+std::unique_ptr<TimeIntegrator> make_implicit_integrator() { return make_implicit_integrator(ImplicitOptions{}); }
+
+}  // namespace squeeze::fem
