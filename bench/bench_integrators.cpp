@@ -34,7 +34,8 @@ std::vector<Case> cases() {
   if (const char* env = std::getenv("SQUEEZE_BENCH_SCENES")) {
     std::vector<Case> v;
     std::stringstream ss(env);
-    for (std::string f; std::getline(ss, f, ',');) v.push_back({f, 1.0});
+    const double duration = std::getenv("SQUEEZE_BENCH_DURATION") ? std::atof(std::getenv("SQUEEZE_BENCH_DURATION")) : 1.0;
+    for (std::string f; std::getline(ss, f, ',');) v.push_back({f, duration});
     return v;
   }
   return {{src + "/bench/scenes/ball_drop.json", 1.0},
@@ -72,6 +73,8 @@ void BM_Integrator(benchmark::State& st, Case c, std::string integrator) {
     st.counters["steps"] = steps;
     st.counters["substeps_per_step"] = double(is.substeps) / steps;
     st.counters["newton_per_step"] = double(is.iterations) / steps;
+    st.counters["factor_per_step"] = double(is.factorizations) / steps;
+    st.counters["cg_per_step"] = double(is.cg_iterations) / steps;
     st.counters["volume_change_end_pct"] = 100 * worst;
     st.counters["finite"] = s.x.allFinite();
     const std::string stem = std::filesystem::path(c.file).stem().string();

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 
 #include "commands.h"
 #include "trajectory_writer.h"
@@ -17,6 +18,7 @@
 #include "squeeze/common/error.h"
 #include "squeeze/common/json_check.h"
 #include "squeeze/common/progress.h"
+#include "squeeze/fem/integrator.h"
 #include "squeeze/fem/scene.h"
 #include "squeeze/meshing/tet_io.h"
 
@@ -65,6 +67,8 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
     const double h = interval / substeps;
     w.set_time_step(h);  // divides the frame interval, never larger than the scene's step
     const int nobj = w.world.bodies();
+    spdlog::info("time step {}{}", w.time_step_choice.describe(scene),
+                 h != w.time_step_choice.h ? ", lowered to " + std::to_string(h) + " s to divide the frame interval" : "");
 
     TrajectoryWriter writer(w, a.output, a.fps, h, frames);
     fem::State s = w.initial_state();
@@ -85,6 +89,7 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
     }
     progress.finish();
     writer.commit();
+    spdlog::info("{}", describe_integrator_stats(w.world));
     const fs::path out = a.output;
     if (!global.quiet)
       std::fprintf(stderr, "squeeze: %s: %d objects, %d frames, time step %.3g s, wrote %s\n", a.scene.c_str(), nobj,

@@ -136,6 +136,8 @@ class ImplicitIntegrator : public TimeIntegrator {
   void gradient(const World& w, const RowMatrixX3d& x, double h, Eigen::VectorXd& g) const;
   void assemble(const World& w, const RowMatrixX3d& x, double h, bool exact);
   void build_pattern(const World& w);
+  bool factorize(double h);
+  bool newton_direction(const World& w, const RowMatrixX3d& x, double h, const Eigen::VectorXd& g, Eigen::VectorXd& dx);
 
   ImplicitOptions o_;
   std::uint64_t version_ = 0;
@@ -150,8 +152,15 @@ class ImplicitIntegrator : public TimeIntegrator {
   std::vector<LinearContact> contacts_;
   std::vector<char> floor_damped_;          // per state row: below the floor at x_n
   BlockMatrix H_;
+  // Off-diagonal blocks of each element's vertex pairs (a < b, in the order of pair_code), as
+  // 2·block + (1 if the block is stored transposed), or −1 where a vertex is fixed.
+  std::vector<int> edge_block_;
+  std::vector<std::array<int, 6>> tet_block_;
+  std::vector<std::array<int, 10>> contact_block_;
   Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
-  bool analysed_ = false;
+  bool analysed_ = false;     // ldlt_ analysed the current pattern
+  double factor_h_ = 0;       // the substep length of ldlt_'s factorisation (0: none): a preconditioner while h is the same
+  Eigen::VectorXd r_, z_, p_, Hp_;  // PCG scratch
 };
 
 void ImplicitIntegrator::fit(const World& w) {
@@ -236,7 +245,14 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
   contacts_.clear();
   State probe = s;
   if (o.collisions) add_contacts(w, find_penetrations(w, probe, ws), xn_);
+  // The initial guess: the inertial target y (exact in free flight) or x_n + h v_n (exact at rest
+  // and in equilibrium), whichever has the lower potential. Both come from the state alone.
   RowMatrixX3d x = y_;
+  {
+    RowMatrixX3d coast = xn_;
+    for (int i : free_rows_) coast.row(i) += h * s.v.row(i);
+    if (potential(w, coast, h) < potential(w, x, h)) x = std::move(coast);
+  }
   solve(w, h, x);
   for (int round = 0; round < o_.contact_rounds && o.collisions; ++round) {
     probe.x = x;
@@ -414,16 +430,38 @@ void ImplicitIntegrator::build_pattern(const World& w) {
   std::vector<std::pair<int, int>> pairs;
   pairs.reserve(d.edges.size() + 10 * contacts_.size());
   auto pair = [&](int ri, int rj) {
-    const int a = free_[ri], b = free_[rj];
+    const int a = ri >= 0 ? free_[ri] : -1, b = rj >= 0 ? free_[rj] : -1;
     if (a < 0 || b < 0 || a == b) return;
     pairs.emplace_back(std::max(a, b), std::min(a, b));
   };
   for (const auto& E : d.edges) pair(E.i, E.j);  // every pair of a tet's corners is an edge
   for (const LinearContact& c : contacts_)
     for (int s = 0; s < 5; ++s)
-      for (int t = s + 1; t < 5; ++t)
-        if (c.row[s] >= 0 && c.row[t] >= 0) pair(c.row[s], c.row[t]);
-  if (H_.build(static_cast<int>(free_rows_.size()), std::move(pairs))) analysed_ = false;
+      for (int t = s + 1; t < 5; ++t) pair(c.row[s], c.row[t]);
+  const bool changed = H_.build(static_cast<int>(free_rows_.size()), std::move(pairs));
+  if (changed) analysed_ = false;
+  // Each element pair's block: (row vertex b, column vertex a) for a < b.
+  auto code = [&](int ra, int rb) {
+    const int A = ra >= 0 ? free_[ra] : -1, B = rb >= 0 ? free_[rb] : -1;
+    if (A < 0 || B < 0 || A == B) return -1;
+    return B > A ? 2 * H_.find(B, A) : 2 * H_.find(A, B) + 1;
+  };
+  if (changed || edge_block_.size() != d.edges.size()) {
+    edge_block_.resize(d.edges.size());
+    for (size_t e = 0; e < d.edges.size(); ++e) edge_block_[e] = code(d.edges[e].i, d.edges[e].j);
+    tet_block_.resize(d.tet_elems.size());
+    for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+      int q = 0;
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) tet_block_[t][q++] = code(d.tet_elems[t].v[a], d.tet_elems[t].v[b]);
+    }
+  }
+  contact_block_.resize(contacts_.size());
+  for (size_t k = 0; k < contacts_.size(); ++k) {
+    int q = 0;
+    for (int a = 0; a < 5; ++a)
+      for (int b = a + 1; b < 5; ++b) contact_block_[k][q++] = code(contacts_[k].row[a], contacts_[k].row[b]);
+  }
 }
 
 void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double h, bool exact) {
@@ -439,15 +477,20 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
     }
     H_.add_diag(static_cast<int>(f), M);
   }
-  // A symmetric element block matrix over rows (each pair of rows gets H(a, b)).
-  auto scatter = [&](int n, const int* rows, auto&& block) {
+  // An element's symmetric block matrix over its n vertices: diagonal blocks to the free vertices,
+  // the block (b, a), a < b, of each pair through its precomputed code.
+  auto scatter = [&](int n, const int* rows, const int* codes, auto&& block) {
+    int q = 0;
     for (int a = 0; a < n; ++a) {
       const int A = rows[a] >= 0 ? free_[rows[a]] : -1;  // −1: a fixed vertex (rigid or pinned)
-      if (A < 0) continue;
-      H_.add_diag(A, block(a, a));
-      for (int b = a + 1; b < n; ++b) {
-        const int B = rows[b] >= 0 ? free_[rows[b]] : -1;
-        if (B >= 0) H_.add(B, A, block(b, a));
+      if (A >= 0) H_.add_diag(A, block(a, a));
+      for (int b = a + 1; b < n; ++b, ++q) {
+        const int c = codes[q];
+        if (c < 0) continue;
+        if (c & 1)
+          H_.add_off(c >> 1, block(b, a).transpose());
+        else
+          H_.add_off(c >> 1, block(b, a));
       }
     }
   };
@@ -456,29 +499,98 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
     Mat3 He = distance_hessian(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact);
     if (E.kd > 0) He += (E.kd / h) * edge_g_[e] * edge_g_[e].transpose();
     const int rows[2] = {E.i, E.j};
-    scatter(2, rows, [&](int a, int b) -> Mat3 { return a == b ? He : Mat3(-He); });
+    scatter(2, rows, &edge_block_[e], [&](int a, int b) -> Mat3 { return a == b ? He : Mat3(-He); });
   }
   for (size_t t = 0; t < d.tet_elems.size(); ++t) {
     const auto& T = d.tet_elems[t];
     Vec3 p[4], gk[4];
     for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
-    volume_constraint(p[0], p[1], p[2], p[3], T.V0, gk);
+    Mat3 B[4][4];
+    if (exact) {
+      volume_hessian_blocks(p, T.V0, T.k, B, gk);
+    } else {
+      volume_constraint(p[0], p[1], p[2], p[3], T.V0, gk);
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) B[a][b] = T.k * gk[a] * gk[b].transpose();
+    }
     const double damp = T.kd / h;
-    Eigen::Matrix<double, 12, 12> HV;
-    if (exact) HV = volume_hessian(p[0], p[1], p[2], p[3], T.V0, T.k);
-    scatter(4, T.v, [&](int a, int b) -> Mat3 {
-      Mat3 B = exact ? Mat3(HV.block<3, 3>(3 * a, 3 * b)) : Mat3(T.k * gk[a] * gk[b].transpose());
-      if (damp > 0) B += damp * tet_g_[t][a] * tet_g_[t][b].transpose();
-      return B;
-    });
+    if (damp > 0)
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) B[a][b] += damp * tet_g_[t][a] * tet_g_[t][b].transpose();
+    scatter(4, T.v, tet_block_[t].data(), [&](int a, int b) -> const Mat3& { return B[a][b]; });
   }
-  for (const LinearContact& c : contacts_) {
+  for (size_t k = 0; k < contacts_.size(); ++k) {
+    const LinearContact& c = contacts_[k];
     const double depth = c.c0 - stencil_dot(c, x);
-    const double k = (depth > 0 ? c.k : 0.0) + c.c / h;
-    if (!(k > 0)) continue;
+    const double kc = (depth > 0 ? c.k : 0.0) + c.c / h;
+    if (!(kc > 0)) continue;
     const Mat3 rr = c.r * c.r.transpose();
-    scatter(5, c.row, [&](int a, int b) -> Mat3 { return (k * c.w[a] * c.w[b]) * rr; });
+    scatter(5, c.row, contact_block_[k].data(), [&](int a, int b) -> Mat3 { return (kc * c.w[a] * c.w[b]) * rr; });
   }
+}
+
+bool ImplicitIntegrator::factorize(double h) {
+  if (!analysed_) {
+    ldlt_.analyzePattern(H_.matrix());
+    analysed_ = true;
+  }
+  ldlt_.factorize(H_.matrix());
+  ++stats_.factorizations;
+  factor_h_ = ldlt_.info() == Eigen::Success ? h : 0.0;
+  return factor_h_ > 0;
+}
+
+// Newton's direction dx = −H⁻¹ g with the exact Hessian H at x: by conjugate gradients
+// preconditioned by the last factorisation (of an earlier Hessian with the same h) while they
+// converge within a few iterations; else by factorising H (which becomes the preconditioner).
+// Where H is not positive definite (negative curvature, or no descent), with the positive
+// semi-definite Hessian instead. Returns false if no descent direction was found.
+bool ImplicitIntegrator::newton_direction(const World& w, const RowMatrixX3d& x, double h, const Eigen::VectorXd& g,
+                                          Eigen::VectorXd& dx) {
+  const int kMaxCg = o_.max_cg_iterations;
+  const double kCgTolerance = o_.cg_tolerance;
+  for (int exact = 1; exact >= 0; --exact) {
+    assemble(w, x, h, exact == 1);
+    const auto A = H_.matrix().selfadjointView<Eigen::Lower>();
+    if (factor_h_ == h) {
+      // PCG from dx = 0.
+      const int n = static_cast<int>(g.size());
+      dx.setZero(n);
+      r_ = -g;
+      z_ = ldlt_.solve(r_);
+      p_ = z_;
+      double rz = r_.dot(z_);
+      const double stop = kCgTolerance * g.norm();
+      bool negative = false, done = false;
+      for (int it = 0; it < kMaxCg && !done; ++it) {
+        ++stats_.cg_iterations;
+        Hp_.noalias() = A * p_;
+        const double pHp = p_.dot(Hp_);
+        if (!(pHp > 0)) {
+          negative = true;
+          break;
+        }
+        const double a = rz / pHp;
+        dx += a * p_;
+        r_ -= a * Hp_;
+        if (r_.norm() <= stop) {
+          done = true;
+          break;
+        }
+        z_ = ldlt_.solve(r_);
+        const double rz1 = r_.dot(z_);
+        p_ = z_ + (rz1 / rz) * p_;
+        rz = rz1;
+      }
+      if (negative) continue;  // indefinite: the positive semi-definite Hessian
+      if (done && dx.allFinite() && g.dot(dx) < 0) return true;
+    }
+    if (!factorize(h)) continue;
+    dx = ldlt_.solve(-g);
+    if (dx.allFinite() && g.dot(dx) < 0) return true;
+    factor_h_ = 0;  // an indefinite factorisation is no preconditioner
+  }
+  return false;
 }
 
 void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
@@ -510,18 +622,7 @@ void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
     ++stats_.iterations;
     // Newton's direction with the exact Hessian, where it is a descent direction; else with the
     // positive semi-definite Hessian (distance_hessian psd, volume_hessian_gn).
-    bool ok = false;
-    for (int exact = 1; exact >= 0 && !ok; --exact) {
-      assemble(w, x, h, exact == 1);
-      if (!analysed_) {
-        ldlt_.analyzePattern(H_.matrix());
-        analysed_ = true;
-      }
-      ldlt_.factorize(H_.matrix());
-      if (ldlt_.info() != Eigen::Success) continue;
-      dx = ldlt_.solve(-g);
-      ok = dx.allFinite() && g.dot(dx) < 0;
-    }
+    const bool ok = newton_direction(w, x, h, g, dx);
     if (!ok) break;
     const double step = largest(dx, false);
     // Backtracking line search on G (Armijo).
@@ -551,6 +652,8 @@ std::unique_ptr<TimeIntegrator> make_implicit_integrator(const ImplicitOptions& 
   if (!(o.motion_fraction > 0)) throw InputError("implicit integrator: motion_fraction must be > 0");
   if (o.max_substeps < 1) throw InputError("implicit integrator: max_substeps must be >= 1");
   if (o.contact_rounds < 0) throw InputError("implicit integrator: contact_rounds must be >= 0");
+  if (o.max_cg_iterations < 0) throw InputError("implicit integrator: max_cg_iterations must be >= 0");
+  if (!(o.cg_tolerance > 0 && o.cg_tolerance < 1)) throw InputError("implicit integrator: cg_tolerance must be in (0, 1)");
   return std::make_unique<ImplicitIntegrator>(o);
 }
 

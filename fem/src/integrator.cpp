@@ -2,6 +2,8 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 #include "squeeze/common/error.h"
 #include "squeeze/fem/constraints.h"
@@ -42,6 +44,21 @@ std::unique_ptr<TimeIntegrator> make_integrator(const std::string& name) {
   std::string list;
   for (const Entry& e : registry()) list += (list.empty() ? "\"" : ", \"") + std::string(e.name) + "\"";
   throw InputError("integrator: unknown integrator \"" + name + "\" (known: " + list + ")");
+}
+
+std::string describe_integrator_stats(const World& w) {
+  const TimeIntegrator& i = w.integrator();
+  const IntegratorStats& s = i.stats();
+  std::ostringstream o;
+  o << i.name() << ": " << s.steps << " steps";
+  if (s.substeps != s.steps) o << ", " << s.substeps << " substeps";
+  if (s.iterations > 0 || std::string(i.name()) != "verlet") {
+    o << std::setprecision(3) << ", " << (s.substeps ? double(s.iterations) / s.substeps : 0.0)
+      << " Newton iterations per substep, " << s.factorizations << " factorisations, " << s.cg_iterations
+      << " CG iterations, " << s.contact_rounds << " contact rounds; " << s.not_converged
+      << " substeps stopped at the iteration limit";
+  }
+  return o.str();
 }
 
 void damp_deformation(const World& w, State& s, double h) {

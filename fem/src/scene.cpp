@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iomanip>
@@ -325,6 +326,76 @@ double stable_time_step(const World& world) {
   return h;
 }
 
+namespace {
+std::string short_number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+}  // namespace
+
+TimeStepChoice auto_time_step(const World& world, const Scene& scene) {
+  TimeStepChoice c;
+  if (scene.integrator == "implicit") {
+    c.h = kImplicitFrameInterval;
+    c.term = "frame interval";
+    c.detail = "1/30 s";
+    for (int b = 0; b < world.bodies(); ++b) {
+      const Body& B = world.body(b);
+      const double v = static_cast<size_t>(b) < scene.objects.size() ? scene.objects[b].velocity.norm() : 0.0;
+      if (B.rigid || !(v > 0) || !(B.mean_edge_length() > 0)) continue;
+      const double hb = 0.5 * B.mean_edge_length() / v;
+      if (hb < c.h) {
+        c.h = hb;
+        c.object = b;
+        c.term = "initial speed";
+        c.detail = short_number(v) + " m/s over half its mean edge length " + short_number(0.5 * B.mean_edge_length()) + " m";
+      }
+    }
+    return c;
+  }
+  // Verlet: the stability bound, vertex by vertex (stable_time_step), and the tightest term.
+  const WorldOptions& o = world.options();
+  c.h = 1e-3;
+  c.term = "cap";
+  c.detail = "1 ms at most";
+  for (int b = 0; b < world.bodies(); ++b) {
+    const Body& B = world.body(b);
+    const int r0 = world.first_state_row(b);
+    if (B.rigid || r0 < 0) continue;
+    Eigen::VectorXd w2e, ge;
+    vertex_frequency_bounds(B, world.masses().segment(r0, B.vertices()), w2e, &ge);
+    for (int i = 0; i < B.vertices(); ++i) {
+      const double m = world.masses()(r0 + i), cs = world.contact_scale(r0 + i);
+      if (!(m > 0)) continue;
+      const double w2c = cs * o.contact_stiffness / m;
+      const double w2 = w2e(i) + w2c, gamma = ge(i) + cs * o.contact_damping / m;
+      const double d = gamma + std::sqrt(gamma * gamma + 4 * w2);
+      if (d > 0 && 2.0 / d < c.h) {
+        c.h = 2.0 / d;
+        c.object = b;
+        // The stiffer of elasticity and contact at this vertex; "and damping" where the damping
+        // rate exceeds the frequency (2 / h = γ + sqrt(γ² + 4ω²) is then well above 2ω).
+        c.term = std::string(w2e(i) >= w2c ? "elastic" : "contact") + (gamma > std::sqrt(w2) ? " and damping" : "");
+        c.detail = "vertex " + std::to_string(i) + ": ω " + short_number(std::sqrt(w2)) + " rad/s (elastic " +
+                   short_number(std::sqrt(w2e(i))) + ", contact " + short_number(std::sqrt(w2c)) + "), damping rate γ " +
+                   short_number(gamma) + " 1/s";
+      }
+    }
+  }
+  return c;
+}
+
+std::string TimeStepChoice::describe(const Scene& scene) const {
+  std::string s = short_number(h) + " s (" + scene.integrator + ": ";
+  if (term == "given") return s + "time_step of the scene)";
+  if (object >= 0 && static_cast<size_t>(object) < scene.objects.size())
+    s += term + (term == "initial speed" ? " of '" : " stability of '") + scene.objects[object].name + "', ";
+  else
+    s += term + ", ";
+  return s + detail + ")";
+}
+
 SceneWorld build_scene(const Scene& scene, Progress* progress) {
   const std::string file = scene.file.string();
   WorldOptions wo;
@@ -409,9 +480,14 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
                          "].box: holds no vertex of '" + o.name + "' at rest");
     }
   }
-  const double h = scene.time_step ? *scene.time_step
-                   : scene.integrator == "implicit" ? 1.0 / 30
-                                                    : stable_time_step(world);
+  TimeStepChoice choice;
+  if (scene.time_step) {
+    choice.h = *scene.time_step;
+    choice.term = "given";
+  } else {
+    choice = auto_time_step(world, scene);
+  }
+  const double h = choice.h;
   if (!scene.time_step && h < 1e-6)
     throw InputError(file + ": time_step: the stable step of these meshes is only " + num(h) +
                      " s (tiny or flat tetrahedra, or very stiff materials): set time_step, another tets count, or a "
@@ -419,6 +495,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
   world.set_time_step(h);
   world.prepare();
   SceneWorld sw(scene, std::move(world));
+  sw.time_step_choice = choice;
   sw.meshes = std::move(meshes);
   sw.rest_volume = std::move(rest_volume);
   if (scene.bounds) {

@@ -230,35 +230,46 @@ inline Eigen::Matrix3d skew(const Vec3& u) {
   return S;
 }
 
-/// Exact Hessian (12×12 over (p0, p1, p2, p3), J/m²) of E_V = ½ k C_V² (eq. 4):
-/// k (∇C ∇Cᵀ + C ∇²C), with ∇²C = ∇²V / V0 and V = ⅙ a·(b×c), a = p1 − p0, b = p2 − p0, c = p3 − p0:
-/// ∂²V/∂a∂b = −⅙ skew(c), ∂²V/∂a∂c = ⅙ skew(b), ∂²V/∂b∂c = −⅙ skew(a), no diagonal blocks.
-/// Indefinite where C ≠ 0; the solver uses volume_hessian_gn.
+/// The 3×3 blocks of the exact Hessian of E_V = ½ k C_V² (eq. 4) over (p0, p1, p2, p3), J/m²:
+/// H_ab = k ∇_a C ∇_b Cᵀ + (k C / V0) ∂²V/∂p_a∂p_b. V = ⅙ det[p1 − p0, p2 − p0, p3 − p0] is linear in
+/// each corner, so ∂²V/∂p_a² = 0, and each cross block is a cross-product matrix of an edge / 6:
+/// with e1 = p1 − p0, e2 = p2 − p0, e3 = p3 − p0, ∂²V/∂p1∂p2 = −skew(e3)/6, ∂²V/∂p1∂p3 = skew(e2)/6,
+/// ∂²V/∂p2∂p3 = −skew(e1)/6, ∂²V/∂p0∂p1 = skew(e2 − e3)/6, ∂²V/∂p0∂p2 = skew(e3 − e1)/6,
+/// ∂²V/∂p0∂p3 = skew(e1 − e2)/6, and ∂²V/∂p_b∂p_a = (∂²V/∂p_a∂p_b)ᵀ = −∂²V/∂p_a∂p_b.
+/// Indefinite where C ≠ 0. grad: receives the four ∂C/∂p_k (1/m). Returns C.
+inline double volume_hessian_blocks(const Vec3 p[4], double V0, double k, Eigen::Matrix3d H[4][4], Vec3 grad[4]) {
+  const double C = volume_constraint(p[0], p[1], p[2], p[3], V0, grad);
+  const Vec3 e1 = p[1] - p[0], e2 = p[2] - p[0], e3 = p[3] - p[0];
+  Eigen::Matrix3d S[4][4];
+  S[0][1] = skew(e2 - e3);
+  S[0][2] = skew(e3 - e1);
+  S[0][3] = skew(e1 - e2);
+  S[1][2] = -skew(e3);
+  S[1][3] = skew(e2);
+  S[2][3] = -skew(e1);
+  const double w = k * C / (6.0 * V0);
+  for (int a = 0; a < 4; ++a) {
+    H[a][a] = k * grad[a] * grad[a].transpose();
+    for (int b = a + 1; b < 4; ++b) {
+      H[a][b] = k * grad[a] * grad[b].transpose() + w * S[a][b];
+      H[b][a] = H[a][b].transpose();
+    }
+  }
+  return C;
+}
+
+/// Exact Hessian (12×12 over (p0, p1, p2, p3), J/m²) of E_V = ½ k C_V²: the blocks of
+/// volume_hessian_blocks. Indefinite where C ≠ 0; the solver uses it where the whole Hessian is
+/// positive definite, else volume_hessian_gn.
 inline Eigen::Matrix<double, 12, 12> volume_hessian(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3,
                                                     double V0, double k) {
+  const Vec3 p[4] = {p0, p1, p2, p3};
+  Eigen::Matrix3d B[4][4];
   Vec3 g[4];
-  const double C = volume_constraint(p0, p1, p2, p3, V0, g);
-  Eigen::Matrix<double, 12, 1> G;
-  for (int i = 0; i < 4; ++i) G.segment<3>(3 * i) = g[i];
-  Eigen::Matrix<double, 12, 12> H = k * G * G.transpose();
-  const Vec3 a = p1 - p0, b = p2 - p0, c = p3 - p0;
-  // Blocks over (a, b, c) = (p1, p2, p3), then p0 = −(sum) by the chain rule.
-  Eigen::Matrix3d B[3][3];
-  B[0][0] = B[1][1] = B[2][2] = Eigen::Matrix3d::Zero();
-  B[0][1] = -skew(c) / 6.0;
-  B[0][2] = skew(b) / 6.0;
-  B[1][2] = -skew(a) / 6.0;
-  B[1][0] = B[0][1].transpose();
-  B[2][0] = B[0][2].transpose();
-  B[2][1] = B[1][2].transpose();
-  const double w = k * C / V0;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      H.block<3, 3>(3 * (i + 1), 3 * (j + 1)) += w * B[i][j];
-      H.block<3, 3>(0, 3 * (j + 1)) -= w * B[i][j];
-      H.block<3, 3>(3 * (i + 1), 0) -= w * B[i][j];
-      H.block<3, 3>(0, 0) += w * B[i][j];
-    }
+  volume_hessian_blocks(p, V0, k, B, g);
+  Eigen::Matrix<double, 12, 12> H;
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) H.block<3, 3>(3 * a, 3 * b) = B[a][b];
   return H;
 }
 

@@ -15,10 +15,15 @@
 // d(x) = d_0 − r·((x_p − x_p⁰) − Σ b_k (x_k − x_k⁰))); after a converged solve they are detected again at
 // the result and new ones join the minimisation (contact_rounds).
 //
-// Solver: Newton's method with a backtracking line search on G. The Hessian is made positive
-// definite term by term (the compressed-edge and the volume curvature terms dropped: distance_hessian
-// with psd, volume_hessian_gn) and factorised by a sparse LDLᵀ (Eigen's SimplicialLDLT, AMD
-// ordering, sequential: bit-identical results whatever the number of threads).
+// Solver: Newton's method with a backtracking line search on G. Each Newton step solves H Δ = −∇G
+// with the exact Hessian (constraints.h: distance_hessian, volume_hessian_blocks) by conjugate
+// gradients preconditioned by the last sparse LDLᵀ factorisation of a Hessian of the same h (Eigen's
+// SimplicialLDLT, AMD ordering); when CG needs more than max_cg_iterations, the current Hessian is
+// factorised (and becomes the preconditioner). Where the exact Hessian is not positive definite
+// (CG meets negative curvature, or the step is no descent), the positive semi-definite one is used
+// (compressed-edge and volume curvature terms dropped: distance_hessian with psd, volume_hessian_gn).
+// Everything is sequential or summed in a fixed order: bit-identical results whatever the number
+// of threads.
 //
 // Substeps (accuracy): a step of h is split into k equal substeps so that no free vertex is
 // predicted to move more than motion_fraction of its object's mean edge length per substep
@@ -34,9 +39,13 @@ namespace squeeze::fem {
 
 struct ImplicitOptions {
   int max_newton_iterations = 40;  // per substep; a substep that does not converge keeps its last iterate (counted)
-  double tolerance = 1e-6;         // converged when the Newton step's largest component is below tolerance × the
-                                   // object's mean edge length
-  double motion_fraction = 0.25;   // largest predicted motion per substep, in mean edge lengths of the object
+  double tolerance = 1e-3;         // converged when the residual force would move no free vertex by more than
+                                   // tolerance × its object's mean edge length in one substep (‖g_i‖ h² / m_i),
+                                   // or the last Newton step moved none by more than that
+  double cg_tolerance = 1e-2;      // relative residual of the conjugate-gradient solve of a Newton step
+  int max_cg_iterations = 8;       // CG iterations with the last factorisation as preconditioner before the
+                                   // Hessian is factorised anew (0: factorise every Newton iteration)
+  double motion_fraction = 0.5;    // largest predicted motion per substep, in mean edge lengths of the object
   int max_substeps = 1024;         // substeps of one step at most
   int contact_rounds = 3;          // re-detections of contacts after a converged solve (0: detect at x_n only)
 };

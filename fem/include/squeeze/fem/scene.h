@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string>
 #include <vector>
 
 #include "squeeze/fem/body.h"
@@ -106,6 +107,20 @@ std::filesystem::path mesh_cache_dir();
 meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bool* cache_hit = nullptr,
                         Progress* progress = nullptr);
 
+/// The automatic time step of a world and what sets it (scene key `time_step`: "auto").
+struct TimeStepChoice {
+  double h = 0;          // s
+  int object = -1;       // the object that sets it, or -1 (the frame interval, or no deformable object)
+  std::string term;      // Verlet: "elastic", "contact" or "damping" (the stability bound of that term at the
+                         // object's stiffest vertex); implicit: "frame interval" or "initial speed"
+  std::string detail;    // numbers behind it, one phrase
+  /// One line: "0.0333 s (implicit: the frame interval 1/30 s)", "8.2e-05 s (verlet: elastic stability of 'ball', ...)".
+  std::string describe(const Scene& scene) const;
+};
+
+/// The frame interval the implicit integrator's automatic step keeps to (s).
+constexpr double kImplicitFrameInterval = 1.0 / 30;
+
 /// A World built from a scene, with what the later stages need beside it. Build it once
 /// (build_scene: meshing, bodies, pins, time step) and copy it: copies are cheap (the world's rest
 /// data is shared) and independent, so planning, replay and metrics each work on their own copy.
@@ -116,6 +131,7 @@ class SceneWorld {
   std::vector<meshing::TetMesh> meshes;  // per object: rest mesh in world coordinates (m)
   Eigen::AlignedBox3d bounds;         // scene bounds (given, or derived)
   std::vector<double> rest_volume;    // per object, m³
+  TimeStepChoice time_step_choice;    // what chose the time step (h = the scene's time_step if it gives one)
 
   SceneWorld(Scene s, World w) : scene(std::move(s)), world(std::move(w)) {}
   /// The time step (s): the world's.
@@ -139,6 +155,15 @@ class SceneWorld {
 /// of a damped oscillator under the symplectic Euler step, (hω)² + 2hγ <= 4 (1/ω without damping,
 /// 1/γ when overdamped). Returns 1e-3 with no deformable object.
 double stable_time_step(const World& world);
+
+/// The automatic time step of `world` for its integrator:
+///  * verlet: stable_time_step, and which vertex term is the tightest (elastic ω², contact k_c/m,
+///    damping γ);
+///  * implicit: chosen for accuracy, not stability: one frame interval (kImplicitFrameInterval), or
+///    less where an object's initial speed would carry it more than half its mean edge length in
+///    one step (h ≤ ½ L / |v0|). Within a step, the integrator's motion substeps (implicit.h) keep
+///    every vertex's motion per substep below half an edge length whatever the speed it reaches.
+TimeStepChoice auto_time_step(const World& world, const Scene& scene);
 
 /// Meshes every object (through the cache), builds bodies, pins and the time step; the world is
 /// prepared (World::prepare), so copies share its rest data.
