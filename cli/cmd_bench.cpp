@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "scene_options.h"
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
@@ -40,7 +41,7 @@ constexpr PaperRow kTable1[] = {
 };
 
 struct BenchArgs {
-  std::string output, scenes = SQUEEZE_SCENES_DIR, only;
+  std::string output, scenes = SQUEEZE_SCENES_DIR, only, integrator;
   int seeds = 3;
   double time_limit = 0, fraction = 1.0 / 20;
 };
@@ -84,6 +85,7 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
   cmd->add_option("--only", args->only, "Only the scene whose file or name contains this text");
   cmd->add_option("--time-limit", args->time_limit, "Seconds per plan (default: the paper's time / 20)")
       ->check(CLI::NonNegativeNumber);
+  add_integrator_option(cmd, args->integrator);
 
   return [args, &global]() -> int {
     const BenchArgs& a = *args;
@@ -104,7 +106,7 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
     std::ostringstream md, csv;
     csv << "environment,obstacles,paper_tets,paper_iterations,paper_seconds,tets,seeds,solved,time_limit_s,"
            "iterations_median,iterations_min,iterations_max,seconds_median,seconds_min,seconds_max,"
-           "iterations_per_second,peak_memory_mib,max_volume_change_pct,paper_volume_bound_pct,speedup\n";
+           "iterations_per_second,peak_memory_mib,max_volume_change_pct,paper_volume_bound_pct,speedup,integrator\n";
     md << "# Table I, reproduced\n\n"
        << "Rodriguez, Lien, Amato 2006, Table I (a 1.7 GHz notebook) beside squeeze (`squeeze bench table1 --seeds "
        << a.seeds << "`). Each plan runs within "
@@ -113,11 +115,11 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
           "[min–max]; volume: the largest |V/V0 − 1| of any object over every step of the replayed paths "
           "(settling included); speed-up: paper time / squeeze median time.\n\n"
        << "| Environment | Obstacles | Tets (paper / squeeze) | Sol. iterations (paper / squeeze) | Sol. time (paper / "
-          "squeeze) | Solved | it/s | Peak memory | Max volume change (paper bound) | Speed-up |\n"
-       << "|---|---|---|---|---|---|---|---|---|---|\n";
+          "squeeze) | Solved | it/s | Peak memory | Max volume change (paper bound) | Speed-up | Integrator |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const PaperRow* r : rows) {
       const fs::path file = fs::path(a.scenes) / r->file;
-      const fem::Scene scene = fem::load_scene(file);
+      const fem::Scene scene = load_scene_with(file.string(), a.integrator);
       Progress progress(!global.quiet);
       fem::SceneWorld w = fem::build_scene(scene, &progress);
       plan::PlannerOptions o = plan::planner_options(w);
@@ -155,13 +157,13 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
           << ',' << a.seeds << ',' << solved << ',' << limit << ',' << f2(mi, "%.0f") << ',' << f2(lo(it), "%.0f") << ','
           << f2(hi(it), "%.0f") << ',' << f2(ms) << ',' << f2(lo(secs)) << ',' << f2(hi(secs)) << ','
           << f2(rate_it / rate_s, "%.1f") << ',' << f2(peak, "%.0f") << ',' << f2(100 * volume) << ','
-          << f2(100 * r->volume_bound, "%.0f") << ',' << f2(r->seconds / ms, "%.0f") << '\n';
+          << f2(100 * r->volume_bound, "%.0f") << ',' << f2(r->seconds / ms, "%.0f") << ',' << scene.integrator << '\n';
       md << "| " << r->name << " | " << r->obstacles << " | " << r->tets << " / " << tets << " | " << r->iterations
          << " / " << f2(mi, "%.0f") << " [" << f2(lo(it), "%.0f") << "–" << f2(hi(it), "%.0f") << "] | "
          << mmss(r->seconds) << " / " << f2(ms, "%.1f") << " s [" << f2(lo(secs), "%.1f") << "–" << f2(hi(secs), "%.1f")
          << "] | " << solved << "/" << a.seeds << " | " << f2(rate_it / rate_s, "%.1f") << " | " << f2(peak, "%.0f")
          << " MiB | " << f2(100 * volume) << " % (" << f2(100 * r->volume_bound, "%.0f") << " %) | "
-         << f2(r->seconds / ms, "%.0f") << "× |\n";
+         << f2(r->seconds / ms, "%.0f") << "× | " << scene.integrator << " |\n";
     }
     write_atomically(out / "table1.csv", [&](const fs::path& p) {
       std::ofstream f(p);

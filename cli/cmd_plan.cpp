@@ -16,6 +16,7 @@
 #include "squeeze/plan/plan_io.h"
 #include "squeeze/plan/planner.h"
 #include "plan_shared.h"
+#include "scene_options.h"
 #include "trajectory_writer.h"
 
 namespace squeeze::cli {
@@ -24,7 +25,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct PlanArgs {
-  std::string scene, output;
+  std::string scene, output, integrator;
   long long seed = -1, iterations = -1;
   double time_limit = 0;
   int threads = 0;
@@ -128,6 +129,7 @@ Runner add_plan_command(CLI::App& app, const Global& global) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--threads", args->threads, "Worker threads (default: -j, else all cores); the plan does not depend on it")
       ->check(CLI::NonNegativeNumber);
+  add_integrator_option(cmd, args->integrator);
 
   return [args, &global]() -> int {
     const PlanArgs& a = *args;
@@ -137,7 +139,7 @@ Runner add_plan_command(CLI::App& app, const Global& global) {
                                                       static_cast<size_t>(a.threads));
     check_output_directory(a.output);
     Progress progress(!global.quiet);
-    const fem::Scene scene = fem::load_scene(a.scene);
+    const fem::Scene scene = load_scene_with(a.scene, a.integrator);
     const PreparedPlanning prep = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
     const plan::PlannerOptions& options = prep.options;
     const plan::PlanResult r = plan::plan(prep.world, options, &progress);
@@ -185,8 +187,8 @@ Runner add_replay_command(CLI::App& app, const Global& global) {
     const ReplayArgs& a = *args;
     if (!(a.fps > 0) || !std::isfinite(a.fps)) throw InputError("--fps must be > 0");
     Progress progress(!global.quiet);
-    const fem::Scene scene = fem::load_scene(a.scene);
     const plan::PlanFile f = plan::load_plan(a.plan);
+    const fem::Scene scene = load_scene_with(a.scene, f.integrator);  // the plan's integrator
     const int settle_steps = a.settle >= 0 ? static_cast<int>(std::lround(a.settle / f.time_step)) : f.settle_steps;
     const fem::SceneWorld world = fem::build_scene(scene, &progress);
     const ReplayOutput r = write_replay(world, f, a.plan, a.output, a.fps, settle_steps, progress);

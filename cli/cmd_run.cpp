@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "plan_shared.h"
+#include "scene_options.h"
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
@@ -28,7 +29,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct RunArgs {
-  std::string scene, output, exports = "pc2,vtu", gl = "osmesa";
+  std::string scene, output, exports = "pc2,vtu", gl = "osmesa", integrator;
   long long seed = -1, iterations = -1;
   double time_limit = 0, fps = 0;
   int width = 0, height = 0;
@@ -63,6 +64,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
   cmd->add_option("--export", args->exports, render::export_option_help())->capture_default_str();
   cmd->add_option("--gl", args->gl, "OpenGL context: osmesa or egl")->capture_default_str();
   cmd->add_flag("--no-render", args->no_render, "Stop after the replay (no frames, plots or exports)");
+  add_integrator_option(cmd, args->integrator);
 
   return [args, &global]() -> int {
     const RunArgs& a = *args;
@@ -75,7 +77,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     Progress progress(!global.quiet);
     std::vector<std::pair<std::string, double>> seconds;
     auto t = clock_type::now();
-    const fem::Scene scene = fem::load_scene(a.scene);
+    const fem::Scene scene = load_scene_with(a.scene, a.integrator);
     const render::RenderSettings rs = render::parse_render_settings(scene.render, scene.file.string());
     const long long builds_before = fem::scene_builds();
     const PreparedPlanning prep = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);

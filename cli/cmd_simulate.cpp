@@ -13,6 +13,7 @@
 #include <spdlog/spdlog.h>
 
 #include "commands.h"
+#include "scene_options.h"
 #include "trajectory_writer.h"
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
@@ -28,7 +29,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct SimulateArgs {
-  std::string scene, output;
+  std::string scene, output, integrator;
   double duration = 0, fps = 30;
 };
 
@@ -48,6 +49,7 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
   cmd->add_option("-o,--output", args->output, "Output directory (created if missing; its parent must exist)")
       ->required();
   cmd->add_option("--fps", args->fps, "Output frames per simulated second, > 0")->capture_default_str();
+  add_integrator_option(cmd, args->integrator);
 
   return [args, &global]() -> int {
     SimulateArgs& a = *args;
@@ -60,7 +62,7 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
 
     // All input checks (scene, meshes, bodies) before anything is written.
     Progress progress(!global.quiet);
-    fem::Scene scene = fem::load_scene(a.scene);
+    fem::Scene scene = load_scene_with(a.scene, a.integrator);
     fem::SceneWorld w = fem::build_scene(scene, &progress);
     const double interval = 1.0 / a.fps;
     const int substeps = std::max(1, static_cast<int>(std::ceil(interval / w.time_step() - 1e-9)));

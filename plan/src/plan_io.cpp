@@ -51,6 +51,7 @@ PlanFile make_plan_file(const fem::Scene& scene, const PlannerOptions& options, 
   f.options = options;
   f.stats = r.stats;
   f.time_step = r.time_step;
+  f.integrator = scene.integrator;
   f.path = r.path;
   f.settle = r.settle;
   f.settle_steps = r.settle_steps;
@@ -66,6 +67,7 @@ void save_plan(const std::filesystem::path& file, const PlanFile& p) {
   j["status"] = to_string(p.status);
   j["seed"] = p.options.seed;
   j["time_step"] = p.time_step;
+  if (!p.integrator.empty()) j["integrator"] = p.integrator;
   const PlannerOptions& o = p.options;
   j["planner"] = {{"iterations", o.iterations},
                   {"seed", o.seed},
@@ -124,6 +126,7 @@ PlanFile load_plan(const std::filesystem::path& file) {
   const std::string st = c.string(j["status"], "status");
   p.status = st == "solved" ? PlanStatus::solved : st == "approximate" ? PlanStatus::approximate : PlanStatus::failed;
   p.time_step = c.positive(j["time_step"], "time_step");
+  if (j.contains("integrator")) p.integrator = c.string(j["integrator"], "integrator");
   if (!j["path"].is_array()) c.fail("path", "must be an array");
   for (size_t i = 0; i < j["path"].size(); ++i) {
     PathSegment seg;

@@ -1,7 +1,7 @@
 // squeeze::plan — PLAN.json: what `squeeze plan` writes and `squeeze replay` reads.
 //
 // { "format": "squeeze-plan", "version": 1, "scene": ABSOLUTE PATH, "status": "solved" | ...,
-//   "seed": N, "time_step": h (s), "planner": {every PlannerOptions field},
+//   "seed": N, "time_step": h (s), "integrator": NAME, "planner": {every PlannerOptions field},
 //   "statistics": {...PlanStatistics...},
 //   "path": [ {"kind": "body" | "control_point" | "interpolation", "target": [x,y,z] (m),
 //              "force": N, "vertex": i, "radius": m, "omega": 1/s, "steps": n, "duration": s}, ... ],
@@ -20,6 +20,7 @@ struct PlanFile {
   PlannerOptions options;
   PlanStatistics stats;
   double time_step = 0;
+  std::string integrator;  // the scene's integrator when planned ("" in plans made before: the scene's)
   std::vector<PathSegment> path;
   Control settle;
   int settle_steps = 0;
