@@ -336,3 +336,86 @@ TEST(FemImplicit, BadOptionsAreRefused) {
   o.cg_tolerance = 1;
   EXPECT_THROW(make_implicit_integrator(o), InputError);
 }
+
+namespace {
+
+// Two soft balls overlapping by about 1.5 cm at rest, no gravity (the organs of a body touch so).
+World overlapping_balls(const std::string& integrator, bool rest_overlap) {
+  WorldOptions o;
+  o.integrator = integrator;
+  o.h = integrator == "implicit" ? 1.0 / 30 : 2e-4;
+  o.gravity.setZero();
+  o.contact_stiffness = 2e3;
+  o.contact_damping = 1;
+  o.rest_overlap = rest_overlap;
+  World w(o);
+  Material m;
+  m.k_distance = m.k_volume = 5;
+  m.damping_distance = m.damping_volume = 0.002;
+  Eigen::Affine3d a = Eigen::Affine3d::Identity(), b = a;
+  a.translation() = Vector3d(-0.0925, 0, 0);
+  b.translation() = Vector3d(0.0925, 0.01, 0);
+  w.add_body(Body(ball_tet_mesh(0.1, 5), m, false, a));
+  w.add_body(Body(ball_tet_mesh(0.1, 5), m, false, b));
+  w.prepare();
+  return w;
+}
+
+}  // namespace
+
+// Issue 18: objects that overlap at rest start at rest (both integrators): the overlap is their
+// contacts' rest state. Without it, the same overlap pushes them apart.
+TEST(FemWorld, RestOverlapsStartAtRest) {
+  for (const char* integrator : {"verlet", "implicit"}) {
+    SCOPED_TRACE(integrator);
+    World w = overlapping_balls(integrator, true);
+    ASSERT_GT(w.rest_overlaps().size(), 4u);  // they do overlap
+    double deepest = 0;
+    for (const auto& o : w.rest_overlaps()) deepest = std::max(deepest, o.depth);
+    EXPECT_GT(deepest, 0.005);
+    State s = w.initial_state();
+    ASSERT_EQ(s.overlap.size(), static_cast<Eigen::Index>(w.rest_overlaps().size()));
+    const State s0 = s;
+    const int steps = std::string(integrator) == "implicit" ? 30 : 5000;
+    for (int k = 0; k < steps; ++k) w.step(s);
+    EXPECT_LT(s.v.cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT((s.x - s0.x).cwiseAbs().maxCoeff(), 1e-9);
+    World off = overlapping_balls(integrator, false);
+    EXPECT_TRUE(off.rest_overlaps().empty());
+    State t = off.initial_state();
+    for (int k = 0; k < steps; ++k) off.step(t);
+    EXPECT_GT(t.v.cwiseAbs().maxCoeff(), 1e-3);  // pushed apart
+  }
+}
+
+// Issue 18: the tolerance of a rest overlap shrinks as the objects separate and is gone once they
+// are apart: from then on, pushed back together, they collide exactly as objects that never
+// overlapped (bit for bit), instead of sinking into each other by the old overlap.
+TEST(FemWorld, RestOverlapRelaxesAsObjectsSeparate) {
+  for (const char* integrator : {"verlet", "implicit"}) {
+    SCOPED_TRACE(integrator);
+    World w = overlapping_balls(integrator, true);
+    State s = w.initial_state();
+    const int n0 = w.body(0).vertices();
+    RowMatrixX3d pull = RowMatrixX3d::Zero(w.state_rows(), 3);
+    for (int i = 0; i < w.state_rows(); ++i) pull(i, 0) = (i < n0 ? -1.0 : 1.0) * w.masses()(i);
+    const double h = w.time_step();
+    for (double t = 0; t < 0.3; t += h) w.step(s, &pull);  // pulled apart
+    EXPECT_EQ(s.overlap.cwiseAbs().maxCoeff(), 0.0);       // out: no tolerance left
+    s.v.setZero();
+    World never = overlapping_balls(integrator, false);    // the same balls, overlaps never tolerated
+    State t = s;
+    t.overlap.resize(0);
+    const RowMatrixX3d push = -pull;
+    double deepest = 0;
+    for (double time = 0; time < 1.0; time += h) {
+      w.step(s, &push);  // pushed back into each other
+      never.step(t, &push);
+      deepest = std::max(deepest, w.last_stats().max_depth);
+    }
+    std::printf("%s: after separating, pushed back: deepest penetration %.4f m\n", integrator, deepest);
+    EXPECT_GT(deepest, 0.0);  // they did touch again
+    EXPECT_TRUE(same_bits(s.x, t.x));
+    EXPECT_TRUE(same_bits(s.v, t.v));
+  }
+}

@@ -230,6 +230,19 @@ TEST(Planner, ReplayReproducesTheTreeStatesBitForBit) {
   EXPECT_GT(e.result.stats.peak_memory, 0u);
 }
 
+// The same with the implicit integrator: its propagators forget what earlier expansions left them
+// (TimeIntegrator::reset), so a replay from the start reproduces every tree state bit for bit.
+TEST(Planner, ReplayReproducesTheTreeStatesBitForBitImplicit) {
+  const sqt::TempDir tmp("plan-replay-implicit");
+  const fem::Scene scene = fem::load_scene(write_scene(tmp.path(), mini_scene({{"integrator", "implicit"}})));
+  PlannerOptions o = options_of(scene);
+  o.iterations = 40;
+  o.seed = 3;
+  const PlanEvaluation e = evaluate_plan(fem::build_scene(scene), o);
+  ASSERT_GT(e.result.path.size(), 1u);
+  EXPECT_TRUE(e.replay_matches);
+}
+
 TEST(Planner, SolvesTheMiniCorridorWithinLimitsOfVolume) {
   const sqt::TempDir tmp("plan-solve");
   const fs::path& d = tmp.path();

@@ -27,6 +27,7 @@ struct ForceWorkspace::Impl {
   std::vector<Vec3> contact_f;
   std::vector<int> contact_rows;  // rows with a list (to reset them)
   StepStats stats;
+  Eigen::VectorXd overlap;    // the rest-overlap tolerances after the last evaluation (State::overlap)
 
   void fit(const WorldData& d) {
     if (version == d.version) return;
@@ -50,6 +51,7 @@ ForceWorkspace& ForceWorkspace::operator=(const ForceWorkspace&) {
 ForceWorkspace::ForceWorkspace(ForceWorkspace&&) noexcept = default;
 ForceWorkspace& ForceWorkspace::operator=(ForceWorkspace&&) noexcept = default;
 const StepStats& ForceWorkspace::stats() const { return impl_->stats; }
+const Eigen::VectorXd& ForceWorkspace::overlap() const { return impl_->overlap; }
 
 namespace {
 
@@ -134,6 +136,27 @@ inline Vec3 gathered(const WorldData& d, const std::vector<double>& acc, int row
   return f;
 }
 
+// The rest-overlap tolerances of state s: its own, or the rest depths for a state made before the
+// world was prepared (World::initial_state then had none to give).
+const Eigen::VectorXd& current_overlap(const WorldData& d, const State& s) {
+  return s.overlap.size() == d.overlap_depths.size() ? s.overlap : d.overlap_depths;
+}
+
+// Depths beyond each overlapping vertex's tolerance; `next` receives the shrunk tolerances
+// (min(tolerance, depth) for a vertex still inside, 0 for one that is out).
+void apply_overlap(const WorldData& d, const Eigen::VectorXd& allowance, std::vector<Penetration>& pens,
+                   Eigen::VectorXd& next) {
+  next.setZero(allowance.size());
+  if (allowance.size() == 0) return;
+  for (Penetration& p : pens) {
+    const int slot = d.overlap_slot[p.vertex];
+    if (slot < 0 || !(p.depth > 0)) continue;
+    const double a = allowance(slot);
+    next(slot) = std::min(a, p.depth);
+    p.depth = std::max(0.0, p.depth - a);
+  }
+}
+
 // Collision detection and the contact penalty forces of state s, into the workspace's lists.
 void collect_contact_forces(const WorldData& d, const World& w, const State& s, ForceWorkspace::Impl& ws,
                             bool with_forces) {
@@ -143,13 +166,17 @@ void collect_contact_forces(const WorldData& d, const World& w, const State& s, 
   ws.contact_f.clear();
   ws.stats = StepStats{};
   const WorldOptions& o = w.options();
+  // Rest overlaps: the tolerance of each overlapping vertex, shrunk below to its current depth.
+  const Eigen::VectorXd& allowance = current_overlap(d, s);
+  ws.overlap.setZero(allowance.size());
   if (!o.collisions || d.bodies.empty()) return;
   const int rows = d.rows;
   ws.X_all.topRows(rows) = s.x;
   const std::vector<Contact> contacts = ws.hash->find(ws.X_all, d.T_all, d.filter, o.parallel.detection_tets);
   ws.stats.contacts = static_cast<int>(contacts.size());
   if (contacts.empty()) return;
-  const std::vector<Penetration> pens = penetration_depths(d.scene, ws.X_all, contacts, o.parallel.border_vertices);
+  std::vector<Penetration> pens = penetration_depths(d.scene, ws.X_all, contacts, o.parallel.border_vertices);
+  apply_overlap(d, allowance, pens, ws.overlap);
   ws.stats.colliding_vertices = static_cast<int>(pens.size());
   auto velocity = [&](int g) -> Vec3 { return g < rows ? Vec3(s.v.row(g).transpose()) : Vec3::Zero(); };
   auto add = [&](int row, const Vec3& f) {  // appended: applied in the order found
@@ -245,6 +272,7 @@ std::vector<Penetration> find_penetrations(const World& w, const State& s, Force
   ForceWorkspace::Impl& ws = workspace.impl();
   ws.fit(d);
   ws.stats = StepStats{};
+  ws.overlap.setZero(current_overlap(d, s).size());  // out of every other object: no tolerance left
   const WorldOptions& o = w.options();
   std::vector<Penetration> out;
   if (!o.collisions || d.bodies.empty()) return out;
@@ -253,6 +281,7 @@ std::vector<Penetration> find_penetrations(const World& w, const State& s, Force
   ws.stats.contacts = static_cast<int>(contacts.size());
   if (contacts.empty()) return out;
   std::vector<Penetration> pens = penetration_depths(d.scene, ws.X_all, contacts, o.parallel.border_vertices);
+  apply_overlap(d, current_overlap(d, s), pens, ws.overlap);
   ws.stats.colliding_vertices = static_cast<int>(pens.size());
   for (Penetration& p : pens)
     if (p.depth > 0) {

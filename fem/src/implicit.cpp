@@ -125,6 +125,7 @@ class ImplicitIntegrator : public TimeIntegrator {
   const char* name() const override { return "implicit"; }
   std::unique_ptr<TimeIntegrator> clone() const override { return std::make_unique<ImplicitIntegrator>(o_); }
   void step(const World& world, State& s, const RowMatrixX3d* external, ForceWorkspace& ws) override;
+  void reset() override { factor_h_ = 0; }
 
  private:
   void fit(const World& w);
@@ -244,7 +245,11 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
   // Contacts at x_n, the solve; contacts found at the result join and the solve goes on.
   contacts_.clear();
   State probe = s;
-  if (o.collisions) add_contacts(w, find_penetrations(w, probe, ws), xn_);
+  if (o.collisions) {
+    add_contacts(w, find_penetrations(w, probe, ws), xn_);  // depths beyond the rest overlaps
+    s.overlap = ws.overlap();                               // shrunk where vertices came out
+    probe.overlap = s.overlap;
+  }
   // The initial guess: the inertial target y (exact in free flight) or x_n + h v_n (exact at rest
   // and in equilibrium), whichever has the lower potential. Both come from the state alone.
   RowMatrixX3d x = y_;

@@ -112,9 +112,10 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
   if (j.contains("bounds")) s.bounds = c.box(j["bounds"], "bounds");
   if (j.contains("contact")) {
     const json& k = j["contact"];
-    c.keys(k, "contact", {"stiffness", "damping"});
+    c.keys(k, "contact", {"stiffness", "damping", "rest_overlap"});
     if (k.contains("stiffness")) s.contact_stiffness = c.non_negative(k["stiffness"], "contact.stiffness");
     if (k.contains("damping")) s.contact_damping = c.non_negative(k["damping"], "contact.damping");
+    if (k.contains("rest_overlap")) s.rest_overlap = c.boolean(k["rest_overlap"], "contact.rest_overlap");
   }
   if (j.contains("self_collision")) s.self_collision = c.boolean(j["self_collision"], "self_collision");
   // Blocks of later stages, validated there (plan/, render/).
@@ -405,6 +406,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
   wo.contact_stiffness = scene.contact_stiffness;
   wo.contact_damping = scene.contact_damping;
   wo.self_collision = scene.self_collision;
+  wo.rest_overlap = scene.rest_overlap;
   wo.cap_contact_stiffness = true;  // contact never sets the stable step
   wo.h = scene.time_step.value_or(1e-3);
   wo.integrator = scene.integrator;

@@ -30,6 +30,7 @@ void VerletIntegrator::step(const World& w, State& s, const RowMatrixX3d* extern
   const double h = w.time_step();
   damp_deformation(w, s, h);
   assemble_forces(w, s, external, ws, F_);
+  s.overlap = ws.overlap();  // rest overlaps shrunk where vertices came out (State::overlap)
   tbb::parallel_for(tbb::blocked_range<int>(0, d.rows, 512), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i != r.end(); ++i) {
       if (d.pinned[i]) {

@@ -274,6 +274,7 @@ State World::initial_state() const {
   s.v = RowMatrixX3d::Zero(d.rows, 3);
   for (int b = 0; b < bodies(); ++b)
     if (d.state_row[b] >= 0) s.x.middleRows(d.state_row[b], d.bodies[b].vertices()) = d.bodies[b].rest;
+  if (d.prepared) s.overlap = d.overlap_depths;
   return s;
 }
 
@@ -340,7 +341,32 @@ void World::prepare() {
   d.table = options_.table_size > 0 ? options_.table_size : next_prime(std::max(4 * nv_all, 97));
   d.version = ++g_version;
   d.prepared = true;
+  // Rest overlaps: the penetrations of the rest state, found with the contacts' own detection.
+  d.overlaps.clear();
+  d.overlap_depths.resize(0);
+  d.overlap_slot.assign(static_cast<size_t>(nv_all), -1);
+  if (options_.rest_overlap && options_.collisions && rows > 0) {
+    State rest;
+    rest.x.resize(rows, 3);
+    rest.v.setZero(rows, 3);
+    for (size_t b = 0; b < d.bodies.size(); ++b)
+      if (d.state_row[b] >= 0) rest.x.middleRows(d.state_row[b], d.bodies[b].vertices()) = d.bodies[b].rest;
+    ForceWorkspace ws;
+    const std::vector<Penetration> pens = find_penetrations(*this, rest, ws);
+    auto body_of = [&](int group) { return static_cast<int>(d.scene.bodies[group] - d.bodies.data()); };
+    for (const Penetration& p : pens)
+      d.overlaps.push_back({p.vertex, body_of(d.filter.vertex_group[p.vertex]), body_of(p.body), p.depth});
+    std::sort(d.overlaps.begin(), d.overlaps.end(),
+              [](const World::RestOverlap& a, const World::RestOverlap& b) { return a.vertex < b.vertex; });
+    d.overlap_depths.resize(static_cast<Eigen::Index>(d.overlaps.size()));
+    for (size_t k = 0; k < d.overlaps.size(); ++k) {
+      d.overlap_slot[d.overlaps[k].vertex] = static_cast<int>(k);
+      d.overlap_depths(static_cast<Eigen::Index>(k)) = d.overlaps[k].depth;
+    }
+  }
 }
+
+const std::vector<World::RestOverlap>& World::rest_overlaps() const { return data().overlaps; }
 
 void World::step(State& s, const RowMatrixX3d* external) {
   prepare();

@@ -49,6 +49,11 @@ struct WorldData {
   CollisionFilter filter;
   Eigen::MatrixX4i T_all;
   RowMatrixX3d X_rest_all;  // rest positions in the collision numbering (rigid rows stay so)
+  // Rest overlaps: collision vertices inside another object at rest, their rest depths, and per
+  // collision vertex its index in them (−1: none).
+  std::vector<World::RestOverlap> overlaps;
+  Eigen::VectorXd overlap_depths;
+  std::vector<int> overlap_slot;
   double cell = 1.0;        // spatial hash cell (m)
   int table = 97;           // spatial hash entries
 

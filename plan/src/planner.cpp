@@ -47,6 +47,7 @@ std::uint64_t state_hash(const fem::State& s) {
   };
   add(s.x.data(), static_cast<size_t>(s.x.size()));
   add(s.v.data(), static_cast<size_t>(s.v.size()));
+  add(s.overlap.data(), static_cast<size_t>(s.overlap.size()));  // nothing for scenes without rest overlaps
   return h;
 }
 

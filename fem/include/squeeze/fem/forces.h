@@ -5,7 +5,10 @@
 //       + floor penalty k_c (y_f − y) − c_c min(0, v_y) below the floor
 //       + contact penalty forces (k_c d − c_c (v_rel·r)) r of every colliding vertex (collision.h,
 //         Heidelberger 2004); a rigid vertex inside a deformable tet pushes back on that tet's
-//         corners with −(k_c d − c_c (v_rel·r)) r spread by its barycentric weights.
+//         corners with −(k_c d − c_c (v_rel·r)) r spread by its barycentric weights. d is the depth
+//         beyond the vertex's rest overlap (State::overlap; WorldOptions::rest_overlap): a vertex
+//         inside another object at rest is at rest there, and no force acts while it stays within
+//         that depth.
 // Every caller that needs forces uses it: the integrators (integrator.h), World::total_forces and
 // World::internal_forces, the metrics. Kernels of one element are in constraints.h.
 //
@@ -39,6 +42,9 @@ class ForceWorkspace {
   ForceWorkspace& operator=(ForceWorkspace&&) noexcept;
   /// What the last evaluation's collision pass found.
   const StepStats& stats() const;
+  /// The rest-overlap tolerances after the last evaluation (State::overlap, shrunk where a vertex
+  /// came out): an integrator stores them in the state it advances.
+  const Eigen::VectorXd& overlap() const;
 
   struct Impl;
   Impl& impl() { return *impl_; }
@@ -68,7 +74,9 @@ void assemble_forces(const World& world, const State& s, const RowMatrixX3d* ext
 void detect_contacts(const World& world, const State& s, ForceWorkspace& ws);
 
 /// The collision pass of state s: every colliding vertex with a penetration depth > 0
-/// (collision.h, Penetration), in detection order; ws.stats() as detect_contacts. Indices are in
+/// (collision.h, Penetration), in detection order; ws.stats() as detect_contacts. Depths are
+/// beyond the vertex's rest-overlap tolerance (State::overlap; ws.overlap() gets the shrunk
+/// tolerances). Indices are in
 /// the world's collision numbering: vertex and tet-corner indices below world.state_rows() are
 /// state rows, the others rigid vertices (collision_vertex_positions gives every position).
 std::vector<Penetration> find_penetrations(const World& world, const State& s, ForceWorkspace& ws);

@@ -76,6 +76,7 @@ struct Scene {
   std::optional<Eigen::AlignedBox3d> bounds;  // m; default: derived (see build_scene)
   double contact_stiffness = 1e5;          // N/m per penetrating vertex (objects and floor)
   double contact_damping = 10.0;           // N·s/m along the contact normal while penetrating
+  bool rest_overlap = true;                // overlaps at rest are the contacts' rest state (WorldOptions::rest_overlap)
   bool self_collision = true;
   std::vector<SceneObject> objects;
   std::optional<SceneGoal> goal;

@@ -13,13 +13,18 @@ struct State {
   RowMatrixX3d x;     // #N by 3 positions (m)
   RowMatrixX3d v;     // #N by 3 velocities (m/s)
   double time = 0.0;  // s
+  // Rest overlaps (WorldOptions::rest_overlap): per vertex that overlaps another object at rest
+  // (World::overlap_vertices), the penetration depth its contact tolerates now (m). It starts at
+  // the rest depth and only shrinks: to the current depth while the vertex stays inside, to 0 once
+  // it is out. Empty when no vertex overlaps at rest.
+  Eigen::VectorXd overlap;
 };
 
 /// What the last collision pass found (World::last_stats, ForceWorkspace::stats).
 struct StepStats {
   int contacts = 0;            // (vertex, tet) pairs found by the spatial hash
   int colliding_vertices = 0;  // vertices given a penetration depth
-  double max_depth = 0.0;      // m
+  double max_depth = 0.0;      // m, beyond the rest overlap a vertex may keep (State::overlap)
 };
 
 }  // namespace squeeze::fem

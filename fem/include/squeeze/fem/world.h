@@ -55,6 +55,12 @@ struct WorldOptions {
   bool self_collision = true;                      // ... and within a deformable object
   double contact_stiffness = 1e5;                  // N/m, k_c of the penalty force k_c·d·r (also the floor)
   double contact_damping = 0.0;                    // N·s/m, along r, only while penetrating (also the floor)
+  // true: an overlap of two objects (or of two parts of one) present at rest is the contact's rest
+  // state: the penalty acts on the penetration beyond each vertex's rest depth, a tolerance that
+  // shrinks as the vertex comes out (State::overlap) and is gone once it is out, so touching
+  // objects neither explode at t = 0 nor stay interpenetrated once they move apart. false: every
+  // penetration is penalised from the start.
+  bool rest_overlap = true;
   // true: vertex i of object b gets the contact coefficients times min(1, m_i ω_b² / k_c), ω_b² =
   // the largest of b's vertex_frequency_bounds (body.h; the object's highest elastic frequency):
   // a light vertex (small tets) is never made stiffer by contact than the stiffest
@@ -112,8 +118,18 @@ class World {
   /// The gravity acceleration acting on object b (m/s²): options().gravity, or zero if Body::gravity is false.
   Eigen::Vector3d gravity_of(int b) const;
 
-  /// Rest positions, zero velocities, time 0.
+  /// Rest positions, zero velocities, time 0, the rest overlaps (State::overlap).
   State initial_state() const;
+  /// A vertex that overlaps another object (or another part of its own) at rest.
+  struct RestOverlap {
+    int vertex = -1;     // collision numbering: state rows, then the rigid objects' vertices
+    int body = -1;       // the object it belongs to
+    int penetrated = -1; // the object it is inside
+    double depth = 0;    // m, its penetration depth at rest (its contact's tolerance, State::overlap)
+  };
+  /// Every vertex inside another object at rest, in State::overlap's order (empty with
+  /// WorldOptions::rest_overlap false). prepare() first.
+  const std::vector<RestOverlap>& rest_overlaps() const;
 
   /// Advances s by one step h with the world's integrator. external: #N by 3 forces (N) per state
   /// row, or null. Throws InputError if s or external has the wrong number of rows.

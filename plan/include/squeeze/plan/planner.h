@@ -134,7 +134,7 @@ void check_planning_inputs(const fem::SceneWorld& world);
 PlanningProblem planning_problem(const fem::SceneWorld& world, const PlannerOptions& options,
                                  PropagatorFactory make_propagator = {});
 
-/// FNV-1a 64 of the bytes of s.x and s.v (to check a replay against the tree).
+/// FNV-1a 64 of the bytes of s.x, s.v and s.overlap (to check a replay against the tree).
 std::uint64_t state_hash(const fem::State& s);
 
 /// Plans in a built scene from its initial state with the planner of options.algorithm.

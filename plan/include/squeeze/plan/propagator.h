@@ -80,7 +80,9 @@ int goal_object_index(const fem::Scene& scene);
 /// Throws InputError "FILE: objects[i].transform: the robot starts inside NAME (…)" if, at rest, a
 /// vertex of the robot's coarse mesh lies strictly inside a tetrahedron of another object or a
 /// vertex of another object strictly inside a robot tetrahedron (barycentric coordinates all
-/// > 1e-9), or the robot starts below the floor or outside the bounds.
+/// > 1e-9) — with rest overlaps on (contact.rest_overlap, the default) only if more than a fifth of
+/// the vertices of either object are inside the other (a touching overlap is a contact at rest) —
+/// or the robot starts below the floor or outside the bounds.
 void check_robot_start(const fem::SceneWorld& world);
 
 }  // namespace squeeze::plan

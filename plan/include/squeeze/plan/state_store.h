@@ -19,9 +19,22 @@ class StateStore {
     for (int b = 0; b < w.bodies(); ++b)
       if (w.first_state_row(b) >= 0) objects_.push_back({w.first_state_row(b), w.body(b).vertices()});
   }
-  /// The blocks of s; a block equal to the parent's (if given) is shared, not copied.
+  /// The blocks of s; a block equal to the parent's (if given) is shared, not copied. The rest
+  /// overlaps (State::overlap), if any, are one more block after the objects'.
   Blocks store(const fem::State& s, const Blocks* parent) {
     Blocks blocks;
+    auto keep = [&](const double* p, size_t n, size_t o) {
+      if (parent && o < parent->size()) {
+        const std::vector<double>& q = *(*parent)[o];
+        if (q.size() == n && std::memcmp(q.data(), p, n * sizeof(double)) == 0) {
+          blocks.push_back((*parent)[o]);
+          return;
+        }
+      }
+      auto blk = std::make_shared<std::vector<double>>(p, p + n);
+      bytes_ += n * sizeof(double);
+      blocks.push_back(std::move(blk));
+    };
     for (size_t o = 0; o < objects_.size(); ++o) {
       const Rows r = objects_[o];
       const size_t n = static_cast<size_t>(r.count) * 3;
@@ -40,6 +53,7 @@ class StateStore {
       bytes_ += 2 * n * sizeof(double);
       blocks.push_back(std::move(blk));
     }
+    if (s.overlap.size() > 0) keep(s.overlap.data(), static_cast<size_t>(s.overlap.size()), objects_.size());
     return blocks;
   }
   /// Writes the blocks into s (whose rows and shape must be the world's) and sets its time.
@@ -50,6 +64,10 @@ class StateStore {
       const std::vector<double>& b = *blocks[o];
       std::memcpy(s.x.data() + static_cast<size_t>(r.first) * 3, b.data(), n * sizeof(double));
       std::memcpy(s.v.data() + static_cast<size_t>(r.first) * 3, b.data() + n, n * sizeof(double));
+    }
+    if (blocks.size() > objects_.size()) {
+      const std::vector<double>& o = *blocks[objects_.size()];
+      s.overlap = Eigen::Map<const Eigen::VectorXd>(o.data(), static_cast<Eigen::Index>(o.size()));
     }
     s.time = time;
   }
