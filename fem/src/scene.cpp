@@ -318,7 +318,9 @@ double stable_time_step(const World& world) {
     for (int i = 0; i < B.vertices(); ++i) {
       const double m = world.masses()(r0 + i), cs = world.contact_scale(r0 + i);
       if (!(m > 0)) continue;
-      const double w2 = w2e(i) + cs * o.contact_stiffness / m, gamma = ge(i) + cs * o.contact_damping / m;
+      double w2 = w2e(i) + cs * o.contact_stiffness / m, gamma = ge(i) + cs * o.contact_damping / m;
+      const double ka = world.attachment_stiffness(r0 + i), ca = world.attachment_damping(r0 + i);
+      if (ka > 0 || ca > 0) w2 += ka / m, gamma += ca / m;
       const double d = gamma + std::sqrt(gamma * gamma + 4 * w2);
       if (d > 0) h = std::min(h, 2.0 / d);
     }
@@ -369,16 +371,21 @@ TimeStepChoice auto_time_step(const World& world, const Scene& scene) {
       const double m = world.masses()(r0 + i), cs = world.contact_scale(r0 + i);
       if (!(m > 0)) continue;
       const double w2c = cs * o.contact_stiffness / m;
-      const double w2 = w2e(i) + w2c, gamma = ge(i) + cs * o.contact_damping / m;
+      double w2 = w2e(i) + w2c, gamma = ge(i) + cs * o.contact_damping / m;
+      const double ka = world.attachment_stiffness(r0 + i), ca = world.attachment_damping(r0 + i);
+      const double w2a = ka / m;
+      if (ka > 0 || ca > 0) w2 += w2a, gamma += ca / m;
       const double d = gamma + std::sqrt(gamma * gamma + 4 * w2);
       if (d > 0 && 2.0 / d < c.h) {
         c.h = 2.0 / d;
         c.object = b;
-        // The stiffer of elasticity and contact at this vertex; "and damping" where the damping
-        // rate exceeds the frequency (2 / h = γ + sqrt(γ² + 4ω²) is then well above 2ω).
-        c.term = std::string(w2e(i) >= w2c ? "elastic" : "contact") + (gamma > std::sqrt(w2) ? " and damping" : "");
+        // The stiffest of elasticity, contact and a soft attachment at this vertex; "and damping"
+        // where the damping rate exceeds the frequency (2 / h = γ + sqrt(γ² + 4ω²) is then well above 2ω).
+        const char* stiffest = w2e(i) >= w2c && w2e(i) >= w2a ? "elastic" : w2c >= w2a ? "contact" : "attachment";
+        c.term = std::string(stiffest) + (gamma > std::sqrt(w2) ? " and damping" : "");
         c.detail = "vertex " + std::to_string(i) + ": ω " + short_number(std::sqrt(w2)) + " rad/s (elastic " +
-                   short_number(std::sqrt(w2e(i))) + ", contact " + short_number(std::sqrt(w2c)) + "), damping rate γ " +
+                   short_number(std::sqrt(w2e(i))) + ", contact " + short_number(std::sqrt(w2c)) +
+                   (ka > 0 ? ", attachment " + short_number(std::sqrt(w2a)) : std::string()) + "), damping rate γ " +
                    short_number(gamma) + " 1/s";
       }
     }

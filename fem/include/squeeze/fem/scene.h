@@ -111,7 +111,7 @@ meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bo
 struct TimeStepChoice {
   double h = 0;          // s
   int object = -1;       // the object that sets it, or -1 (the frame interval, or no deformable object)
-  std::string term;      // Verlet: "elastic", "contact" or "damping" (the stability bound of that term at the
+  std::string term;      // Verlet: "elastic", "contact" or "attachment" (+ " and damping") (the stability bound of that term at the
                          // object's stiffest vertex); implicit: "frame interval" or "initial speed"
   std::string detail;    // numbers behind it, one phrase
   /// One line: "0.0333 s (implicit: the frame interval 1/30 s)", "8.2e-05 s (verlet: elastic stability of 'ball', ...)".
@@ -147,10 +147,11 @@ class SceneWorld {
 };
 
 /// The largest stable explicit step (s) of a world's deformable objects (estimate): for every
-/// vertex i, ω² = ω_i² + k_c,i / m_i and γ = γ_i + c_c,i / m_i, with ω_i², γ_i the element-by-element
-/// bounds of vertex_frequency_bounds (body.h: Σ over the vertex's edges and tets of
-/// k Σ_k |∂C/∂p_k|² / m_k, and the same with the damping coefficients), k_c,i, c_c,i the vertex's
-/// contact stiffness and damping (World::contact_scale) and m the masses (mass scaling included);
+/// vertex i, ω² = ω_i² + k_c,i / m_i + k_a,i / m_i and γ = γ_i + c_c,i / m_i + c_a,i / m_i, with ω_i², γ_i
+/// the element-by-element bounds of vertex_frequency_bounds (body.h: Σ over the vertex's edges and
+/// tets of k Σ_k |∂C/∂p_k|² / m_k, and the same with the damping coefficients), k_c,i, c_c,i the
+/// vertex's contact stiffness and damping (World::contact_scale), k_a,i, c_a,i its soft attachment's
+/// (World::attach) and m the masses (mass scaling included);
 /// h = min over vertices of 2 / (γ + sqrt(γ² + 4ω²)), at most 1e-3 s. That is half the exact limit
 /// of a damped oscillator under the symplectic Euler step, (hω)² + 2hγ <= 4 (1/ω without damping,
 /// 1/γ when overdamped). Returns 1e-3 with no deformable object.
@@ -158,7 +159,7 @@ double stable_time_step(const World& world);
 
 /// The automatic time step of `world` for its integrator:
 ///  * verlet: stable_time_step, and which vertex term is the tightest (elastic ω², contact k_c/m,
-///    damping γ);
+///    attachment k_a/m, damping γ);
 ///  * implicit: chosen for accuracy, not stability: one frame interval (kImplicitFrameInterval), or
 ///    less where an object's initial speed would carry it more than half its mean edge length in
 ///    one step (h ≤ ½ L / |v0|). Within a step, the integrator's motion substeps (implicit.h) keep
