@@ -142,6 +142,7 @@ Runner add_plan_command(CLI::App& app, const Global& global) {
     const fem::Scene scene = load_scene_with(a.scene, a.integrator);
     const PreparedPlanning prep = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
     const plan::PlannerOptions& options = prep.options;
+    print_scene_warnings(prep.world, options.max_volume_change);  // squeeze check's warnings
     const plan::PlanResult r = plan::plan(prep.world, options, &progress);
 
     const plan::PlanFile f = plan::make_plan_file(scene, options, r);

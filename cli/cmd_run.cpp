@@ -82,6 +82,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     const long long builds_before = fem::scene_builds();
     const PreparedPlanning prep = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
     const plan::PlannerOptions& options = prep.options;
+    print_scene_warnings(prep.world, options.max_volume_change);  // squeeze check's warnings
     seconds.emplace_back("meshing", since(t));
     const fs::path out = a.output;
     std::error_code ec;

@@ -64,6 +64,14 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
     Progress progress(!global.quiet);
     fem::Scene scene = load_scene_with(a.scene, a.integrator);
     fem::SceneWorld w = fem::build_scene(scene, &progress);
+    {
+      std::optional<double> limit;  // the planner block is not simulate's to validate: no limit if it is bad
+      try {
+        limit = scene_volume_limit(w);
+      } catch (const InputError&) {
+      }
+      print_scene_warnings(w, limit);  // squeeze check's warnings
+    }
     const double interval = 1.0 / a.fps;
     const int substeps = std::max(1, static_cast<int>(std::ceil(interval / w.time_step() - 1e-9)));
     const double h = interval / substeps;

@@ -23,6 +23,7 @@ Runner add_replay_command(CLI::App& app, const Global& global);  // cmd_plan.cpp
 Runner add_render_command(CLI::App& app, const Global& global);  // cmd_render.cpp
 Runner add_run_command(CLI::App& app, const Global& global);     // cmd_run.cpp (squeeze run)
 Runner add_bench_command(CLI::App& app, const Global& global);   // cmd_bench.cpp (squeeze bench table1)
+Runner add_check_command(CLI::App& app, const Global& global);   // cmd_check.cpp (squeeze check)
 
 /// Exit codes.
 constexpr int kExitOk = 0;

@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   const Runner render = add_render_command(app, global);
   const Runner bench = add_bench_command(app, global);
   const Runner run = add_run_command(app, global);
+  const Runner check = add_check_command(app, global);
 
   try {
     app.parse(argc, argv);
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
       if (sub->get_name() == "render") return render();
       if (sub->get_name() == "bench") return bench();
       if (sub->get_name() == "run") return run();
+      if (sub->get_name() == "check") return check();
     }
   } catch (const squeeze::InputError& e) {
     std::fprintf(stderr, "squeeze: error: %s\n", e.what());

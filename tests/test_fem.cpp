@@ -988,3 +988,96 @@ TEST(FemWorld, GravityIsPerBody) {
   for (int k = 0; k < 100; ++k) w.step(s);
   EXPECT_LT((s.x.topRows(n0) - w.body(0).rest).cwiseAbs().maxCoeff(), 1e-12);
 }
+
+// ---- Soft attachments (issue 18): zero-length springs to the rest position ----
+
+namespace {
+
+// A 10 cm cube (2 cells per axis, 27 vertices) under gravity, no floor, every vertex attached to its
+// rest position with stiffness k and damping c: at equilibrium the attachments carry the weight,
+// Σ_i k (y0_i − y_i) = M g (internal forces sum to zero), so the mean sag is M g / (N k) exactly.
+World attached_cube(const std::string& integrator, double k, double c) {
+  WorldOptions o;
+  o.integrator = integrator;
+  o.collisions = false;
+  World w(o);
+  Material m;
+  m.k_distance = m.k_volume = 20;
+  m.damping_distance = m.damping_volume = 0.01;
+  m.deformation_damping = 20;
+  w.add_body(Body(box_tet_mesh(Vector3d::Zero(), Vector3d::Constant(0.1), Eigen::Vector3i::Constant(2)), m));
+  for (int i = 0; i < w.state_rows(); ++i) w.attach(i, k, c);
+  return w;
+}
+
+double mean_sag(const World& w, const State& s) {
+  double sag = 0;
+  for (int i = 0; i < w.state_rows(); ++i) sag += w.body(0).rest(i, 1) - s.x(i, 1);
+  return sag / w.state_rows();
+}
+
+}  // namespace
+
+TEST(FemAttachment, SettledSagIsWeightOverStiffnessWithVerlet) {
+  const double k = 200, c = 1.0;
+  World w = attached_cube("verlet", k, c);
+  EXPECT_EQ(w.attachment_stiffness(5), k);
+  EXPECT_EQ(w.attachment_damping(5), c);
+  w.set_time_step(stable_time_step(w));
+  State s = w.initial_state();
+  for (int n = 0; n < static_cast<int>(3.0 / w.time_step()); ++n) w.step(s);
+  const double M = w.masses().sum(), expected = M * 9.81 / (w.state_rows() * k);
+  EXPECT_GT(expected, 1e-3);  // a visible sag (1.8 mm)
+  EXPECT_NEAR(mean_sag(w, s), expected, 1e-3 * expected);
+  EXPECT_LT(s.v.cwiseAbs().maxCoeff(), 1e-5);  // settled
+  // The force of the one assembly at the settled state: the attachments cancel gravity.
+  RowMatrixX3d F;
+  w.total_forces(s, nullptr, F);
+  EXPECT_LT(F.colwise().sum().norm(), 1e-6 * M * 9.81);
+}
+
+// The attachment's k / m and c / m enter the per-vertex frequency bound: a stiff attachment on
+// light vertices lowers the automatic step, the Verlet step at that bound stays stable, and a step
+// well above it (2.5×, beyond the exact limit 2 / ω of the attachment's oscillation) diverges.
+TEST(FemAttachment, StableStepCountsTheAttachmentAndKeepsVerletStable) {
+  World free_cube = attached_cube("verlet", 0, 0);
+  const double h_elastic = stable_time_step(free_cube);
+  const double k = 3e8;  // ω = sqrt(k / m) about 6 times the cube's highest elastic frequency
+  World w = attached_cube("verlet", k, 0);
+  const double h = stable_time_step(w);
+  const double m_max = w.masses().maxCoeff();
+  EXPECT_LT(h, h_elastic / 5);                     // the attachment sets it
+  EXPECT_LE(h, std::sqrt(m_max / k) * (1 + 1e-12));  // ... below 1/ω of the heaviest vertex's spring
+  World c = attached_cube("verlet", k, 0);
+  Scene sc;
+  sc.objects.resize(1);
+  sc.objects[0].name = "cube";
+  EXPECT_EQ(auto_time_step(c, sc).term, "attachment");
+  auto run = [&](double step) {
+    World x = attached_cube("verlet", k, 0);
+    x.set_time_step(step);
+    State s = x.initial_state();
+    const State s0 = s;
+    s.x.col(1).array() += 1e-3;  // displaced: the springs oscillate
+    double worst = 0;
+    for (int n = 0; n < 3000; ++n) {
+      x.step(s);
+      if (!s.x.allFinite()) return 1e300;
+      worst = std::max(worst, (s.x - s0.x).cwiseAbs().maxCoeff());
+    }
+    return worst;
+  };
+  EXPECT_LT(run(h), 2e-3);   // bounded by the initial displacement (plus a little sag)
+  EXPECT_GT(run(2.5 * h), 1.0);  // diverges
+}
+
+TEST(FemAttachment, BadCoefficientsAndRowsAreRefused) {
+  World w = attached_cube("verlet", 1, 0);
+  EXPECT_THROW(w.attach(-1, 1), InputError);
+  EXPECT_THROW(w.attach(w.state_rows(), 1), InputError);
+  EXPECT_THROW(w.attach(0, -1), InputError);
+  EXPECT_THROW(w.attach(0, 1, std::nan("")), InputError);
+  w.attach(0, 2, 3);  // adds
+  EXPECT_EQ(w.attachment_stiffness(0), 3);
+  EXPECT_EQ(w.attachment_damping(0), 3);
+}

@@ -418,4 +418,31 @@ TEST(FemWorld, RestOverlapRelaxesAsObjectsSeparate) {
     EXPECT_TRUE(same_bits(s.x, t.x));
     EXPECT_TRUE(same_bits(s.v, t.v));
   }
+
+// Soft attachments (issue 18) in the incremental potential: a cube whose every vertex is held by a
+// zero-length spring k settles with the mean sag M g / (N k) (the attachments carry the weight),
+// at the frame interval 1/30 s as with Verlet at its small step.
+TEST(FemImplicit, SoftAttachmentsSettleAtWeightOverStiffness) {
+  WorldOptions o;
+  o.integrator = "implicit";
+  o.h = 1.0 / 30;
+  o.collisions = false;
+  World w(o);
+  Material m;
+  m.k_distance = m.k_volume = 20;
+  m.damping_distance = m.damping_volume = 0.01;
+  m.deformation_damping = 20;
+  w.add_body(Body(box_tet_mesh(Vector3d::Zero(), Vector3d::Constant(0.1), Eigen::Vector3i::Constant(2)), m));
+  const double k = 200, c = 1.0;
+  for (int i = 0; i < w.state_rows(); ++i) w.attach(i, k, c);
+  w.set_integrator(implicit_with(1e-6));
+  State s = w.initial_state();
+  for (int n = 0; n < 90; ++n) w.step(s);  // 3 s
+  double sag = 0;
+  for (int i = 0; i < w.state_rows(); ++i) sag += w.body(0).rest(i, 1) - s.x(i, 1);
+  sag /= w.state_rows();
+  const double expected = w.masses().sum() * 9.81 / (w.state_rows() * k);
+  EXPECT_NEAR(sag, expected, 1e-3 * expected);
+  EXPECT_LT(s.v.cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_EQ(w.integrator().stats().not_converged, 0);
 }

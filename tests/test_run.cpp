@@ -162,3 +162,92 @@ TEST(RunCli, BuildsTheSceneWorldOnce) {
   EXPECT_NE(err.find("built the scene's world 1 time (planning, replay and metrics use copies)"), std::string::npos)
       << err;
 }
+
+// ---- squeeze check (issue 18) ----
+
+// Every bundled scene: exit 0, a row per object, the scene's time step, and the JSON report the same.
+TEST(CheckCli, EveryBundledSceneChecksAndPrintsEveryObject) {
+  const sqt::TempDir tmp("check-all");
+  const fs::path& d = tmp.path();
+  int scenes = 0;
+  for (const auto& e : fs::directory_iterator(kScenes)) {
+    if (e.path().extension() != ".json") continue;
+    ++scenes;
+    SCOPED_TRACE(e.path().filename().string());
+    const fs::path report = d / (e.path().stem().string() + ".check.json");
+    const sqt::RunResult r = sqt::run_squeeze({"-q", "check", e.path().string(), "--json", report.string()}, d, 600);
+    ASSERT_EQ(r.code, 0) << r.err << r.out;
+    EXPECT_EQ(r.err, "");  // -q: nothing on stderr
+    const nlohmann::json scene = read_json(e.path());
+    const nlohmann::json j = read_json(report);
+    ASSERT_EQ(j["objects"].size(), scene["objects"].size());
+    for (size_t i = 0; i < scene["objects"].size(); ++i) {
+      const std::string name = scene["objects"][i]["name"];
+      EXPECT_EQ(j["objects"][i]["name"], name);
+      EXPECT_GT(j["objects"][i]["tets"].get<int>(), 0);
+      EXPECT_NE(r.out.find("\n  " + name + " "), std::string::npos) << "no row for " << name << "\n" << r.out;
+      if (j["objects"][i]["kind"] == "deformable") {
+        EXPECT_GT(j["objects"][i]["mass"].get<double>(), 0);
+        EXPECT_GT(j["objects"][i]["time_step_alone"]["h"].get<double>(), 0);
+      }
+    }
+    EXPECT_NE(r.out.find("time step "), std::string::npos);
+    EXPECT_GT(j["time_step"]["h"].get<double>(), 0);
+    // The warnings of stdout are the JSON's.
+    for (const auto& w : j["warnings"]) EXPECT_NE(r.out.find("warning: " + w.get<std::string>()), std::string::npos);
+    if (j["warnings"].empty()) EXPECT_NE(r.out.find("no warnings"), std::string::npos);
+  }
+  EXPECT_GE(scenes, 7);
+}
+
+// A robot starting inside an obstacle and an object below the floor are warnings of check (exit 0)
+// and of simulate (on stderr before it starts; not with -q); bad scenes stay one-line errors.
+TEST(CheckCli, WarnsAboutARobotInsideAnObstacleAndObjectsBelowTheFloor) {
+  const sqt::TempDir tmp("check-warn");
+  const fs::path& d = tmp.path();
+  nlohmann::json inside = barriers1();
+  inside["objects"][0]["transform"]["translate"] = {-0.6, 0.5, 0.0};  // in plate_a
+  std::ofstream(d / "inside.json") << inside.dump(2);
+  sqt::RunResult r = sqt::run_squeeze({"check", (d / "inside.json").string()}, d, 600);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("warning: objects[0] 'robot': the robot starts inside 'plate_a'"), std::string::npos) << r.out;
+  // plan refuses it (an error, as before).
+  std::string err;
+  EXPECT_EQ(run(d, {"plan", (d / "inside.json").string(), "-o", (d / "p.json").string()}, &err), 1);
+
+  nlohmann::json low = read_json(kScenes + "cube_drop.json");
+  low["objects"][0]["mesh"] = kScenes + low["objects"][0]["mesh"].get<std::string>();
+  low["objects"][0]["transform"]["translate"] = {0, 0.09, 0};  // the 20 cm cube reaches 1 cm below the floor
+  std::ofstream(d / "low.json") << low.dump(2);
+  r = sqt::run_squeeze({"check", (d / "low.json").string()}, d, 600);
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::string below = "objects[0] 'cube': ";
+  EXPECT_NE(r.out.find("warning: " + below), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("start below the floor (y = 0 m), the deepest by 0.01 m"), std::string::npos) << r.out;
+  // The unchanged scene has no such warning.
+  r = sqt::run_squeeze({"check", kScenes + "cube_drop.json"}, d, 600);
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.out.find("below the floor"), std::string::npos) << r.out;
+
+  // simulate prints the warnings (spdlog, one line each) before it starts; -q does not.
+  r = sqt::run_squeeze({"simulate", (d / "low.json").string(), "--duration", "0.1", "--fps", "10", "-o", (d / "sim").string()},
+                       d, 600);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("squeeze: warning: " + (d / "low.json").string() + ": " + below), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("below the floor"), std::string::npos) << r.err;
+  r = sqt::run_squeeze({"-q", "simulate", (d / "low.json").string(), "--duration", "0.1", "--fps", "10", "-o",
+                        (d / "sim2").string()},
+                       d, 600);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+
+  // A bad scene: one line, exit 1, no report.
+  nlohmann::json bad = low;
+  bad["objects"][0]["pinned"] = {{{"near", {5, 5, 5}}, {"radius", 0.1}}};
+  std::ofstream(d / "bad.json") << bad.dump(2);
+  r = sqt::run_squeeze({"check", (d / "bad.json").string(), "--json", (d / "bad.check.json").string()}, d, 600);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("bad.json: objects[0].pinned[0].near: holds no vertex of 'cube' at rest"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(d / "bad.check.json"));
+}

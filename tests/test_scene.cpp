@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <regex>
 
 #include "meshing_test_util.h"
 #include "squeeze/common/error.h"
@@ -284,6 +285,172 @@ TEST_F(SceneTest, EveryTetFormatIsLoadedAsItIsNotMeshed) {
       }
     }
   EXPECT_FALSE(fs::exists(dir_->path() / "cache")) << "a tet mesh went to the mesher";
+}
+
+// ---- Pins from the surface, soft attachments, material presets (issue 18) ----
+
+// A generated 1 m box [-0.5, 0.5]³ with 4 cells per axis: vertices on the grid {-0.5, -0.25, 0, 0.25, 0.5}³.
+fs::path grid_box(const fs::path& dir) {
+  const fs::path p = dir / "grid.mesh";
+  squeeze::meshing::save_tet_mesh(p, box_tet_mesh(Eigen::Vector3d::Constant(-0.5), Eigen::Vector3d::Constant(0.5),
+                                                  Eigen::Vector3i::Constant(4)));
+  return p;
+}
+
+// The rows a world holds: pinned ones and softly attached ones.
+std::vector<int> pinned_rows(const World& w) {
+  std::vector<int> r;
+  for (int i = 0; i < w.state_rows(); ++i)
+    if (w.pinned(i)) r.push_back(i);
+  return r;
+}
+std::vector<int> attached_rows(const World& w) {
+  std::vector<int> r;
+  for (int i = 0; i < w.state_rows(); ++i)
+    if (w.attachment_stiffness(i) > 0) r.push_back(i);
+  return r;
+}
+
+TEST_F(SceneTest, EachPinKindSelectsItsVertices) {
+  grid_box(dir_->path());
+  // A triangle 5 cm beside the face x = 0.5 of the object "surf" (translated by 3 m: the surface is
+  // in world coordinates), covering y, z >= -0.6 with y + z <= 0.
+  std::ofstream(dir_->path() / "stump.off") << "OFF\n3 1 0\n3.55 -0.6 -0.6\n3.55 0.6 -0.6\n3.55 -0.6 0.6\n3 0 1 2\n";
+  const fs::path p = write("pins.json", R"({"floor": null, "objects": [
+    {"name": "near", "mesh": "grid.mesh", "pinned": [{"near": [0.5, 0.5, 0.5], "radius": 0.3}]},
+    {"name": "surf", "mesh": "grid.mesh", "transform": {"translate": [3, 0, 0]},
+     "pinned": [{"surface": "stump.off", "distance": 0.06, "stiffness": 50, "damping": 0.5}]},
+    {"name": "box", "mesh": "grid.mesh", "transform": {"translate": [-3, 0, 0]},
+     "pinned": [{"box": {"min": [-4, 0.4, -1], "max": [-2, 1, 1]}, "stiffness": 20}]}]})");
+  const Scene scene = load_scene(p);
+  ASSERT_EQ(scene.objects[1].pinned.size(), 1u);
+  EXPECT_EQ(scene.objects[1].pinned[0].kind, ScenePin::Kind::surface);
+  EXPECT_EQ(scene.objects[1].pinned[0].surface, dir_->path() / "stump.off");
+  const SceneWorld w = build_scene(scene);
+  // Expected sets, computed from the rest positions independently.
+  std::vector<int> near, surf, box;
+  for (int b = 0; b < 3; ++b) {
+    const Body& B = w.world.body(b);
+    const int r0 = w.world.first_state_row(b);
+    for (int v = 0; v < B.vertices(); ++v) {
+      const Eigen::Vector3d x = B.rest.row(v).transpose();
+      if (b == 0 && (x - Eigen::Vector3d(0.5, 0.5, 0.5)).norm() <= 0.3) near.push_back(r0 + v);
+      if (b == 1 && std::abs(x.x() - 3.5) < 1e-12 && x.y() + x.z() <= 1e-12) surf.push_back(r0 + v);
+      if (b == 2 && x.y() >= 0.4) box.push_back(r0 + v);
+    }
+  }
+  EXPECT_EQ(near.size(), 4u);   // the corner and its 3 grid neighbours (√2 · 0.25 > 0.3)
+  EXPECT_EQ(surf.size(), 15u);  // face x = 0.5: the 15 of 25 grid points with y + z <= 0
+  EXPECT_EQ(box.size(), 25u);   // the top face
+  EXPECT_EQ(pinned_rows(w.world), near);  // hard
+  std::vector<int> soft = surf;
+  soft.insert(soft.end(), box.begin(), box.end());
+  EXPECT_EQ(attached_rows(w.world), soft);  // soft, with their coefficients
+  EXPECT_EQ(w.world.attachment_stiffness(surf[0]), 50.0);
+  EXPECT_EQ(w.world.attachment_damping(surf[0]), 0.5);
+  EXPECT_EQ(w.world.attachment_stiffness(box[0]), 20.0);
+  EXPECT_EQ(w.world.attachment_damping(box[0]), 0.0);
+  ASSERT_EQ(w.pin_counts.size(), 3u);
+  EXPECT_EQ(w.pin_counts[0], std::vector<int>{4});
+  EXPECT_EQ(w.pin_counts[1], std::vector<int>{15});
+  // pinned_vertices is what build_scene used.
+  EXPECT_EQ(pinned_vertices(w.world.body(0), scene.objects[0].pinned[0]).size(), 4u);
+  // A surface 0.05 m from the face holds nothing at distance 0.04: an error naming the key.
+  const fs::path q = write("far.json", R"({"objects": [{"name": "c", "mesh": "grid.mesh",
+    "pinned": [{"box": {"min": [-1, -1, -1], "max": [1, -0.4, 1]}}, {"surface": "stump.off", "distance": 0.04}]}]})");
+  std::ofstream(dir_->path() / "stump.off") << "OFF\n3 1 0\n0.55 -0.6 -0.6\n0.55 0.6 -0.6\n0.55 -0.6 0.6\n3 0 1 2\n";
+  try {
+    build_scene(load_scene(q));
+    FAIL() << "no error";
+  } catch (const squeeze::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(q.string() + ": objects[0].pinned[1].surface: holds no vertex of 'c' at rest"),
+              std::string::npos)
+        << e.what();
+  }
+  const fs::path r = write("nearnone.json", R"({"objects": [{"name": "c", "mesh": "grid.mesh",
+    "pinned": [{"near": [2, 2, 2], "radius": 0.5}]}]})");
+  try {
+    build_scene(load_scene(r));
+    FAIL() << "no error";
+  } catch (const squeeze::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("objects[0].pinned[0].near: holds no vertex of 'c' at rest"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST_F(SceneTest, MaterialPresetsSetTheDocumentedValuesAndKeysOverrideThem) {
+  ASSERT_GE(material_presets().size(), 5u);
+  const std::string readme = read_text(fs::path(SQUEEZE_SOURCE_DIR) / "scenes" / "README.md");
+  for (const char* name : {"liver", "lung", "heart", "fat", "rubber"}) {
+    SCOPED_TRACE(name);
+    const MaterialPreset* p = find_material_preset(name);
+    ASSERT_NE(p, nullptr);
+    const Scene s = load_scene(scene_file(std::string(R"({"objects": [{"name": "o", "mesh": "cube.mesh", "material": {"preset": ")") +
+                                          name + R"("}}]})"));
+    EXPECT_EQ(s.objects[0].preset, name);
+    EXPECT_EQ(s.objects[0].youngs_modulus, p->youngs_modulus);
+    EXPECT_EQ(s.objects[0].density, p->density);
+    EXPECT_TRUE(std::regex_search(std::string(p->source), std::regex("et al\\. (19|20)[0-9][0-9]"))) << "a preset cites its source";
+    EXPECT_NE(readme.find(std::string("`") + name + "`"), std::string::npos) << "documented in scenes/README.md";
+  }
+  // The documented numbers (scenes/README.md, "Material presets").
+  EXPECT_EQ(find_material_preset("liver")->youngs_modulus, 5.5e3);
+  EXPECT_EQ(find_material_preset("liver")->density, 1060);
+  EXPECT_EQ(find_material_preset("lung")->youngs_modulus, 4.5e3);
+  EXPECT_EQ(find_material_preset("lung")->density, 260);
+  EXPECT_EQ(find_material_preset("heart")->youngs_modulus, 2.5e4);
+  EXPECT_EQ(find_material_preset("fat")->youngs_modulus, 3e3);
+  EXPECT_EQ(find_material_preset("rubber")->youngs_modulus, 1.2e6);
+  // Explicit keys in the same block override the preset, whatever their order.
+  const Scene o = load_scene(scene_file(
+      R"({"objects": [{"name": "o", "mesh": "cube.mesh", "material": {"density": 900, "preset": "liver"}}]})"));
+  EXPECT_EQ(o.objects[0].density, 900);
+  EXPECT_EQ(o.objects[0].youngs_modulus, 5.5e3);
+  const Scene e = load_scene(scene_file(
+      R"({"objects": [{"name": "o", "mesh": "cube.mesh", "material": {"preset": "lung", "youngs_modulus": 2000}}]})"));
+  EXPECT_EQ(e.objects[0].youngs_modulus, 2000);
+  EXPECT_EQ(e.objects[0].density, 260);
+  // The preset's modulus reaches the stiffnesses: k_distance = E V / #edges.
+  const SceneWorld w = build_scene(e);
+  const Body& B = w.world.body(0);
+  EXPECT_NEAR(B.material.k_distance, 2000 * B.total_volume() / B.E.rows(), 1e-12);
+  EXPECT_NEAR(B.mass.sum() - B.added_mass, 260 * B.total_volume(), 1e-9);
+}
+
+TEST_F(SceneTest, BadPinsAndPresetsNameTheKeyPath) {
+  const std::string cube = R"("name": "cube", "mesh": "cube.mesh")";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"objects": [{)" + cube + R"(, "material": {"preset": "kidney"}}]})",
+       R"(objects[0].material.preset: unknown preset "kidney" (known: "liver", "lung", "heart", "fat", "rubber")"},
+      {R"({"objects": [{)" + cube + R"(, "material": {"preset": 3}}]})", "objects[0].material.preset: must be a string"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{}]}]})", "objects[0].pinned[0]: missing the vertices to hold"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radios": 1}]}]})",
+       "objects[0].pinned[0].radios: unknown key"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0]}]}]})", "objects[0].pinned[0].radius: missing"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 0}]}]})",
+       "objects[0].pinned[0].radius: must be > 0"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0], "radius": 1}]}]})", "objects[0].pinned[0].near: must be"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"box": {"min": [0, 0, 0], "max": [1, 1, 1]}, "radius": 1}]}]})",
+       "objects[0].pinned[0].radius: only with \"near\""},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"box": {"min": [0, 0, 0], "max": [1, 1, 1]}, "near": [0, 0, 0]}]}]})",
+       "objects[0].pinned[0]: holds one of"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"surface": "nope.off", "distance": 0.1}]}]})",
+       "objects[0].pinned[0].surface: file"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"surface": "cube.mesh"}]}]})", "objects[0].pinned[0].distance: missing"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "stiffness": -2}]}]})",
+       "objects[0].pinned[0].stiffness: must be > 0"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "damping": 2}]}]})",
+       "objects[0].pinned[0].damping: only for soft attachments"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "stiffness": 1, "damping": -1}]}]})",
+       "objects[0].pinned[0].damping: must be >= 0"},
+  };
+  for (const auto& [text, expected] : cases) {
+    const fs::path p = scene_file(text);
+    const std::string err = error_of(p);
+    EXPECT_NE(err.find(p.string() + ": "), std::string::npos) << text << "\n-> " << err;
+    EXPECT_NE(err.find(expected), std::string::npos) << text << "\n-> " << err;
+    EXPECT_EQ(err.find('\n'), std::string::npos) << err;
+  }
 }
 
 std::vector<std::string> split(const std::string& line) {

@@ -250,6 +250,7 @@ void assemble_forces(const World& w, const State& s, const RowMatrixX3d* externa
   const bool floor = terms.floor && o.floor;
   const double fy = o.floor_height;
   const bool contacts = terms.contacts;
+  const bool attached = terms.attachments && d.any_attached;
   F.resize(d.rows, 3);
   parallel_rows(d.rows, [&](int i) {
     Vec3 f = terms.internal ? gathered(d, ws.acc, i) : Vec3::Zero();
@@ -260,6 +261,9 @@ void assemble_forces(const World& w, const State& s, const RowMatrixX3d* externa
       f += e;
     }
     if (floor && s.x(i, 1) < fy) f.y() += d.contact_k(i) * (fy - s.x(i, 1)) - d.contact_c(i) * std::min(0.0, s.v(i, 1));
+    if (attached && (d.attach_k(i) > 0 || d.attach_c(i) > 0))  // zero-length spring to the rest position
+      f -= d.attach_k(i) * (Vec3(s.x.row(i).transpose()) - Vec3(d.X_rest_all.row(i).transpose())) +
+           d.attach_c(i) * Vec3(s.v.row(i).transpose());
     if (contacts)
       for (int id = ws.contact_head[i]; id >= 0; id = ws.contact_next[id]) f += ws.contact_f[id];
     F.row(i) = f.transpose();
@@ -289,6 +293,18 @@ std::vector<Penetration> find_penetrations(const World& w, const State& s, Force
       out.push_back(std::move(p));
     }
   return out;
+}
+
+int collision_vertex_body(const World& w, int g) {
+  const WorldData& d = w.data();
+  if (g < 0 || g >= static_cast<int>(d.filter.vertex_group.size())) return -1;
+  return static_cast<int>(d.scene.bodies[d.filter.vertex_group[g]] - d.bodies.data());
+}
+
+int collision_tet_body(const World& w, int tet) {
+  const WorldData& d = w.data();
+  if (tet < 0 || tet >= static_cast<int>(d.filter.tet_group.size())) return -1;
+  return static_cast<int>(d.scene.bodies[d.filter.tet_group[tet]] - d.bodies.data());
 }
 
 Eigen::Vector4i collision_tet(const World& w, int tet) { return w.data().T_all.row(tet).transpose(); }

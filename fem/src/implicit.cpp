@@ -378,6 +378,12 @@ double ImplicitIntegrator::potential(const World& w, const RowMatrixX3d& x, doub
         G += 0.5 * d.contact_c(i) / h * dy * dy;
       }
     }
+  if (d.any_attached)  // soft attachments: ½ k |x − x_rest|² + ½ (c / h) |x − x_n|²
+    for (int i : free_rows_) {
+      const double k = d.attach_k(i), c = d.attach_c(i);
+      if (k > 0) G += 0.5 * k * (x.row(i) - d.X_rest_all.row(i)).squaredNorm();
+      if (c > 0) G += 0.5 * c / h * (x.row(i) - xn_.row(i)).squaredNorm();
+    }
   return G;
 }
 
@@ -426,6 +432,9 @@ void ImplicitIntegrator::gradient(const World& w, const RowMatrixX3d& x, double 
       if (pen > 0) gi.y() -= d.contact_k(i) * pen;
       if (floor_damped_[i]) gi.y() += d.contact_c(i) / h * std::min(0.0, x(i, 1) - xn_(i, 1));
     }
+    if (d.any_attached && (d.attach_k(i) > 0 || d.attach_c(i) > 0))
+      gi += d.attach_k(i) * Vec3((x.row(i) - d.X_rest_all.row(i)).transpose()) +
+            d.attach_c(i) / h * Vec3((x.row(i) - xn_.row(i)).transpose());
     g.segment<3>(3 * static_cast<Eigen::Index>(f)) = gi;
   }
 }
@@ -480,6 +489,7 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
       if (x(i, 1) < o.floor_height) M(1, 1) += d.contact_k(i);
       if (floor_damped_[i] && x(i, 1) < xn_(i, 1)) M(1, 1) += d.contact_c(i) / h;
     }
+    if (d.any_attached) M.diagonal().array() += d.attach_k(i) + d.attach_c(i) / h;  // soft attachment
     H_.add_diag(static_cast<int>(f), M);
   }
   // An element's symmetric block matrix over its n vertices: diagonal blocks to the free vertices,

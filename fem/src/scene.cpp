@@ -21,6 +21,8 @@
 #include "squeeze/common/json_check.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/mesh_pipeline.h"
+#include "squeeze/meshing/point_triangle_distance.h"
+#include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_io.h"
 
 namespace squeeze::fem {
@@ -76,6 +78,49 @@ Eigen::Affine3d SceneTransform::affine() const {
   A.linear() = R * scale.asDiagonal();
   A.translation() = translate;
   return A;
+}
+
+const char* ScenePin::key() const {
+  switch (kind) {
+    case Kind::box: return "box";
+    case Kind::near: return "near";
+    case Kind::surface: return "surface";
+  }
+  return "?";
+}
+
+// Material presets (objects[].material.preset). Young's moduli are small-strain values of the
+// linear model; the sources, their methods and ranges are in scenes/README.md ("Material presets").
+// Elastography reports a shear modulus μ or E = 3μ (nearly incompressible tissue).
+const std::vector<MaterialPreset>& material_presets() {
+  static const std::vector<MaterialPreset> table = {
+      {"liver", 5.5e3, 1060,
+       "healthy human liver in vivo, transient elastography: E = 5.49 ± 1.59 kPa in 429 subjects (Roulot et al. 2008, "
+       "J Hepatol 48:606-613, PMID 18222014); density 1060 kg/m³ (Duck 1990, Physical Properties of Tissue)"},
+      {"lung", 4.5e3, 260,
+       "human lung parenchyma in vivo, MR elastography: shear stiffness 1.14 ± 0.14 kPa at residual volume, 1.83 ± 0.22 kPa "
+       "at total lung capacity, E = 3μ = 3.4-5.5 kPa (Mariappan et al. 2011, J Magn Reson Imaging 33:1351-1361); "
+       "density of inflated lung 260 kg/m³ (ICRP Publication 23, 1975; deflated 1050)"},
+      {"heart", 2.5e4, 1055,
+       "passive left-ventricular myocardium ex vivo, AFM indentation of intact mouse hearts: 21.4-27.4 kPa (Kossivas et al. "
+       "2013, Int J Nanotechnology, doi:10.1504/IJNT.2013.058565; 10-500 kPa by method: Emig et al. 2021, Biophys Rev "
+       "13:587-610, doi:10.1007/s12551-021-00838-1); density 1055 kg/m³ (Gheorghe et al. 2019, BMC Med Imaging, "
+       "doi:10.1186/s12880-019-0326-4)"},
+      {"fat", 3.0e3, 950,
+       "adipose tissue ex vivo, indentation at small strain: about 3 kPa, like fibroglandular tissue (Samani et al. 2007, "
+       "Phys Med Biol 52:1565, doi:10.1088/0031-9155/52/6/002); density 925-970 kg/m³ (Martin et al. 1994, Int J Obes "
+       "18:79-83)"},
+      {"rubber", 1.2e6, 950,
+       "vulcanised natural rubber: shear modulus about 0.4 MPa, E = 3μ (Treloar 1944 data, as fitted by Ogden et al. 2004, "
+       "Comput Mech 34:484-502, doi:10.1007/s00466-004-0593-y; MatWeb lists 0.5 MPa); density 950 kg/m³ (uncompounded)"},
+  };
+  return table;
+}
+
+const MaterialPreset* find_material_preset(const std::string& name) {
+  for (const MaterialPreset& p : material_presets())
+    if (name == p.name) return &p;
+  return nullptr;
 }
 
 int Scene::find(const std::string& name) const {
@@ -181,8 +226,19 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
     if (o.contains("material")) {
       const json& m = o["material"];
       const std::string q = p + ".material";
-      c.keys(m, q, {"density", "youngs_modulus", "k_distance", "k_volume", "damping", "volume_weighted", "mass_scaling",
-                    "deformation_damping"});
+      c.keys(m, q, {"preset", "density", "youngs_modulus", "k_distance", "k_volume", "damping", "volume_weighted",
+                    "mass_scaling", "deformation_damping"});
+      if (m.contains("preset")) {  // first: the explicit keys below override it
+        ob.preset = c.string(m["preset"], q + ".preset");
+        const MaterialPreset* preset = find_material_preset(ob.preset);
+        if (!preset) {
+          std::string list;
+          for (const MaterialPreset& x : material_presets()) list += (list.empty() ? "\"" : ", \"") + std::string(x.name) + "\"";
+          c.fail(q + ".preset", "unknown preset \"" + ob.preset + "\" (known: " + list + ")");
+        }
+        ob.density = preset->density;
+        ob.youngs_modulus = preset->youngs_modulus;
+      }
       if (m.contains("density")) ob.density = c.positive(m["density"], q + ".density");
       if (m.contains("youngs_modulus")) ob.youngs_modulus = c.positive(m["youngs_modulus"], q + ".youngs_modulus");
       if (m.contains("k_distance")) ob.k_distance = c.positive(m["k_distance"], q + ".k_distance");
@@ -204,9 +260,39 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
       if (!pins.is_array()) c.fail(p + ".pinned", "must be an array, got " + type_name(pins));
       for (size_t k = 0; k < pins.size(); ++k) {
         const std::string q = p + ".pinned[" + std::to_string(k) + "]";
-        c.keys(pins[k], q, {"box"});
-        if (!pins[k].contains("box")) c.fail(q + ".box", "missing (required)");
-        ob.pinned.push_back(c.box(pins[k]["box"], q + ".box"));
+        const json& e = pins[k];
+        c.keys(e, q, {"box", "near", "radius", "surface", "distance", "stiffness", "damping"});
+        ScenePin pin;
+        const int kinds = int(e.contains("box")) + int(e.contains("near")) + int(e.contains("surface"));
+        if (kinds != 1)
+          c.fail(q, kinds == 0 ? "missing the vertices to hold: one of \"box\", \"near\" (with \"radius\") or \"surface\" (with \"distance\")"
+                               : "holds one of \"box\", \"near\" or \"surface\", not several");
+        if (e.contains("radius") && !e.contains("near")) c.fail(q + ".radius", "only with \"near\"");
+        if (e.contains("distance") && !e.contains("surface")) c.fail(q + ".distance", "only with \"surface\"");
+        if (e.contains("box")) {
+          pin.kind = ScenePin::Kind::box;
+          pin.box = c.box(e["box"], q + ".box");
+        } else if (e.contains("near")) {
+          pin.kind = ScenePin::Kind::near;
+          pin.point = c.vec3(e["near"], q + ".near");
+          if (!e.contains("radius")) c.fail(q + ".radius", "missing (required with \"near\")");
+          pin.radius = c.positive(e["radius"], q + ".radius");
+        } else {
+          pin.kind = ScenePin::Kind::surface;
+          const std::string f = c.string(e["surface"], q + ".surface");
+          if (f.empty()) c.fail(q + ".surface", "must not be empty");
+          pin.surface = fs::path(f).is_absolute() ? fs::path(f) : base / f;
+          std::error_code ec;
+          if (!fs::is_regular_file(pin.surface, ec)) c.fail(q + ".surface", "file " + pin.surface.string() + " does not exist");
+          if (!e.contains("distance")) c.fail(q + ".distance", "missing (required with \"surface\")");
+          pin.distance = c.positive(e["distance"], q + ".distance");
+        }
+        if (e.contains("stiffness")) pin.stiffness = c.positive(e["stiffness"], q + ".stiffness");
+        if (e.contains("damping")) {
+          if (!pin.stiffness) c.fail(q + ".damping", "only for soft attachments (with \"stiffness\"); a hard pin never moves");
+          pin.damping = c.non_negative(e["damping"], q + ".damping");
+        }
+        ob.pinned.push_back(std::move(pin));
       }
       if (ob.rigid && !ob.pinned.empty()) c.fail(p + ".pinned", "a rigid object never moves: pins apply to deformable objects only");
     }
@@ -303,6 +389,62 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
   return std::move(r.tets);
 }
 
+std::vector<int> pinned_vertices(const Body& body, const ScenePin& pin) {
+  std::vector<int> held;
+  const RowMatrixX3d& X = body.rest;
+  const int n = body.vertices();
+  if (pin.kind == ScenePin::Kind::box) {
+    for (int v = 0; v < n; ++v)
+      if (pin.box.contains(X.row(v).transpose())) held.push_back(v);
+    return held;
+  }
+  if (pin.kind == ScenePin::Kind::near) {
+    for (int v = 0; v < n; ++v)
+      if ((X.row(v).transpose() - pin.point).norm() <= pin.radius) held.push_back(v);
+    return held;
+  }
+  // Surface: the triangles near the object, against a grid of its vertices (cells of at least
+  // the distance and the mean edge length: a triangle visits few cells, a cell holds few vertices).
+  const meshing::SurfaceMesh S = meshing::load_surface(pin.surface);
+  const double d = pin.distance;
+  const double cell = std::max(d, body.mean_edge_length() > 0 ? body.mean_edge_length() : d);
+  const Eigen::Vector3d lo = X.colwise().minCoeff().transpose(), hi = X.colwise().maxCoeff().transpose();
+  const Eigen::Vector3i dims = (((hi - lo) / cell).array().floor().cast<int>() + 1).matrix();
+  auto cell_of = [&](const Eigen::Vector3d& p) {
+    return ((p - lo) / cell).array().floor().cast<int>().max(0).min(dims.array() - 1).matrix().eval();
+  };
+  auto code = [&](const Eigen::Vector3i& c) { return (static_cast<long long>(c.z()) * dims.y() + c.y()) * dims.x() + c.x(); };
+  std::vector<std::pair<long long, int>> cells(static_cast<size_t>(n));  // (cell, vertex), sorted
+  for (int v = 0; v < n; ++v) cells[v] = {code(cell_of(X.row(v).transpose())), v};
+  std::sort(cells.begin(), cells.end());
+  std::vector<char> in(static_cast<size_t>(n), 0);
+  const Eigen::AlignedBox3d object(lo.array() - d, hi.array() + d);
+  for (Eigen::Index f = 0; f < S.F.rows(); ++f) {
+    const Eigen::Vector3d a = S.V.row(S.F(f, 0)).transpose(), b = S.V.row(S.F(f, 1)).transpose(),
+                          c = S.V.row(S.F(f, 2)).transpose();
+    Eigen::AlignedBox3d tb(a);
+    tb.extend(b).extend(c);
+    tb.min().array() -= d;
+    tb.max().array() += d;
+    if (!tb.intersects(object)) continue;
+    const Eigen::Vector3i c0 = cell_of(tb.min()), c1 = cell_of(tb.max());
+    for (int z = c0.z(); z <= c1.z(); ++z)
+      for (int y = c0.y(); y <= c1.y(); ++y)
+        for (int x = c0.x(); x <= c1.x(); ++x) {
+          const long long k = code(Eigen::Vector3i(x, y, z));
+          for (auto it = std::lower_bound(cells.begin(), cells.end(), std::make_pair(k, -1)); it != cells.end() && it->first == k; ++it) {
+            const int v = it->second;
+            if (in[v]) continue;
+            const Eigen::Vector3d p = X.row(v).transpose();
+            if (tb.contains(p) && meshing::point_triangle_distance(p, a, b, c) <= d) in[v] = 1;
+          }
+        }
+  }
+  for (int v = 0; v < n; ++v)
+    if (in[v]) held.push_back(v);
+  return held;
+}
+
 // γ_max / ω_max allowed to the default stiffness-proportional damping: a damped step of at least
 // a third of the undamped one (F − 1/F with F = 3).
 constexpr double kDampingStepCost = 8.0 / 3.0;
@@ -319,7 +461,9 @@ double stable_time_step(const World& world) {
     for (int i = 0; i < B.vertices(); ++i) {
       const double m = world.masses()(r0 + i), cs = world.contact_scale(r0 + i);
       if (!(m > 0)) continue;
-      const double w2 = w2e(i) + cs * o.contact_stiffness / m, gamma = ge(i) + cs * o.contact_damping / m;
+      double w2 = w2e(i) + cs * o.contact_stiffness / m, gamma = ge(i) + cs * o.contact_damping / m;
+      const double ka = world.attachment_stiffness(r0 + i), ca = world.attachment_damping(r0 + i);
+      if (ka > 0 || ca > 0) w2 += ka / m, gamma += ca / m;
       const double d = gamma + std::sqrt(gamma * gamma + 4 * w2);
       if (d > 0) h = std::min(h, 2.0 / d);
     }
@@ -370,16 +514,21 @@ TimeStepChoice auto_time_step(const World& world, const Scene& scene) {
       const double m = world.masses()(r0 + i), cs = world.contact_scale(r0 + i);
       if (!(m > 0)) continue;
       const double w2c = cs * o.contact_stiffness / m;
-      const double w2 = w2e(i) + w2c, gamma = ge(i) + cs * o.contact_damping / m;
+      double w2 = w2e(i) + w2c, gamma = ge(i) + cs * o.contact_damping / m;
+      const double ka = world.attachment_stiffness(r0 + i), ca = world.attachment_damping(r0 + i);
+      const double w2a = ka / m;
+      if (ka > 0 || ca > 0) w2 += w2a, gamma += ca / m;
       const double d = gamma + std::sqrt(gamma * gamma + 4 * w2);
       if (d > 0 && 2.0 / d < c.h) {
         c.h = 2.0 / d;
         c.object = b;
-        // The stiffer of elasticity and contact at this vertex; "and damping" where the damping
-        // rate exceeds the frequency (2 / h = γ + sqrt(γ² + 4ω²) is then well above 2ω).
-        c.term = std::string(w2e(i) >= w2c ? "elastic" : "contact") + (gamma > std::sqrt(w2) ? " and damping" : "");
+        // The stiffest of elasticity, contact and a soft attachment at this vertex; "and damping"
+        // where the damping rate exceeds the frequency (2 / h = γ + sqrt(γ² + 4ω²) is then well above 2ω).
+        const char* stiffest = w2e(i) >= w2c && w2e(i) >= w2a ? "elastic" : w2c >= w2a ? "contact" : "attachment";
+        c.term = std::string(stiffest) + (gamma > std::sqrt(w2) ? " and damping" : "");
         c.detail = "vertex " + std::to_string(i) + ": ω " + short_number(std::sqrt(w2)) + " rad/s (elastic " +
-                   short_number(std::sqrt(w2e(i))) + ", contact " + short_number(std::sqrt(w2c)) + "), damping rate γ " +
+                   short_number(std::sqrt(w2e(i))) + ", contact " + short_number(std::sqrt(w2c)) +
+                   (ka > 0 ? ", attachment " + short_number(std::sqrt(w2a)) : std::string()) + "), damping rate γ " +
                    short_number(gamma) + " 1/s";
       }
     }
@@ -466,20 +615,33 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     body->gravity = o.gravity;
     world.add_body(std::move(*body));
   }
-  // Pins: per object, on rest positions in world coordinates.
+  // Pins and soft attachments: per object, on rest positions in world coordinates.
+  std::vector<std::vector<int>> pin_counts(scene.objects.size());
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const SceneObject& o = scene.objects[i];
     const int b = static_cast<int>(i), r0 = world.first_state_row(b);
     for (size_t k = 0; k < o.pinned.size(); ++k) {
-      int n = 0;
-      for (int v = 0; v < world.body(b).vertices(); ++v)
-        if (o.pinned[k].contains(world.body(b).rest.row(v).transpose())) {
-          world.pin_vertex(r0 + v);
-          ++n;
-        }
-      if (n == 0)
-        throw InputError(file + ": objects[" + std::to_string(i) + "].pinned[" + std::to_string(k) +
-                         "].box: holds no vertex of '" + o.name + "' at rest");
+      const ScenePin& pin = o.pinned[k];
+      const std::string key = "objects[" + std::to_string(i) + "].pinned[" + std::to_string(k) + "]." + pin.key();
+      std::vector<int> held;
+      try {
+        held = pinned_vertices(world.body(b), pin);
+      } catch (const InputError& e) {
+        throw InputError(file + ": " + key + ": " + e.what());
+      }
+      if (held.empty()) {
+        std::string where;
+        if (pin.kind == ScenePin::Kind::near)
+          where = " (none within " + num(pin.radius) + " m of the point)";
+        else if (pin.kind == ScenePin::Kind::surface)
+          where = " (none within " + num(pin.distance) + " m of " + pin.surface.filename().string() + ")";
+        throw InputError(file + ": " + key + ": holds no vertex of '" + o.name + "' at rest" + where);
+      }
+      for (int v : held) {
+        if (pin.stiffness) world.attach(r0 + v, *pin.stiffness, pin.damping);
+        else world.pin_vertex(r0 + v);
+      }
+      pin_counts[i].push_back(static_cast<int>(held.size()));
     }
   }
   TimeStepChoice choice;
@@ -500,6 +662,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
   sw.time_step_choice = choice;
   sw.meshes = std::move(meshes);
   sw.rest_volume = std::move(rest_volume);
+  sw.pin_counts = std::move(pin_counts);
   if (scene.bounds) {
     sw.bounds = *scene.bounds;
   } else {

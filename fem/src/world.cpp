@@ -159,7 +159,9 @@ WorldData::WorldData(const WorldData& o)
       rows(o.rows),
       mass(o.mass),
       contact_scale(o.contact_scale),
-      pinned(o.pinned) {}
+      pinned(o.pinned),
+      attach_k(o.attach_k),
+      attach_c(o.attach_c) {}
 
 World::World(const WorldOptions& options)
     : options_(options), data_(std::make_shared<WorldData>()), integrator_(make_integrator(options.integrator)) {
@@ -217,6 +219,10 @@ int World::add_body(Body body) {
     d.mass.conservativeResize(rows + n);
     d.mass.segment(rows, n) = body.mass;
     d.pinned.resize(static_cast<size_t>(rows + n), 0);
+    d.attach_k.conservativeResize(rows + n);
+    d.attach_k.segment(rows, n).setZero();
+    d.attach_c.conservativeResize(rows + n);
+    d.attach_c.segment(rows, n).setZero();
     d.contact_scale.conservativeResize(rows + n);
     d.contact_scale.segment(rows, n).setOnes();
     if (options_.cap_contact_stiffness && options_.contact_stiffness > 0) {
@@ -248,6 +254,18 @@ void World::pin_vertex(int row) {
   if (row < 0 || row >= data_->rows) throw InputError("fem world: pinned row " + std::to_string(row) + " out of range");
   mutable_data().pinned[row] = 1;
 }
+
+void World::attach(int row, double stiffness, double damping) {
+  if (row < 0 || row >= data_->rows) throw InputError("fem world: attached row " + std::to_string(row) + " out of range");
+  if (!(stiffness >= 0) || !std::isfinite(stiffness) || !(damping >= 0) || !std::isfinite(damping))
+    throw InputError("fem world: attachment stiffness and damping must be finite and >= 0");
+  WorldData& d = mutable_data();
+  d.attach_k(row) += stiffness;
+  d.attach_c(row) += damping;
+}
+
+double World::attachment_stiffness(int row) const { return data_->attach_k(row); }
+double World::attachment_damping(int row) const { return data_->attach_c(row); }
 
 int World::bodies() const { return static_cast<int>(data_->bodies.size()); }
 const Body& World::body(int b) const { return data_->bodies[b]; }
@@ -290,6 +308,9 @@ void World::prepare() {
     d.contact_k(i) = options_.contact_stiffness * d.contact_scale(i);
     d.contact_c(i) = options_.contact_damping * d.contact_scale(i);
   }
+  d.any_attached = false;
+  for (int i = 0; i < rows; ++i)
+    if (!d.pinned[i] && (d.attach_k(i) > 0 || d.attach_c(i) > 0)) d.any_attached = true;
   d.gravity_off.assign(static_cast<size_t>(rows), 0);
   d.any_gravity_off = false;
   for (size_t b = 0; b < d.bodies.size(); ++b)

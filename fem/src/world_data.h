@@ -18,6 +18,9 @@ struct WorldData {
   Eigen::VectorXd mass;          // per state row (kg)
   Eigen::VectorXd contact_scale; // per state row, see World::contact_scale()
   std::vector<char> pinned;      // per state row
+  // Soft attachments (World::attach): per state row, the stiffness (N/m) and damping (N·s/m) of a
+  // zero-length spring to the row's rest position (X_rest_all.row(row)); 0 and 0: none.
+  Eigen::VectorXd attach_k, attach_c;
 
   // --- derived by prepare() ---
   bool prepared = false;
@@ -26,6 +29,7 @@ struct WorldData {
   Eigen::VectorXd contact_k, contact_c;  // per state row: contact stiffness and damping (contact_scale applied)
   std::vector<char> gravity_off; // per state row: its object has Body::gravity false
   bool any_gravity_off = false;
+  bool any_attached = false;     // some free row has a soft attachment (assemble_forces skips the term otherwise)
   // Elements of all deformable objects in groups, for the force pass. A group is the edges and
   // tets owned by a cluster of kClusterRows vertices (world.cpp) of one object, neighbours in
   // space (consecutive in the Morton order of the rest positions; an element belongs to the

@@ -3,6 +3,7 @@
 //   F = Σ distance and volume constraint forces (elastic + damping; constraints.h, Teschner 2004)
 //       + m g (objects with Body::gravity) + external forces
 //       + floor penalty k_c (y_f − y) − c_c min(0, v_y) below the floor
+//       + soft attachments −k_a (x − x_rest) − c_a v of the attached vertices (World::attach)
 //       + contact penalty forces (k_c d − c_c (v_rel·r)) r of every colliding vertex (collision.h,
 //         Heidelberger 2004); a rigid vertex inside a deformable tet pushes back on that tet's
 //         corners with −(k_c d − c_c (v_rel·r)) r spread by its barycentric weights. d is the depth
@@ -15,7 +16,9 @@
 // Summation order (fixed, so the results do not depend on the threads): per row, its element
 // groups' slots in group order; then gravity; then the external forces (with, for an object whose
 // gravity is off, the cancelling −m g added first: gravity is applied and cancelled, which keeps
-// the rounding of the plans made before); then the floor; then its contacts in detection order.
+// the rounding of the plans made before); then the floor; then its soft attachment (only in worlds
+// that have one: the sums of worlds without attachments are unchanged); then its contacts in
+// detection order.
 #pragma once
 #include <Eigen/Core>
 #include <memory>
@@ -60,7 +63,8 @@ struct ForceTerms {
   bool external = true;  // the `external` matrix
   bool floor = true;     // the floor penalty (if the world has a floor)
   bool contacts = true;  // collision detection and the contact penalty (if the world has collisions)
-  static ForceTerms internal_only() { return {true, false, false, false, false}; }
+  bool attachments = true;  // the soft attachments' springs (World::attach), summed after the floor
+  static ForceTerms internal_only() { return {true, false, false, false, false, false}; }
 };
 
 /// F = the forces (N) on every state row of `world` in state s, #N by 3 (pinned rows included:
@@ -69,6 +73,11 @@ struct ForceTerms {
 /// wrong number of rows; std::logic_error if the world is not prepared.
 void assemble_forces(const World& world, const State& s, const RowMatrixX3d* external, ForceWorkspace& ws,
                      RowMatrixX3d& F, const ForceTerms& terms = {});
+
+/// The object (index of World::body) of collision vertex g, and of collision tet `tet` (the
+/// numbering of find_penetrations).
+int collision_vertex_body(const World& world, int g);
+int collision_tet_body(const World& world, int tet);
 
 /// The collision pass alone: the contacts of state s in ws.stats(), no forces.
 void detect_contacts(const World& world, const State& s, ForceWorkspace& ws);

@@ -8,7 +8,8 @@
 //   v_{n+1} = (x − x_n) / h,
 //
 // E the elastic energies (constraints.h, eqs. 3–4) plus the penalty energies ½ k_c d² of the
-// contacts and the floor, D the dissipation potentials of the damping terms: for an element,
+// contacts and the floor and ½ k_a |x − x_rest|² of the soft attachments (World::attach), D the
+// dissipation potentials of the damping terms: for an attachment, ½ (c_a / h) |x − x_n|²; for an element,
 // ½ (k_d / h) (∇C(x_n)·(x − x_n))² (Teschner's damping force −k_d (∇C·v) ∇C with the gradient taken
 // at the start of the step); for a contact, ½ (c_c / h) (r·(Δx_p − Σ b_k Δx_k))²; for the floor,
 // ½ (c_c / h) min(0, Δy)². Contacts are detected at x_n and linearised there (depth

@@ -38,6 +38,41 @@ struct SceneTransform {
   Eigen::Affine3d affine() const;
 };
 
+/// One entry of objects[].pinned: which rest vertices it holds, and how. The vertices are those
+/// whose rest position (after the object's transform, m) lies
+///  * box:      in the world box `box`;
+///  * near:     within `radius` of the point `point`;
+///  * surface:  within `distance` of the triangle mesh in the file `surface` (any format
+///              meshing::load_surface reads, in the scene's world coordinates, m).
+/// Without stiffness they are pinned (never move); with one, each is held by a zero-length spring
+/// of that stiffness (N/m) and damping (N·s/m) to its rest position (World::attach).
+struct ScenePin {
+  enum class Kind { box, near, surface };
+  Kind kind = Kind::box;
+  Eigen::AlignedBox3d box;             // box: m
+  Eigen::Vector3d point{0, 0, 0};      // near: m
+  double radius = 0;                   // near: m, > 0
+  std::filesystem::path surface;       // surface: the mesh file (absolute: resolved against the scene's folder)
+  double distance = 0;                 // surface: m, > 0
+  std::optional<double> stiffness;     // N/m per vertex, > 0; empty: a hard pin
+  double damping = 0;                  // N·s/m per vertex, >= 0 (soft attachments only)
+  /// The key naming the selection in messages: "box", "near" or "surface".
+  const char* key() const;
+};
+
+/// A named material of objects[].material.preset: measured values of a tissue or material, with
+/// where they come from (scenes/README.md has the table and the sources).
+struct MaterialPreset {
+  const char* name;
+  double youngs_modulus;  // Pa
+  double density;         // kg/m³
+  const char* source;     // one line: measurement, range, citation
+};
+/// Every preset, in the order of the documentation ("liver", "lung", "heart", "fat", "rubber").
+const std::vector<MaterialPreset>& material_presets();
+/// The preset called `name`, or null.
+const MaterialPreset* find_material_preset(const std::string& name);
+
 /// One object of a scene, defaults filled in. Optional values left empty are derived from the
 /// mesh when the world is built (see scenes/README.md for the formulas).
 struct SceneObject {
@@ -47,8 +82,9 @@ struct SceneObject {
   bool rigid = false;                     // kind: "rigid" | "deformable" (default)
   int tets = 500;                         // meshing target (ignored when `mesh` is a tet mesh)
   SceneTransform transform;
-  double density = 1000.0;                // kg/m³
-  double youngs_modulus = 1e5;            // Pa, only used to derive the default stiffnesses
+  std::string preset;                     // material.preset ("" if none): it set density and youngs_modulus
+  double density = 1000.0;                // kg/m³ (material.density, else the preset's)
+  double youngs_modulus = 1e5;            // Pa, only used to derive the default stiffnesses (else the preset's)
   std::optional<double> k_distance;       // J, of an edge of average volume share; default youngs_modulus · V / #edges
   std::optional<double> k_volume;         // J, of a tet of average volume; default 3 · youngs_modulus · V / #tets
   std::optional<double> damping;          // J·s, both damping terms; default τ · k, τ = min(5 ms, (8/3) / ω_max)
@@ -57,7 +93,7 @@ struct SceneObject {
   double deformation_damping = 20.0;      // 1/s, Material::deformation_damping
   bool gravity = true;                    // false: gravity does not act on this object
   Eigen::Vector3d velocity{0, 0, 0};      // m/s, initial
-  std::vector<Eigen::AlignedBox3d> pinned;  // world boxes (m): vertices at rest inside are fixed
+  std::vector<ScenePin> pinned;           // pins and soft attachments of rest vertices
 };
 
 struct SceneGoal {
@@ -112,7 +148,7 @@ meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bo
 struct TimeStepChoice {
   double h = 0;          // s
   int object = -1;       // the object that sets it, or -1 (the frame interval, or no deformable object)
-  std::string term;      // Verlet: "elastic", "contact" or "damping" (the stability bound of that term at the
+  std::string term;      // Verlet: "elastic", "contact" or "attachment" (+ " and damping") (the stability bound of that term at the
                          // object's stiffest vertex); implicit: "frame interval" or "initial speed"
   std::string detail;    // numbers behind it, one phrase
   /// One line: "0.0333 s (implicit: the frame interval 1/30 s)", "8.2e-05 s (verlet: elastic stability of 'ball', ...)".
@@ -133,6 +169,7 @@ class SceneWorld {
   Eigen::AlignedBox3d bounds;         // scene bounds (given, or derived)
   std::vector<double> rest_volume;    // per object, m³
   TimeStepChoice time_step_choice;    // what chose the time step (h = the scene's time_step if it gives one)
+  std::vector<std::vector<int>> pin_counts;  // per object, per objects[].pinned entry: the vertices it holds
 
   SceneWorld(Scene s, World w) : scene(std::move(s)), world(std::move(w)) {}
   /// The time step (s): the world's.
@@ -147,11 +184,16 @@ class SceneWorld {
   RowMatrixX3d positions(const State& s, int b) const;
 };
 
+/// The vertices of `body` (rest positions, m) that the pin selects (ScenePin: box, near or surface),
+/// ascending. Throws InputError "PATH: problem" if the surface file cannot be loaded.
+std::vector<int> pinned_vertices(const Body& body, const ScenePin& pin);
+
 /// The largest stable explicit step (s) of a world's deformable objects (estimate): for every
-/// vertex i, ω² = ω_i² + k_c,i / m_i and γ = γ_i + c_c,i / m_i, with ω_i², γ_i the element-by-element
-/// bounds of vertex_frequency_bounds (body.h: Σ over the vertex's edges and tets of
-/// k Σ_k |∂C/∂p_k|² / m_k, and the same with the damping coefficients), k_c,i, c_c,i the vertex's
-/// contact stiffness and damping (World::contact_scale) and m the masses (mass scaling included);
+/// vertex i, ω² = ω_i² + k_c,i / m_i + k_a,i / m_i and γ = γ_i + c_c,i / m_i + c_a,i / m_i, with ω_i², γ_i
+/// the element-by-element bounds of vertex_frequency_bounds (body.h: Σ over the vertex's edges and
+/// tets of k Σ_k |∂C/∂p_k|² / m_k, and the same with the damping coefficients), k_c,i, c_c,i the
+/// vertex's contact stiffness and damping (World::contact_scale), k_a,i, c_a,i its soft attachment's
+/// (World::attach) and m the masses (mass scaling included);
 /// h = min over vertices of 2 / (γ + sqrt(γ² + 4ω²)), at most 1e-3 s. That is half the exact limit
 /// of a damped oscillator under the symplectic Euler step, (hω)² + 2hγ <= 4 (1/ω without damping,
 /// 1/γ when overdamped). Returns 1e-3 with no deformable object.
@@ -159,16 +201,17 @@ double stable_time_step(const World& world);
 
 /// The automatic time step of `world` for its integrator:
 ///  * verlet: stable_time_step, and which vertex term is the tightest (elastic ω², contact k_c/m,
-///    damping γ);
+///    attachment k_a/m, damping γ);
 ///  * implicit: chosen for accuracy, not stability: one frame interval (kImplicitFrameInterval), or
 ///    less where an object's initial speed would carry it more than half its mean edge length in
 ///    one step (h ≤ ½ L / |v0|). Within a step, the integrator's motion substeps (implicit.h) keep
 ///    every vertex's motion per substep below half an edge length whatever the speed it reaches.
 TimeStepChoice auto_time_step(const World& world, const Scene& scene);
 
-/// Meshes every object (through the cache), builds bodies, pins and the time step; the world is
-/// prepared (World::prepare), so copies share its rest data.
-/// Throws InputError "FILE: objects[i].KEY: problem" (e.g. a pin box that holds no vertex).
+/// Meshes every object (through the cache), builds bodies, pins, soft attachments and the time
+/// step; the world is prepared (World::prepare), so copies share its rest data.
+/// Throws InputError "FILE: objects[i].KEY: problem" (e.g. "objects[1].pinned[0].near: holds no
+/// vertex of 'liver' at rest", or a pin surface that cannot be loaded).
 SceneWorld build_scene(const Scene& scene, Progress* progress = nullptr);
 
 /// How many times build_scene has run in this process (a scene should be built once per command;

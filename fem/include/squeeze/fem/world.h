@@ -9,6 +9,7 @@
 //   World w(options);                        // h, gravity, floor, contact coefficients
 //   w.add_body(Body(mesh, material));        // deformable or rigid objects
 //   w.pin(box);                              // pinned vertices never move
+//   w.attach(row, 100.0, 1.0);               // or are held by a spring to their rest position
 //   State s = w.initial_state();
 //   for (...) w.step(s);                     // the integrator of options.integrator ("verlet")
 //
@@ -92,6 +93,17 @@ class World {
   int pin(const Eigen::AlignedBox3d& box);
   /// Pins one vertex (row of the state). Throws InputError if out of range.
   void pin_vertex(int row);
+  /// Soft attachment of one vertex (row of the state) to its rest position x0: a zero-length
+  /// spring with the force −stiffness (x − x0) − damping v (assemble_forces; the implicit
+  /// integrator takes the same term as the energy ½ k |x − x0|² and the dissipation ½ (c / h) |Δx|²).
+  /// Calling it again for a row adds to its coefficients (springs in parallel); a pinned row stays
+  /// pinned. stable_time_step counts k / m and c / m in the row's frequency bound.
+  ///   stiffness  N/m, >= 0;  damping  N·s/m, >= 0
+  /// Throws InputError if the row is out of range or a coefficient is negative or not finite.
+  void attach(int row, double stiffness, double damping = 0.0);
+  /// The soft attachment of a state row: stiffness (N/m) and damping (N·s/m), 0 if none.
+  double attachment_stiffness(int row) const;
+  double attachment_damping(int row) const;
   /// Builds the derived rest data now (element groups, collision numbering) instead of at the
   /// first step: copies made afterwards share it. Idempotent.
   void prepare();

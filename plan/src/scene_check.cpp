@@ -1,0 +1,247 @@
+#include "squeeze/plan/scene_check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+
+#include "squeeze/fem/forces.h"
+#include "squeeze/meshing/point_triangle_distance.h"
+
+namespace squeeze::plan {
+namespace {
+
+std::string g3(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
+std::string percent(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f %%", 100 * x);
+  return buf;
+}
+
+std::string who(const fem::Scene& scene, int b) {
+  return "objects[" + std::to_string(b) + "] '" + scene.objects[b].name + "'";
+}
+
+// Closest distance (m) from the boundary vertices of `a` to the boundary triangles of `b` (rest
+// positions); triangles whose bounding box is farther than the best so far are skipped.
+double boundary_distance(const fem::Body& a, const fem::Body& b) {
+  struct Tri { Eigen::Vector3d p[3]; Eigen::AlignedBox3d box; };
+  std::vector<Tri> tris(static_cast<size_t>(b.F.rows()));
+  for (Eigen::Index f = 0; f < b.F.rows(); ++f) {
+    Tri& t = tris[static_cast<size_t>(f)];
+    t.box.setEmpty();
+    for (int k = 0; k < 3; ++k) {
+      t.p[k] = b.rest.row(b.F(f, k)).transpose();
+      t.box.extend(t.p[k]);
+    }
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (int v = 0; v < a.vertices(); ++v) {
+    if (!a.on_boundary[static_cast<size_t>(v)]) continue;
+    const Eigen::Vector3d p = a.rest.row(v).transpose();
+    for (const Tri& t : tris) {
+      if (t.box.exteriorDistance(p) >= best) continue;
+      best = std::min(best, meshing::point_triangle_distance(p, t.p[0], t.p[1], t.p[2]));
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& options) {
+  const fem::Scene& scene = w.scene;
+  const fem::World& world = w.world;
+  SceneCheck out;
+  out.time_step = w.time_step_choice;
+  out.max_volume_change = options.max_volume_change;
+  const int nb = world.bodies();
+
+  // --- per object ---
+  for (int b = 0; b < nb; ++b) {
+    const fem::Body& B = world.body(b);
+    ObjectCheck o;
+    o.name = scene.objects[b].name;
+    o.robot = scene.objects[b].robot;
+    o.rigid = B.rigid;
+    o.tets = B.tets();
+    o.vertices = B.vertices();
+    o.volume = w.rest_volume[b];
+    if (static_cast<size_t>(b) < w.pin_counts.size()) o.pin_counts = w.pin_counts[b];
+    const int r0 = world.first_state_row(b);
+    if (r0 >= 0)
+      for (int v = 0; v < B.vertices(); ++v) {
+        o.mass += world.masses()(r0 + v);
+        if (world.pinned(r0 + v)) ++o.hard_pins;
+        else if (world.attachment_stiffness(r0 + v) > 0 || world.attachment_damping(r0 + v) > 0) ++o.soft_pins;
+      }
+    if (scene.floor)
+      for (int v = 0; v < B.vertices(); ++v)
+        if (B.rest(v, 1) < *scene.floor) {
+          ++o.below_floor;
+          o.below_floor_depth = std::max(o.below_floor_depth, *scene.floor - B.rest(v, 1));
+        }
+    if (options.details && r0 >= 0) {
+      // A world of this object alone: the same options, its pins and attachments.
+      fem::World alone(world.options());
+      alone.add_body(B);
+      for (int v = 0; v < B.vertices(); ++v) {
+        if (world.pinned(r0 + v)) alone.pin_vertex(v);
+        const double ka = world.attachment_stiffness(r0 + v), ca = world.attachment_damping(r0 + v);
+        if (ka > 0 || ca > 0) alone.attach(v, ka, ca);
+      }
+      fem::Scene sub = scene;
+      sub.objects = {scene.objects[b]};
+      o.time_step = fem::auto_time_step(alone, sub);
+    }
+    out.objects.push_back(std::move(o));
+  }
+
+  // --- rest overlaps: fem's collision pass on the initial state ---
+  std::map<std::pair<int, int>, OverlapCheck> pairs;
+  {
+    fem::ForceWorkspace ws;
+    const fem::State s0 = w.initial_state();
+    for (const fem::Penetration& p : fem::find_penetrations(world, s0, ws)) {
+      const int va = fem::collision_vertex_body(world, p.vertex), tb = fem::collision_tet_body(world, p.tet);
+      if (va < 0 || tb < 0) continue;
+      OverlapCheck& c = pairs[{std::min(va, tb), std::max(va, tb)}];
+      c.a = std::min(va, tb);
+      c.b = std::max(va, tb);
+      (va == c.a ? c.a_in_b : c.b_in_a) += 1;
+      c.depth = std::max(c.depth, p.depth);
+    }
+  }
+  for (int a = 0; a < nb; ++a)
+    for (int b = a + 1; b < nb; ++b) {
+      if (world.body(a).rigid && world.body(b).rigid) continue;  // never move, never interact
+      const bool robot_pair = scene.objects[a].robot || scene.objects[b].robot;
+      if (!options.details && !robot_pair) continue;
+      OverlapCheck& c = pairs[{a, b}];
+      c.a = a;
+      c.b = b;
+      if (!c.overlapping())
+        c.gap = std::min(boundary_distance(world.body(a), world.body(b)), boundary_distance(world.body(b), world.body(a)));
+    }
+  for (auto& [key, c] : pairs) out.overlaps.push_back(c);
+
+  // --- settle: a copy of the world, no control ---
+  if (options.settle > 0) {
+    fem::SceneWorld sim = w;
+    fem::State s = sim.initial_state();
+    const double h = sim.time_step();
+    const long long steps = std::min<long long>(20000, std::max<long long>(1, std::llround(std::ceil(options.settle / h - 1e-9))));
+    for (long long k = 0; k < steps && !out.settle_diverged; ++k) {
+      sim.step(s);
+      out.settle_diverged = !s.x.allFinite() || !s.v.allFinite() || (s.v.size() > 0 && !(s.v.cwiseAbs().maxCoeff() < 1e3));
+      if (out.settle_diverged) break;
+      for (int b = 0; b < nb; ++b) {
+        if (world.body(b).rigid) continue;
+        const double c = std::abs(world.body_volume(s, b) / w.rest_volume[b] - 1.0);
+        if (!(c <= out.objects[b].settle_volume_change)) out.objects[b].settle_volume_change = c;
+      }
+    }
+    out.settle = steps * h;
+  }
+
+  // --- warnings, in a fixed order: objects, pairs, robot and goal, settle ---
+  std::vector<std::string>& warn = out.warnings;
+  std::vector<int> robots;
+  for (int b = 0; b < nb; ++b)
+    if (scene.objects[b].robot) robots.push_back(b);
+  for (int b = 0; b < nb; ++b) {
+    const ObjectCheck& o = out.objects[b];
+    if (!o.rigid && o.below_floor > 0)
+      warn.push_back(who(scene, b) + ": " + std::to_string(o.below_floor) + " of its " + std::to_string(o.vertices) +
+                     " vertices start below the floor (y = " + g3(*scene.floor) + " m), the deepest by " +
+                     g3(o.below_floor_depth) + " m: the floor penalty pushes them up at once");
+    if (!o.rigid && o.hard_pins == o.vertices)
+      warn.push_back(who(scene, b) + ": its pins hold every vertex, so it never moves (make it \"kind\": \"rigid\")");
+    if (o.robot && (o.hard_pins > 0 || o.soft_pins > 0))
+      warn.push_back(who(scene, b) + ": the robot has " + std::to_string(o.hard_pins) + " pinned and " +
+                     std::to_string(o.soft_pins) + " softly attached vertices: the planner's forces work against them");
+    if (o.robot && o.rigid)
+      warn.push_back(who(scene, b) + ": the robot is rigid and never moves: squeeze plan refuses it");
+  }
+  for (const OverlapCheck& c : out.overlaps) {
+    if (c.a == c.b && c.overlapping()) {
+      warn.push_back(who(scene, c.a) + ": overlaps itself at rest (" + std::to_string(c.a_in_b) +
+                     " vertices inside its own tetrahedra, deepest " + g3(c.depth) +
+                     " m): self-collision pushes them apart at once; set \"self_collision\": false or mend the mesh");
+      continue;
+    }
+    const bool robot_pair = scene.objects[c.a].robot || scene.objects[c.b].robot;
+    const std::string counts = std::to_string(c.a_in_b) + " vertices of '" + scene.objects[c.a].name + "' inside '" +
+                               scene.objects[c.b].name + "', " + std::to_string(c.b_in_a) + " of '" +
+                               scene.objects[c.b].name + "' inside '" + scene.objects[c.a].name + "', deepest " +
+                               g3(c.depth) + " m";
+    if (c.overlapping() && robot_pair) {
+      const int r = scene.objects[c.a].robot ? c.a : c.b, other = r == c.a ? c.b : c.a;
+      warn.push_back(who(scene, r) + ": the robot starts inside '" + scene.objects[other].name + "' (" + counts +
+                     "): squeeze plan and run refuse to start");
+    } else if (c.overlapping()) {
+      warn.push_back(who(scene, c.a) + " and " + who(scene, c.b) + " overlap at rest (" + counts +
+                     "): the contact penalty pushes them apart at once, squeezing them");
+    } else if (robot_pair && c.gap >= 0) {
+      const int r = scene.objects[c.a].robot ? c.a : c.b, other = r == c.a ? c.b : c.a;
+      const double edge = world.body(r).mean_edge_length();
+      if (c.gap < 0.01 * edge)
+        warn.push_back(who(scene, r) + ": the robot starts touching '" + scene.objects[other].name + "' (gap " + g3(c.gap) +
+                       " m, below 1 % of its mean edge length " + g3(edge) + " m)");
+    }
+  }
+  if (robots.size() > 1) {
+    std::string names;
+    for (int r : robots) names += (names.empty() ? "'" : ", '") + scene.objects[r].name + "'";
+    warn.push_back("objects: " + std::to_string(robots.size()) + " robots (" + names + "): squeeze plan needs exactly one");
+  }
+  if (!robots.empty() && !scene.goal)
+    warn.push_back(who(scene, robots[0]) + " is the robot but the scene has no goal: squeeze plan and run need one");
+  if (robots.empty() && scene.goal)
+    warn.push_back("goal: the scene has a goal but no robot: squeeze plan and run need an object with \"role\": \"robot\"");
+  if (scene.goal) {
+    const Eigen::Vector3d& g = scene.goal->position;
+    if (!w.bounds.contains(g))
+      warn.push_back("goal.position: [" + g3(g.x()) + ", " + g3(g.y()) + ", " + g3(g.z()) +
+                     "] lies outside the bounds of the scene: squeeze plan refuses it");
+    if (scene.floor && g.y() < *scene.floor)
+      warn.push_back("goal.position: lies below the floor (y = " + g3(*scene.floor) + " m): no object can reach it");
+  }
+  if (scene.time_step && scene.integrator == "verlet") {
+    const fem::TimeStepChoice a = fem::auto_time_step(world, scene);
+    if (*scene.time_step > a.h * (1 + 1e-9))
+      warn.push_back("time_step: " + g3(*scene.time_step) + " s is " + g3(*scene.time_step / a.h) +
+                     " times the stable Verlet step estimated for the meshes (" + g3(a.h) + " s, " + a.term + " of '" +
+                     (a.object >= 0 ? scene.objects[a.object].name : std::string("?")) +
+                     "'): it may diverge; the estimate is conservative" +
+                     (out.settle > 0 && !out.settle_diverged ? " and the " + g3(out.settle) + " s settle did not diverge"
+                                                              : std::string()));
+  }
+  if (out.settle_diverged)
+    warn.push_back("the simulation diverges within " + g3(out.settle) + " s at the time step " + g3(w.time_step()) +
+                   " s: lower time_step or the stiffnesses");
+  if (out.max_volume_change && !out.settle_diverged) {
+    const double limit = *out.max_volume_change;
+    for (int b = 0; b < nb; ++b) {
+      const double c = out.objects[b].settle_volume_change;
+      if (out.objects[b].rigid) continue;
+      if (c >= limit)
+        warn.push_back(who(scene, b) + ": its volume changes by " + percent(c) + " within " + g3(out.settle) +
+                       " s without any control, beyond planner.max_volume_change (" + g3(100 * limit) + " %" +
+                       "): every expansion will be discarded");
+      else if (c >= 0.5 * limit)
+        warn.push_back(who(scene, b) + ": its volume changes by " + percent(c) + " within " + g3(out.settle) +
+                       " s without any control, more than half of planner.max_volume_change (" + g3(100 * limit) + " %" +
+                       "): many expansions will be discarded");
+    }
+  }
+  return out;
+}
+
+}  // namespace squeeze::plan
