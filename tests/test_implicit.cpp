@@ -418,6 +418,7 @@ TEST(FemWorld, RestOverlapRelaxesAsObjectsSeparate) {
     EXPECT_TRUE(same_bits(s.x, t.x));
     EXPECT_TRUE(same_bits(s.v, t.v));
   }
+}
 
 // Soft attachments (issue 18) in the incremental potential: a cube whose every vertex is held by a
 // zero-length spring k settles with the mean sag M g / (N k) (the attachments carry the weight),

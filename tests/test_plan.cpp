@@ -161,7 +161,7 @@ void expect_same_plan_with_one_and_two_threads(const std::string& integrator) {
   const fem::Scene scene = fem::load_scene(write_scene(d, mini_scene({{"integrator", integrator}})));
   PlannerOptions o = options_of(scene);
   o.iterations = 24;
-  o.seed = 5;
+  o.seed = 7;
   PlanResult one, two;
   {
     tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
@@ -186,7 +186,7 @@ void expect_same_plan_with_one_and_two_threads(const std::string& integrator) {
   }
   EXPECT_EQ(one.final_state_hash, two.final_state_hash);
   // Another seed gives another tree.
-  o.seed = 5;
+  o.seed = 8;
   const PlanResult other = squeeze::plan::plan(fem::build_scene(scene), o);
   EXPECT_NE(other.final_state_hash, one.final_state_hash);
 }

@@ -103,20 +103,24 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
     out.objects.push_back(std::move(o));
   }
 
-  // --- rest overlaps: fem's collision pass on the initial state ---
+  // --- rest overlaps: fem's collision pass on the rest state (World::rest_overlaps: the raw depths,
+  // which with contact.rest_overlap are the contacts' rest state; else a pass on the initial state) ---
   std::map<std::pair<int, int>, OverlapCheck> pairs;
-  {
+  auto count = [&](int va, int tb, double depth) {
+    if (va < 0 || tb < 0) return;
+    OverlapCheck& c = pairs[{std::min(va, tb), std::max(va, tb)}];
+    c.a = std::min(va, tb);
+    c.b = std::max(va, tb);
+    (va == c.a ? c.a_in_b : c.b_in_a) += 1;
+    c.depth = std::max(c.depth, depth);
+  };
+  if (world.options().rest_overlap) {
+    for (const fem::World::RestOverlap& o : world.rest_overlaps()) count(o.body, o.penetrated, o.depth);
+  } else {
     fem::ForceWorkspace ws;
     const fem::State s0 = w.initial_state();
-    for (const fem::Penetration& p : fem::find_penetrations(world, s0, ws)) {
-      const int va = fem::collision_vertex_body(world, p.vertex), tb = fem::collision_tet_body(world, p.tet);
-      if (va < 0 || tb < 0) continue;
-      OverlapCheck& c = pairs[{std::min(va, tb), std::max(va, tb)}];
-      c.a = std::min(va, tb);
-      c.b = std::max(va, tb);
-      (va == c.a ? c.a_in_b : c.b_in_a) += 1;
-      c.depth = std::max(c.depth, p.depth);
-    }
+    for (const fem::Penetration& p : fem::find_penetrations(world, s0, ws))
+      count(fem::collision_vertex_body(world, p.vertex), fem::collision_tet_body(world, p.tet), p.depth);
   }
   for (int a = 0; a < nb; ++a)
     for (int b = a + 1; b < nb; ++b) {
@@ -169,13 +173,19 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
     if (o.robot && o.rigid)
       warn.push_back(who(scene, b) + ": the robot is rigid and never moves: squeeze plan refuses it");
   }
+  const bool tolerant = world.options().rest_overlap;
+  auto diagonal = [](const fem::Body& B) { return (B.rest.colwise().maxCoeff() - B.rest.colwise().minCoeff()).norm(); };
   for (const OverlapCheck& c : out.overlaps) {
     if (c.a == c.b && c.overlapping()) {
       warn.push_back(who(scene, c.a) + ": overlaps itself at rest (" + std::to_string(c.a_in_b) +
-                     " vertices inside its own tetrahedra, deepest " + g3(c.depth) +
-                     " m): self-collision pushes them apart at once; set \"self_collision\": false or mend the mesh");
+                     " vertices inside its own tetrahedra, deepest " + g3(c.depth) + " m)" +
+                     (tolerant ? ": a contact at rest (contact.rest_overlap)"
+                               : ": self-collision pushes them apart at once; set \"self_collision\": false or mend the mesh"));
       continue;
     }
+    // As plan::check_robot_start: with rest overlaps, only an overlap deeper than a tenth of the
+    // smaller object's size is no contact at rest.
+    const bool deep = !tolerant || c.depth > 0.1 * std::min(diagonal(world.body(c.a)), diagonal(world.body(c.b)));
     const bool robot_pair = scene.objects[c.a].robot || scene.objects[c.b].robot;
     const std::string counts = std::to_string(c.a_in_b) + " vertices of '" + scene.objects[c.a].name + "' inside '" +
                                scene.objects[c.b].name + "', " + std::to_string(c.b_in_a) + " of '" +
@@ -183,11 +193,16 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
                                g3(c.depth) + " m";
     if (c.overlapping() && robot_pair) {
       const int r = scene.objects[c.a].robot ? c.a : c.b, other = r == c.a ? c.b : c.a;
-      warn.push_back(who(scene, r) + ": the robot starts inside '" + scene.objects[other].name + "' (" + counts +
-                     "): squeeze plan and run refuse to start");
+      if (deep)
+        warn.push_back(who(scene, r) + ": the robot starts inside '" + scene.objects[other].name + "' (" + counts +
+                       "): squeeze plan and run refuse to start");
+      else
+        warn.push_back(who(scene, r) + ": the robot touches '" + scene.objects[other].name + "' at rest (" + counts +
+                       "): a contact at rest (contact.rest_overlap); it pushes only deeper than that");
     } else if (c.overlapping()) {
-      warn.push_back(who(scene, c.a) + " and " + who(scene, c.b) + " overlap at rest (" + counts +
-                     "): the contact penalty pushes them apart at once, squeezing them");
+      warn.push_back(who(scene, c.a) + " and " + who(scene, c.b) + " overlap at rest (" + counts + ")" +
+                     (tolerant ? ": a contact at rest (contact.rest_overlap)"
+                               : ": the contact penalty pushes them apart at once, squeezing them"));
     } else if (robot_pair && c.gap >= 0) {
       const int r = scene.objects[c.a].robot ? c.a : c.b, other = r == c.a ? c.b : c.a;
       const double edge = world.body(r).mean_edge_length();
