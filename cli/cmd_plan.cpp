@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <memory>
 
+#include <spdlog/spdlog.h>
+
 #include "commands.h"
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
@@ -60,10 +62,15 @@ ReplayOutput write_replay(const fem::SceneWorld& world, const plan::PlanFile& f,
                           const std::string& output, double fps, int settle_steps, Progress& progress) {
   check_output_folder(output);
   const fem::Scene& scene = world.scene;
+  fem::SceneWorld at_h = world;  // the plan's time step (a copy: nothing rebuilt)
+  if (at_h.time_step() != f.time_step) at_h.set_time_step(f.time_step);
+  // The plan's start: the scene settled without control for its start_settle_steps; volume changes
+  // are measured against it, as the planner measured them.
+  const fem::State start = plan::settle_start_state(at_h, 0, nullptr, f.start_settle_steps);
   plan::PropagatorOptions po;
   po.stop_when_invalid = false;
-  plan::SimulationPropagator p(world, po);  // a copy of the built world
-  if (p.world().time_step() != f.time_step) p.world().set_time_step(f.time_step);
+  for (int b = 0; b < at_h.world.bodies(); ++b) po.reference_volume.push_back(at_h.world.body_volume(start, b));
+  plan::SimulationPropagator p(at_h, po);  // a copy of the built world
   const double h = f.time_step;
   for (size_t i = 0; i < f.path.size(); ++i)
     f.path[i].control.kind->validate(f.path[i].control, p.robot(),
@@ -86,21 +93,27 @@ ReplayOutput write_replay(const fem::SceneWorld& world, const plan::PlanFile& f,
   auto frame_step = [&](int k) { return std::llround(k / (fps * h)); };
   long long step = 0;
   int next = 1;
-  fem::State s0 = p.world().initial_state(), settled = s0;
-  writer.add_frame(s0, 0.0);
-  progress.stage("replaying", static_cast<double>(total));
-  p.on_step = [&](const fem::State& s, int) {
-    ++step;
+  const fem::State& s0 = start;
+  fem::State settled = s0;
+  // The summary's volume changes are those of the frames, against the start (frame 0): the numbers
+  // the volume plot shows (render::render_trajectory plots every frame against frame 0).
+  auto frame = [&](const fem::State& s, double t) {
     for (int b = 0; b < w.bodies(); ++b) {
       const double c = p.volume_change(s, b);
       if (!(c <= out.max_volume_change[b])) out.max_volume_change[b] = c;
     }
+    writer.add_frame(s, t);
+  };
+  frame(s0, 0.0);
+  progress.stage("replaying", static_cast<double>(total));
+  p.on_step = [&](const fem::State& s, int) {
+    ++step;
     if (step == total) settled = s;
-    while (next < out.frames && frame_step(next) <= step) writer.add_frame(s, next++ / fps);
+    while (next < out.frames && frame_step(next) <= step) frame(s, next++ / fps);
     progress.update(static_cast<double>(step));
   };
-  const std::vector<fem::State> ends = plan::replay(p, f.path, f.settle, settle_steps);
-  while (next < out.frames) writer.add_frame(settled, next++ / fps);  // rounding at the very end
+  const std::vector<fem::State> ends = plan::replay(p, s0, f.path, f.settle, settle_steps);
+  while (next < out.frames) frame(settled, next++ / fps);  // rounding at the very end
   progress.finish();
   writer.commit();
   out.hash = plan::state_hash(ends.empty() ? s0 : ends.back());
@@ -149,6 +162,16 @@ Runner add_plan_command(CLI::App& app, const Global& global) {
     plan::save_plan(a.output, f);
     if (!global.quiet) {
       const plan::PlanStatistics& s = r.stats;
+      if (s.discarded_volume > 0) {
+        std::string by;
+        for (size_t b = 0; b < s.discarded_volume_by_object.size(); ++b)
+          if (s.discarded_volume_by_object[b] > 0)
+            by += (by.empty() ? "" : ", ") + scene.objects[b].name + " " + std::to_string(s.discarded_volume_by_object[b]);
+        spdlog::warn("{}: {} expansions discarded for a volume change beyond planner.max_volume_change {:.3g} % "
+                     "(measured against the settled start; by object: {})",
+                     a.scene, s.discarded_volume, 100 * options.max_volume_change, by);
+      }
+      if (r.timed_out) spdlog::info("{}: planning stopped at --time-limit {:.3g} s", a.scene, a.time_limit);
       std::fprintf(stderr,
                    "squeeze: %s: %s after %d iterations (%d nodes, %d discarded: %d diverged, %d volume, %d bounds) "
                    "in %.1f s, %.1f it/s; distance to goal %.3g m (tolerance %.3g m); path of %zu segments, %.2f s; "

@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "meshing_test_util.h"
 #include "squeeze/fem/scene.h"
@@ -87,7 +89,37 @@ TEST(RunCli, WholePipelineOnBarriers1) {
   if (rc == 0) {
     EXPECT_EQ(s["status"], "solved");
     EXPECT_LT(s["final_distance"].get<double>(), 0.1);
-    for (const auto& [name, v] : s["max_volume_change"].items()) EXPECT_LT(v.get<double>(), 0.03) << name;
+    // The summary's figure is the plot's: the largest change of volume from the first frame (the
+    // settled start) over the frames of metrics.csv. The planner limits it along the path, 2.5 % in
+    // barriers1.json, checked every check_every steps (hence a little slack between checks); the
+    // final settle towards the goal is not part of the search and is not limited.
+    const nlohmann::json plan = read_json(out / "plan.json");
+    double path_seconds = 0;
+    for (const auto& seg : plan["path"]) path_seconds += seg["steps"].get<double>() * plan["time_step"].get<double>();
+    std::ifstream csv(out / "metrics.csv");
+    std::string header, line;
+    std::getline(csv, header);
+    std::vector<std::string> cols;
+    for (size_t a = 0, b; a <= header.size(); a = b + 1) {
+      b = std::min(header.find(',', a), header.size());
+      cols.push_back(header.substr(a, b - a));
+    }
+    const auto col = std::find(cols.begin(), cols.end(), "robot.volume_ratio") - cols.begin();
+    ASSERT_LT(col, static_cast<long>(cols.size()));
+    double first = 0, max_on_path = 0, max_from_start = 0;
+    for (int row = 0; std::getline(csv, line); ++row) {
+      std::vector<std::string> f;
+      for (size_t a = 0, b; a <= line.size(); a = b + 1) {
+        b = std::min(line.find(',', a), line.size());
+        f.push_back(line.substr(a, b - a));
+      }
+      const double r = std::stod(f[static_cast<size_t>(col)]);
+      if (row == 0) first = r;
+      max_from_start = std::max(max_from_start, std::abs(r / first - 1));
+      if (std::stod(f[0]) <= path_seconds) max_on_path = std::max(max_on_path, std::abs(r / first - 1));
+    }
+    EXPECT_NEAR(s["max_volume_change"]["robot"].get<double>(), max_from_start, 1e-6);
+    EXPECT_LT(max_on_path, 0.03);
   }
   // Nothing temporary left behind.
   for (const auto& e : fs::recursive_directory_iterator(out))

@@ -8,8 +8,10 @@ namespace squeeze::plan {
 PlanEvaluation evaluate_plan(const fem::SceneWorld& world, const PlannerOptions& options, Progress* progress) {
   PlanEvaluation e;
   e.result = plan(world, options, progress);
+  const fem::State start = settle_start_state(world, 0, nullptr, e.result.start_settle_steps);
   PropagatorOptions po;
   po.stop_when_invalid = false;
+  for (int b = 0; b < world.world.bodies(); ++b) po.reference_volume.push_back(world.world.body_volume(start, b));
   SimulationPropagator p(world, po);
   const fem::Scene& scene = world.scene;
   const fem::World& w = p.world().world;
@@ -26,7 +28,7 @@ PlanEvaluation evaluate_plan(const fem::SceneWorld& world, const PlannerOptions&
       if (!(c <= e.max_volume_change[k])) e.max_volume_change[k] = c;
     }
   };
-  const std::vector<fem::State> ends = replay(p, e.result.path, e.result.settle, e.result.settle_steps);
+  const std::vector<fem::State> ends = replay(p, start, e.result.path, e.result.settle, e.result.settle_steps);
   e.replay_matches = ends.size() == e.result.path_states.size();
   for (size_t i = 0; e.replay_matches && i < ends.size(); ++i) {
     const fem::State& a = ends[i];

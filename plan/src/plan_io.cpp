@@ -55,6 +55,7 @@ PlanFile make_plan_file(const fem::Scene& scene, const PlannerOptions& options, 
   f.path = r.path;
   f.settle = r.settle;
   f.settle_steps = r.settle_steps;
+  f.start_settle_steps = r.start_settle_steps;
   f.final_state_hash = r.final_state_hash;
   return f;
 }
@@ -79,6 +80,7 @@ void save_plan(const std::filesystem::path& file, const PlanFile& p) {
                   {"max_volume_change", o.max_volume_change},
                   {"interpolation_omega", o.interpolation_omega},
                   {"settle", o.settle},
+                  {"settle_start", o.settle_start},
                   {"batch", o.batch},
                   {"algorithm", o.algorithm}};
   for (const ControlKind* k : control_kinds()) j["planner"]["weights"][k->name()] = o.weights[k->name()];
@@ -88,6 +90,7 @@ void save_plan(const std::filesystem::path& file, const PlanFile& p) {
                      {"discarded", {{"diverged", s.discarded_diverged},
                                     {"volume", s.discarded_volume},
                                     {"bounds", s.discarded_bounds},
+                                    {"volume_by_object", s.discarded_volume_by_object},
                                     {"total", s.discarded_diverged + s.discarded_volume + s.discarded_bounds}}},
                      {"seconds", s.seconds},
                      {"iterations_per_second", s.seconds > 0 ? s.iterations / s.seconds : 0.0},
@@ -99,6 +102,7 @@ void save_plan(const std::filesystem::path& file, const PlanFile& p) {
   j["path"] = json::array();
   for (const PathSegment& seg : p.path) j["path"].push_back(control_json(seg.control, seg.steps, p.time_step));
   j["settle"] = control_json(p.settle, p.settle_steps, p.time_step);
+  j["start_settle_steps"] = p.start_settle_steps;
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016" PRIx64, p.final_state_hash);
   j["final_state_hash"] = hex;
@@ -134,6 +138,8 @@ PlanFile load_plan(const std::filesystem::path& file) {
     p.path.push_back(seg);
   }
   p.settle = read_control(c, j["settle"], "settle", &p.settle_steps);
+  if (j.contains("start_settle_steps"))
+    p.start_settle_steps = static_cast<int>(c.integer(j["start_settle_steps"], "start_settle_steps", 0, 1LL << 30));
   if (j.contains("seed")) p.options.seed = static_cast<std::uint64_t>(c.integer(j["seed"], "seed", 0, 1LL << 53));
   // The hash is what a replay is checked against: required, exactly 16 hexadecimal digits.
   if (!j.contains("final_state_hash"))

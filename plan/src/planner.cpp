@@ -5,6 +5,7 @@
 
 #include "squeeze/common/error.h"
 #include "squeeze/common/json_check.h"
+#include "squeeze/fem/integrator.h"
 
 namespace squeeze::plan {
 using json = nlohmann::json;
@@ -66,7 +67,10 @@ PlannerOptions planner_options(const fem::SceneWorld& w) {
   const json& j = scene.planner;
   if (!j.is_null()) {
     c.keys(j, "planner", {"algorithm", "iterations", "seed", "goal_bias", "t_min", "t_max", "max_force",
-                          "control_radius", "max_volume_change", "weights", "interpolation_omega", "settle", "batch"});
+                          "control_radius", "max_volume_change", "weights", "interpolation_omega", "settle", "batch",
+                          "settle_start"});
+    if (j.contains("settle_start") && !(j["settle_start"].is_string() && j["settle_start"] == "auto"))
+      o.settle_start = c.non_negative(j["settle_start"], "planner.settle_start");
     if (j.contains("algorithm")) {
       o.algorithm = c.string(j["algorithm"], "planner.algorithm");
       try {
@@ -142,6 +146,28 @@ void check_planning_inputs(const fem::SceneWorld& w) {
   check_robot_start(w);
 }
 
+fem::State settle_start_state(const fem::SceneWorld& w, double seconds, int* steps, int settle_steps) {
+  fem::SceneWorld copy = w;  // its own scratch and integrator
+  copy.world.integrator().reset();
+  fem::State s = copy.initial_state();
+  const double h = copy.time_step();
+  const bool automatic = settle_steps < 0 && seconds < 0;
+  const long long limit = settle_steps >= 0 ? settle_steps
+                          : std::llround(std::ceil((automatic ? kSettleStartMax : seconds) / h - 1e-9));
+  double movable = 0;  // kg of the free vertices
+  for (int i = 0; i < copy.world.state_rows(); ++i)
+    if (!copy.world.pinned(i)) movable += copy.world.masses()(i);
+  constexpr double kRestSpeed = 1e-3;  // m/s: the scene is at rest when its RMS speed is below it
+  long long n = 0;
+  for (; n < limit; ++n) {
+    if (automatic && n > 0 && !(copy.world.kinetic_energy(s) > 0.5 * movable * kRestSpeed * kRestSpeed)) break;
+    copy.step(s);
+    if (!s.x.allFinite()) break;
+  }
+  if (steps) *steps = static_cast<int>(n);
+  return s;
+}
+
 PlanningProblem planning_problem(const fem::SceneWorld& w, const PlannerOptions& options,
                                  PropagatorFactory make_propagator) {
   check_planning_inputs(w);
@@ -151,12 +177,18 @@ PlanningProblem planning_problem(const fem::SceneWorld& w, const PlannerOptions&
   p.goal_object = Robot(w.world, goal_object_index(w.scene));
   p.goal = w.scene.goal->position;
   p.tolerance = w.scene.goal->tolerance;
-  p.start = w.initial_state();
+  p.start = settle_start_state(w, options.settle_start, &p.start_settle_steps);
+  if (!p.start.x.allFinite())
+    throw InputError(w.scene.file.string() + ": planner.settle_start: the scene diverged while settling before planning "
+                     "(see squeeze check)");
+  p.start_volume.resize(static_cast<size_t>(w.world.bodies()));
+  for (int b = 0; b < w.world.bodies(); ++b) p.start_volume[b] = w.world.body_volume(p.start, b);
   if (make_propagator) {
     p.make_propagator = std::move(make_propagator);
   } else {
     PropagatorOptions popt;
     popt.max_volume_change = options.max_volume_change;
+    popt.reference_volume = p.start_volume;
     p.make_propagator = [&w, popt] { return std::make_unique<SimulationPropagator>(w, popt); };
   }
   return p;
@@ -168,15 +200,16 @@ PlanResult plan(const fem::SceneWorld& world, const PlannerOptions& options, Pro
   const std::unique_ptr<Planner> planner = make_planner(options.algorithm);
   const PlanningProblem problem = planning_problem(world, options, std::move(make_propagator));
   PlanResult r = planner->solve(problem, options, progress);
+  r.start_settle_steps = problem.start_settle_steps;
   r.settle = settle_control(world, options);
   r.settle_steps = static_cast<int>(std::lround(options.settle / world.time_step()));
   return r;
 }
 
-std::vector<fem::State> replay(SimulationPropagator& p, const std::vector<PathSegment>& path, const Control& settle,
-                               int settle_steps) {
+std::vector<fem::State> replay(SimulationPropagator& p, const fem::State& start, const std::vector<PathSegment>& path,
+                               const Control& settle, int settle_steps) {
   std::vector<fem::State> ends;
-  fem::State s = p.world().initial_state(), next;
+  fem::State s = start, next;
   for (const PathSegment& seg : path) {
     p.propagate(s, seg.control, seg.steps, next);
     s = next;

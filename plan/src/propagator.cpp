@@ -15,6 +15,7 @@ const char* to_string(Validity v) {
     case Validity::diverged: return "diverged";
     case Validity::volume: return "volume";
     case Validity::bounds: return "bounds";
+    case Validity::timeout: return "timeout";
   }
   return "?";
 }
@@ -109,6 +110,8 @@ SimulationPropagator::SimulationPropagator(const fem::SceneWorld& world, const P
     : world_(world), options_(options) {
   if (options.check_every < 1)
     throw InputError("propagator: check_every must be >= 1, got " + std::to_string(options.check_every));
+  if (!options.reference_volume.empty() && options.reference_volume.size() != static_cast<size_t>(world.world.bodies()))
+    throw std::invalid_argument("propagator: reference_volume needs one volume per object");
   const fem::Scene& scene = world_.scene;
   const int r = robot_index(scene);
   robot_ = Robot(world_.world, r);
@@ -118,6 +121,12 @@ SimulationPropagator::SimulationPropagator(const fem::SceneWorld& world, const P
 }
 
 Eigen::Vector3d SimulationPropagator::goal_com(const fem::State& s) const { return goal_.com(s); }
+
+double SimulationPropagator::volume_change(const fem::State& s, int b) const {
+  if (options_.reference_volume.empty()) return plan::volume_change(world_, s, b);
+  if (world_.world.body(b).rigid) return 0.0;
+  return std::abs(world_.world.body_volume(s, b) / options_.reference_volume[b] - 1.0);
+}
 
 double SimulationPropagator::max_volume_change(const fem::State& s, int* object) const {
   double worst = 0;
@@ -133,13 +142,17 @@ double SimulationPropagator::max_volume_change(const fem::State& s, int* object)
   return worst;
 }
 
-Validity SimulationPropagator::check(const fem::State& s) const {
+Validity SimulationPropagator::check(const fem::State& s) {
   // Faster than 1 km/s is a blow-up, not motion (the same bound as `squeeze simulate`).
   if (!s.x.allFinite() || !s.v.allFinite() || (s.v.size() && s.v.cwiseAbs().maxCoeff() > 1e3))
     return Validity::diverged;
-  const double change = max_volume_change(s);
+  int object = -1;
+  const double change = max_volume_change(s, &object);
   if (!std::isfinite(change)) return Validity::diverged;
-  if (change > options_.max_volume_change) return Validity::volume;
+  if (change > options_.max_volume_change) {
+    invalid_object_ = object;
+    return Validity::volume;
+  }
   const auto X = s.x.middleRows(robot_.first_row, robot_.vertices);
   const Eigen::AlignedBox3d& b = world_.bounds;
   for (int k = 0; k < 3; ++k)
@@ -153,6 +166,7 @@ Validity SimulationPropagator::propagate(const fem::State& start, const Control&
   // An expansion depends on its start state alone, whatever this propagator ran before: the tree
   // and its replay must agree bit for bit.
   world_.world.integrator().reset();
+  invalid_object_ = -1;
   result = start;
   const std::unique_ptr<AppliedControl> applied = apply_control(robot_, control, start);
   // Constant forces: the sum is the same every step.
@@ -164,6 +178,7 @@ Validity SimulationPropagator::propagate(const fem::State& start, const Control&
       F_.setZero();
       applied->add_forces(result, F_);
     }
+    if (past_deadline()) return Validity::timeout;
     world_.world.step(result, &F_);
     ++steps_done_;
     if (on_step) on_step(result, k);

@@ -78,6 +78,10 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
   // One propagator per expansion of a batch; they run in parallel.
   std::vector<std::unique_ptr<Propagator>> workers;
   for (int k = 0; k < options.batch; ++k) workers.push_back(pb.make_propagator());
+  if (options.time_limit > 0)  // expansions stop within a step of the limit
+    for (auto& wk : workers)
+      wk->set_deadline(t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                std::chrono::duration<double>(options.time_limit)));
 
   const double h = w.time_step();
   const int min_steps = std::max(1, static_cast<int>(std::lround(options.t_min / h)));
@@ -118,15 +122,19 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
     PathSegment edge;
     fem::State result;
     Validity validity = Validity::valid;
+    int object = -1;  // the object that made it invalid
   };
+  result.stats.discarded_volume_by_object.assign(static_cast<size_t>(w.world.bodies()), 0);
   std::vector<Job> jobs(options.batch);
   // With a time limit far below what the iterations would take, a percentage of iterations means
   // nothing: show the elapsed time only.
   if (progress) progress->stage("planning", options.time_limit > 0 && options.iterations >= 1000000 ? 0 : options.iterations);
   while (solved_node < 0 && result.stats.iterations < options.iterations) {
     if (options.time_limit > 0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= options.time_limit)
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= options.time_limit) {
+      result.timed_out = true;
       break;
+    }
     const int n = std::min(options.batch, options.iterations - result.stats.iterations);
     // 1. All random draws of the batch, in order, against the tree as it is.
     for (int k = 0; k < n; ++k) {
@@ -162,15 +170,26 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
       fem::State start = s0;
       store.restore(nodes[job.from].blocks, nodes[job.from].time, start);
       job.validity = workers[k]->propagate(start, job.edge.control, job.edge.steps, job.result);
+      job.object = workers[k]->invalid_object();
     });
+    bool timed_out = false;
+    for (int k = 0; k < n; ++k) timed_out = timed_out || jobs[k].validity == Validity::timeout;
+    if (timed_out) {  // the time limit fell inside this batch: it does not count
+      result.timed_out = true;
+      break;
+    }
     // 3. Added in batch order.
     for (int k = 0; k < n; ++k) {
       Job& job = jobs[k];
       ++result.stats.iterations;
       switch (job.validity) {
         case Validity::diverged: ++result.stats.discarded_diverged; continue;
-        case Validity::volume: ++result.stats.discarded_volume; continue;
+        case Validity::volume:
+          ++result.stats.discarded_volume;
+          if (job.object >= 0) ++result.stats.discarded_volume_by_object[static_cast<size_t>(job.object)];
+          continue;
         case Validity::bounds: ++result.stats.discarded_bounds; continue;
+        case Validity::timeout: continue;  // not reached (the batch is dropped above)
         case Validity::valid: break;
       }
       Node node;

@@ -6,6 +6,7 @@
 //   "path": [ {"kind": "body" | "control_point" | "interpolation", "target": [x,y,z] (m),
 //              "force": N, "vertex": i, "radius": m, "omega": 1/s, "steps": n, "duration": s}, ... ],
 //   "settle": {"kind": "interpolation", ..., "steps": n, "duration": s},
+//   "start_settle_steps": n (steps without control before the path: planner.settle_start),
 //   "final_state_hash": "16 hex digits" }
 #pragma once
 #include <filesystem>
@@ -24,6 +25,7 @@ struct PlanFile {
   std::vector<PathSegment> path;
   Control settle;
   int settle_steps = 0;
+  int start_settle_steps = 0;  // steps without control from the scene's initial state to the plan's start
   std::uint64_t final_state_hash = 0;
 };
 

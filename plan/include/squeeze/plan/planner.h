@@ -54,6 +54,9 @@ struct PlannerOptions {
   double max_volume_change = 0.1;  // fraction of rest volume, any deformable object
   double interpolation_omega = 0;  // 1/s, ω of the interpolation force; default 2π / t_max
   double settle = 1.0;             // s, interpolation phase at the end of a replayed path
+  double settle_start = -1;        // s simulated without control from the scene's initial state before planning:
+                                   // the tree's root and the volume reference of max_volume_change; −1 ("auto"):
+                                   // until the scene is at rest (settle_start_state), at most kSettleStartMax
   ForceWeights weights;
   int batch = 4;                   // expansions drawn and run together (not a thread count)
   double time_limit = 0;           // s of wall time, 0: none (CLI --time-limit)
@@ -79,6 +82,7 @@ struct PlanStatistics {
   int nodes = 0;               // tree nodes (root included)
   int discarded_diverged = 0;  // NaN or blow-up
   int discarded_volume = 0;    // volume change beyond max_volume_change
+  std::vector<int> discarded_volume_by_object;  // per object: the expansions it broke the volume limit in
   int discarded_bounds = 0;    // robot left the bounds
   double seconds = 0;          // wall time of planning
   long long simulation_steps = 0;
@@ -96,7 +100,9 @@ struct PlanResult {
   std::vector<fem::State> path_states;  // state at the end of every segment (path.size())
   Control settle;                       // the replay's final interpolation phase (settle_control)
   int settle_steps = 0;                 // its time steps: options.settle / h
+  int start_settle_steps = 0;           // steps without control from the scene's initial state to the start (settle_start)
   std::uint64_t final_state_hash = 0;   // state_hash of the final node's state
+  bool timed_out = false;               // stopped by options.time_limit
 };
 
 /// What a planner is handed (OMPL: SpaceInformation and ProblemDefinition).
@@ -106,7 +112,9 @@ struct PlanningProblem {
   Robot goal_object;                       // the object whose centre of mass must reach the goal
   Eigen::Vector3d goal{0, 0, 0};           // m
   double tolerance = 0.05;                 // m
-  fem::State start;                        // the scene's initial state
+  fem::State start;                        // the settled start (settle_start_state): the tree's root
+  int start_settle_steps = 0;              // steps it took from the scene's initial state
+  std::vector<double> start_volume;        // per object (m³) in `start`: the reference of max_volume_change
   PropagatorFactory make_propagator;       // one propagator per parallel expansion
 };
 
@@ -129,8 +137,19 @@ std::unique_ptr<Planner> make_planner(const std::string& name);
 /// bounds (check_robot_start). plan() calls it; commands call it early, before other work.
 void check_planning_inputs(const fem::SceneWorld& world);
 
-/// The problem of a built scene. make_propagator: null for copies of the world
-/// (SimulationPropagator with max_volume_change from options).
+/// The longest automatic settle before planning (s).
+constexpr double kSettleStartMax = 2.0;
+
+/// The start state of planning and replay: the scene's initial state simulated without control for
+/// `seconds` (≥ 0), or, with seconds < 0 ("auto"), until every deformable object's kinetic energy
+/// per kilogram stays below ½ (1 mm/s)² — the scene is at rest — at most kSettleStartMax. `steps`
+/// receives the number of steps taken. Deterministic: replay calls it with the plan's step count
+/// (settle_steps ≥ 0 overrides seconds) and gets the same state bit for bit.
+fem::State settle_start_state(const fem::SceneWorld& world, double seconds, int* steps, int settle_steps = -1);
+
+/// The problem of a built scene: its settled start (options.settle_start). make_propagator: null
+/// for copies of the world (SimulationPropagator with max_volume_change from options and the
+/// settled start's volumes as reference).
 PlanningProblem planning_problem(const fem::SceneWorld& world, const PlannerOptions& options,
                                  PropagatorFactory make_propagator = {});
 
@@ -144,11 +163,12 @@ std::uint64_t state_hash(const fem::State& s);
 PlanResult plan(const fem::SceneWorld& world, const PlannerOptions& options, Progress* progress = nullptr,
                 PropagatorFactory make_propagator = {});
 
-/// The states a plan passes through: re-simulates `path` from the world's initial state with
-/// `propagator` (its on_step sees every step), then `settle_steps` of the settle control.
-/// Returns the state at the end of every path segment (bit-identical to the tree's).
-std::vector<fem::State> replay(SimulationPropagator& propagator, const std::vector<PathSegment>& path,
-                               const Control& settle, int settle_steps);
+/// The states a plan passes through: re-simulates `path` from `start` (the plan's settled start:
+/// settle_start_state with its start_settle_steps) with `propagator` (its on_step sees every step
+/// of the path), then `settle_steps` of the settle control. Returns the state at the end of every
+/// path segment (bit-identical to the tree's).
+std::vector<fem::State> replay(SimulationPropagator& propagator, const fem::State& start,
+                               const std::vector<PathSegment>& path, const Control& settle, int settle_steps);
 
 /// The settle control of a plan's replay (interpolation to the goal with the planner's cap and ω).
 Control settle_control(const fem::SceneWorld& world, const PlannerOptions& options);

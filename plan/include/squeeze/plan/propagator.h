@@ -4,7 +4,9 @@
 // collisions and penalty forces, and the control adds the manipulation forces.
 #pragma once
 #include <Eigen/Geometry>
+#include <chrono>
 #include <functional>
+#include <vector>
 #include <memory>
 
 #include "squeeze/fem/scene.h"
@@ -13,13 +15,15 @@
 namespace squeeze::plan {
 
 /// Why an expansion was kept or discarded (paper: invalid expansions are not added to the tree).
-enum class Validity { valid, diverged, volume, bounds };
+enum class Validity { valid, diverged, volume, bounds, timeout };
 const char* to_string(Validity v);
 
 struct PropagatorOptions {
-  double max_volume_change = 0.1;  // fraction: |V/V0 − 1| above it in any deformable object is invalid
+  double max_volume_change = 0.1;  // fraction: |V/V_ref − 1| above it in any deformable object is invalid
   int check_every = 1;             // steps between validity checks (and at the last step), >= 1
   bool stop_when_invalid = true;   // false: run every step anyway (replay)
+  std::vector<double> reference_volume;  // per object, m³: V_ref (the planner's settled start state);
+                                         // empty: the rest volumes
 };
 
 class Propagator {
@@ -30,6 +34,16 @@ class Propagator {
   virtual Validity propagate(const fem::State& start, const Control& control, int steps, fem::State& result) = 0;
   /// Time steps simulated by this propagator so far (statistics).
   virtual long long steps_done() const = 0;
+  /// The object that made the last propagation invalid (volume: the one beyond the limit), or −1.
+  virtual int invalid_object() const { return -1; }
+  /// Propagations stop with Validity::timeout at this wall-clock time (the planner's --time-limit
+  /// is then kept within one step of simulation).
+  void set_deadline(std::chrono::steady_clock::time_point t) { deadline_ = t; }
+
+ protected:
+  bool past_deadline() const { return deadline_ != std::chrono::steady_clock::time_point::max() &&
+                                      std::chrono::steady_clock::now() >= deadline_; }
+  std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
 };
 
 /// Makes one propagator; a planner asks for one per parallel expansion (each used by one thread).
@@ -46,6 +60,7 @@ class SimulationPropagator : public Propagator {
 
   Validity propagate(const fem::State& start, const Control& control, int steps, fem::State& result) override;
   long long steps_done() const override { return steps_done_; }
+  int invalid_object() const override { return invalid_object_; }
 
   /// Called after every step with the state and the number of steps done in this propagation.
   std::function<void(const fem::State&, int)> on_step;
@@ -56,13 +71,14 @@ class SimulationPropagator : public Propagator {
   int goal_object() const { return goal_object_; }
   /// Centre of mass of the goal object in state s (m).
   Eigen::Vector3d goal_com(const fem::State& s) const;
-  /// |V/V0 − 1| of object b in s (0 for a rigid object; NaN if s is not finite).
-  double volume_change(const fem::State& s, int b) const { return plan::volume_change(world_, s, b); }
+  /// |V/V_ref − 1| of object b in s (PropagatorOptions::reference_volume; 0 for a rigid object; NaN
+  /// if s is not finite).
+  double volume_change(const fem::State& s, int b) const;
   /// Largest |V/V0 − 1| over the deformable objects in s, and the object (or −1).
   double max_volume_change(const fem::State& s, int* object = nullptr) const;
 
  private:
-  Validity check(const fem::State& s) const;
+  Validity check(const fem::State& s);  // sets invalid_object_
   fem::SceneWorld world_;
   PropagatorOptions options_;
   Robot robot_;
@@ -70,6 +86,7 @@ class SimulationPropagator : public Propagator {
   int goal_object_ = -1;
   fem::RowMatrixX3d F_;
   long long steps_done_ = 0;
+  int invalid_object_ = -1;
 };
 
 /// Index of the scene's robot; throws InputError "FILE: objects: …" if there is none or several.
