@@ -9,7 +9,7 @@ void add_integrator_option(CLI::App* cmd, std::string& integrator) {
   std::string names;
   for (const std::string& n : fem::integrator_names()) names += (names.empty() ? "" : ", ") + n;
   cmd->add_option("--integrator", integrator,
-                  "Time integrator: " + names + " (default: the scene's \"integrator\"; scenes/README.md)");
+                  "Time integrator: " + names + " (default: the scene's \"integrator\" key, itself \"implicit\" when absent; \"verlet\" is the paper's explicit step; scenes/README.md)");
 }
 
 fem::Scene load_scene_with(const std::string& file, const std::string& integrator) {

@@ -1050,6 +1050,7 @@ TEST(FemAttachment, StableStepCountsTheAttachmentAndKeepsVerletStable) {
   EXPECT_LE(h, std::sqrt(m_max / k) * (1 + 1e-12));  // ... below 1/ω of the heaviest vertex's spring
   World c = attached_cube("verlet", k, 0);
   Scene sc;
+  sc.integrator = "verlet";
   sc.objects.resize(1);
   sc.objects[0].name = "cube";
   EXPECT_EQ(auto_time_step(c, sc).term, "attachment");

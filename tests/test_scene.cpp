@@ -52,6 +52,7 @@ TEST_F(SceneTest, DefaultsFillAMinimalScene) {
   const fs::path p = scene_file(R"({"objects": [{"name": "blob", "mesh": "cube.mesh"}]})");
   const Scene s = load_scene(p);
   EXPECT_FALSE(s.time_step.has_value());
+  EXPECT_EQ(s.integrator, "implicit");  // issue 17: the default integrator
   EXPECT_EQ(s.gravity, Eigen::Vector3d(0, -9.81, 0));
   ASSERT_TRUE(s.floor.has_value());
   EXPECT_EQ(*s.floor, 0.0);
@@ -75,9 +76,15 @@ TEST_F(SceneTest, DefaultsFillAMinimalScene) {
   EXPECT_TRUE(o.pinned.empty());
 
   SceneWorld w = build_scene(s);
-  EXPECT_GT(w.time_step(), 0.0);
-  EXPECT_LE(w.time_step(), 1e-3);
+  // Implicit (the default): the automatic step is one frame interval; nothing moves initially.
+  EXPECT_EQ(w.time_step(), 1.0 / 30);
+  EXPECT_EQ(w.time_step_choice.term, "frame interval");
   EXPECT_EQ(w.world.options().h, w.time_step());
+  Scene sv = s;
+  sv.integrator = "verlet";
+  SceneWorld wv = build_scene(sv);
+  EXPECT_GT(wv.time_step(), 0.0);
+  EXPECT_LE(wv.time_step(), 1e-3);
   const Body& B = w.world.body(0);
   EXPECT_NEAR(B.material.k_distance, 1e5 * B.total_volume() / B.E.rows(), 1e-12);
   EXPECT_NEAR(B.material.k_volume, 3e5 * B.total_volume() / B.tets(), 1e-12);
@@ -91,7 +98,7 @@ TEST_F(SceneTest, DefaultsFillAMinimalScene) {
   EXPECT_EQ(B.material.mass_scaling, 1.5);
   EXPECT_EQ(B.material.deformation_damping, 20.0);
   EXPECT_TRUE(w.world.options().cap_contact_stiffness);
-  EXPECT_NEAR(w.time_step(), stable_time_step(w.world), 1e-15);
+  EXPECT_NEAR(wv.time_step(), stable_time_step(wv.world), 1e-15);
   EXPECT_TRUE(w.bounds.contains(Eigen::Vector3d(0, 0, 0)));
 }
 
@@ -209,7 +216,7 @@ TEST_F(SceneTest, MeshWithTinyTetsGetsAUsableAutomaticStep) {
   for (Eigen::Index v = 0; v < m.V.rows(); ++v) m.V.row(v) *= 0.1 * std::pow(m.V.row(v).cwiseAbs().maxCoeff(), 2);
   squeeze::meshing::save_tet_mesh(dir_->path() / "graded.mesh", m);
   auto scene = [&](const std::string& head, const std::string& material) {
-    return write("graded.json", "{" + head + R"("objects": [{"name": "g", "mesh": "graded.mesh", "transform": {"translate": [0, 0.15, 0]},
+    return write("graded.json", "{" + head + R"("integrator": "verlet", "objects": [{"name": "g", "mesh": "graded.mesh", "transform": {"translate": [0, 0.15, 0]},
       "material": )" + material + "}]}");
   };
   const fs::path plain_file = scene("", R"({"volume_weighted": false, "mass_scaling": 0})");

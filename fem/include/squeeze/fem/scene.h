@@ -105,7 +105,8 @@ struct SceneGoal {
 /// A parsed, validated scene.
 struct Scene {
   std::filesystem::path file;              // the scene file as given
-  std::string integrator = "verlet";       // "verlet" (the paper's) or "implicit" (integrator.h)
+  std::string integrator = "implicit";     // "implicit" (backward Euler, the default: stable at frame-sized
+                                           // steps) or "verlet" (the paper's explicit step), integrator.h
   std::optional<double> time_step;         // s; default ("auto"): per integrator, see auto_time_step
   Eigen::Vector3d gravity{0, -9.81, 0};    // m/s²
   std::optional<double> floor = 0.0;       // m, height of the floor y >= floor; null: no floor
