@@ -996,7 +996,7 @@ namespace {
 // A 10 cm cube (2 cells per axis, 27 vertices) under gravity, no floor, every vertex attached to its
 // rest position with stiffness k and damping c: at equilibrium the attachments carry the weight,
 // Σ_i k (y0_i − y_i) = M g (internal forces sum to zero), so the mean sag is M g / (N k) exactly.
-World attached_cube(const std::string& integrator, double k, double c) {
+World attached_cube(const std::string& integrator, double k, double c, bool carry_weight = false) {
   WorldOptions o;
   o.integrator = integrator;
   o.collisions = false;
@@ -1006,7 +1006,7 @@ World attached_cube(const std::string& integrator, double k, double c) {
   m.damping_distance = m.damping_volume = 0.01;
   m.deformation_damping = 20;
   w.add_body(Body(box_tet_mesh(Vector3d::Zero(), Vector3d::Constant(0.1), Eigen::Vector3i::Constant(2)), m));
-  for (int i = 0; i < w.state_rows(); ++i) w.attach(i, k, c);
+  for (int i = 0; i < w.state_rows(); ++i) w.attach(i, k, c, carry_weight);
   return w;
 }
 
@@ -1017,6 +1017,33 @@ double mean_sag(const World& w, const State& s) {
 }
 
 }  // namespace
+
+// Issue 18: an attachment that carries its vertices' weight holds them in equilibrium at rest:
+// zero net force at the rest state, and neither integrator moves them (where the same springs
+// without carries_weight sag by M g / (N k)).
+TEST(FemAttachment, CarriedWeightStartsInEquilibrium) {
+  for (const char* integrator : {"verlet", "implicit"}) {
+    const bool verlet = std::string(integrator) == "verlet";
+    World w = attached_cube(integrator, 50, 0.5, true);
+    w.set_time_step(verlet ? stable_time_step(w) : 1.0 / 30);
+    State s = w.initial_state();
+    RowMatrixX3d F;
+    ForceWorkspace ws;
+    w.prepare();
+    assemble_forces(w, s, nullptr, ws, F);
+    EXPECT_LT(F.cwiseAbs().maxCoeff(), 1e-9 * w.masses().maxCoeff() * 9.81) << integrator;
+    const int steps = static_cast<int>(0.5 / w.options().h);  // half a second
+    for (int n = 0; n < steps; ++n) w.step(s);
+    EXPECT_LT(std::abs(mean_sag(w, s)), 1e-9) << integrator;
+    World plain = attached_cube(integrator, 50, 0.5, false);
+    plain.set_time_step(w.options().h);
+    State p = plain.initial_state();
+    for (int n = 0; n < steps; ++n) plain.step(p);
+    EXPECT_GT(mean_sag(plain, p), 5e-4) << integrator;  // the same springs without the weight: they sag
+  }
+  World w = attached_cube("verlet", 0, 0.5);
+  EXPECT_THROW(w.attach(0, 0, 1, true), squeeze::InputError);
+}
 
 TEST(FemAttachment, SettledSagIsWeightOverStiffnessWithVerlet) {
   const double k = 200, c = 1.0;

@@ -262,7 +262,7 @@ void assemble_forces(const World& w, const State& s, const RowMatrixX3d* externa
     }
     if (floor && s.x(i, 1) < fy) f.y() += d.contact_k(i) * (fy - s.x(i, 1)) - d.contact_c(i) * std::min(0.0, s.v(i, 1));
     if (attached && (d.attach_k(i) > 0 || d.attach_c(i) > 0))  // zero-length spring to the rest position
-      f -= d.attach_k(i) * (Vec3(s.x.row(i).transpose()) - Vec3(d.X_rest_all.row(i).transpose())) +
+      f -= d.attach_k(i) * (Vec3(s.x.row(i).transpose()) - Vec3(d.attach_anchor.row(i).transpose())) +
            d.attach_c(i) * Vec3(s.v.row(i).transpose());
     if (contacts)
       for (int id = ws.contact_head[i]; id >= 0; id = ws.contact_next[id]) f += ws.contact_f[id];

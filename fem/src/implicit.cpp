@@ -381,7 +381,7 @@ double ImplicitIntegrator::potential(const World& w, const RowMatrixX3d& x, doub
   if (d.any_attached)  // soft attachments: ½ k |x − x_rest|² + ½ (c / h) |x − x_n|²
     for (int i : free_rows_) {
       const double k = d.attach_k(i), c = d.attach_c(i);
-      if (k > 0) G += 0.5 * k * (x.row(i) - d.X_rest_all.row(i)).squaredNorm();
+      if (k > 0) G += 0.5 * k * (x.row(i) - d.attach_anchor.row(i)).squaredNorm();
       if (c > 0) G += 0.5 * c / h * (x.row(i) - xn_.row(i)).squaredNorm();
     }
   return G;
@@ -433,7 +433,7 @@ void ImplicitIntegrator::gradient(const World& w, const RowMatrixX3d& x, double 
       if (floor_damped_[i]) gi.y() += d.contact_c(i) / h * std::min(0.0, x(i, 1) - xn_(i, 1));
     }
     if (d.any_attached && (d.attach_k(i) > 0 || d.attach_c(i) > 0))
-      gi += d.attach_k(i) * Vec3((x.row(i) - d.X_rest_all.row(i)).transpose()) +
+      gi += d.attach_k(i) * Vec3((x.row(i) - d.attach_anchor.row(i)).transpose()) +
             d.attach_c(i) / h * Vec3((x.row(i) - xn_.row(i)).transpose());
     g.segment<3>(3 * static_cast<Eigen::Index>(f)) = gi;
   }

@@ -261,7 +261,7 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
       for (size_t k = 0; k < pins.size(); ++k) {
         const std::string q = p + ".pinned[" + std::to_string(k) + "]";
         const json& e = pins[k];
-        c.keys(e, q, {"box", "near", "radius", "surface", "distance", "stiffness", "damping"});
+        c.keys(e, q, {"box", "near", "radius", "surface", "distance", "stiffness", "damping", "carries_weight"});
         ScenePin pin;
         const int kinds = int(e.contains("box")) + int(e.contains("near")) + int(e.contains("surface"));
         if (kinds != 1)
@@ -291,6 +291,11 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
         if (e.contains("damping")) {
           if (!pin.stiffness) c.fail(q + ".damping", "only for soft attachments (with \"stiffness\"); a hard pin never moves");
           pin.damping = c.non_negative(e["damping"], q + ".damping");
+        }
+        if (e.contains("carries_weight")) {
+          pin.carries_weight = c.boolean(e["carries_weight"], q + ".carries_weight");
+          if (pin.carries_weight && !pin.stiffness)
+            c.fail(q + ".carries_weight", "only for soft attachments (with \"stiffness\"); a hard pin holds its vertices anyway");
         }
         ob.pinned.push_back(std::move(pin));
       }
@@ -638,7 +643,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
         throw InputError(file + ": " + key + ": holds no vertex of '" + o.name + "' at rest" + where);
       }
       for (int v : held) {
-        if (pin.stiffness) world.attach(r0 + v, *pin.stiffness, pin.damping);
+        if (pin.stiffness) world.attach(r0 + v, *pin.stiffness, pin.damping, pin.carries_weight);
         else world.pin_vertex(r0 + v);
       }
       pin_counts[i].push_back(static_cast<int>(held.size()));

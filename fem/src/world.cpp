@@ -223,6 +223,7 @@ int World::add_body(Body body) {
     d.attach_k.segment(rows, n).setZero();
     d.attach_c.conservativeResize(rows + n);
     d.attach_c.segment(rows, n).setZero();
+    d.attach_weight.resize(static_cast<size_t>(rows + n), 0);
     d.contact_scale.conservativeResize(rows + n);
     d.contact_scale.segment(rows, n).setOnes();
     if (options_.cap_contact_stiffness && options_.contact_stiffness > 0) {
@@ -255,13 +256,16 @@ void World::pin_vertex(int row) {
   mutable_data().pinned[row] = 1;
 }
 
-void World::attach(int row, double stiffness, double damping) {
+void World::attach(int row, double stiffness, double damping, bool carry_weight) {
   if (row < 0 || row >= data_->rows) throw InputError("fem world: attached row " + std::to_string(row) + " out of range");
   if (!(stiffness >= 0) || !std::isfinite(stiffness) || !(damping >= 0) || !std::isfinite(damping))
     throw InputError("fem world: attachment stiffness and damping must be finite and >= 0");
+  if (carry_weight && !(stiffness > 0))
+    throw InputError("fem world: an attachment that carries the weight needs a stiffness > 0");
   WorldData& d = mutable_data();
   d.attach_k(row) += stiffness;
   d.attach_c(row) += damping;
+  if (carry_weight) d.attach_weight[static_cast<size_t>(row)] = 1;
 }
 
 double World::attachment_stiffness(int row) const { return data_->attach_k(row); }
@@ -311,6 +315,7 @@ void World::prepare() {
   d.any_attached = false;
   for (int i = 0; i < rows; ++i)
     if (!d.pinned[i] && (d.attach_k(i) > 0 || d.attach_c(i) > 0)) d.any_attached = true;
+  d.attach_anchor.resize(0, 3);  // filled below, once X_rest_all is
   d.gravity_off.assign(static_cast<size_t>(rows), 0);
   d.any_gravity_off = false;
   for (size_t b = 0; b < d.bodies.size(); ++b)
@@ -357,6 +362,16 @@ void World::prepare() {
     std::copy(B.on_boundary.begin(), B.on_boundary.end(), d.filter.vertex_on_surface.begin() + fv);
     std::fill(d.filter.tet_group.begin() + ft, d.filter.tet_group.begin() + ft + B.tets(), static_cast<int>(g));
     d.filter.group_rigid.push_back(B.rigid ? 1 : 0);
+  }
+  // Attachment anchors: the rest positions (deformables come first in X_rest_all, in state order),
+  // raised by m g / k where the attachment carries the weight.
+  d.attach_anchor = d.X_rest_all.topRows(rows);
+  for (size_t b = 0; b < d.bodies.size(); ++b) {
+    if (d.state_row[b] < 0) continue;
+    const Eigen::Vector3d g = gravity_of(static_cast<int>(b));
+    for (int i = d.state_row[b]; i < d.state_row[b] + d.bodies[b].vertices(); ++i)
+      if (d.attach_weight[static_cast<size_t>(i)] && d.attach_k(i) > 0)
+        d.attach_anchor.row(i) -= (d.mass(i) / d.attach_k(i)) * g.transpose();
   }
   d.cell = options_.cell_size > 0 ? options_.cell_size : (edge_count ? edge_sum / edge_count : 1.0);
   d.table = options_.table_size > 0 ? options_.table_size : next_prime(std::max(4 * nv_all, 97));

@@ -21,6 +21,7 @@ struct WorldData {
   // Soft attachments (World::attach): per state row, the stiffness (N/m) and damping (N·s/m) of a
   // zero-length spring to the row's rest position (X_rest_all.row(row)); 0 and 0: none.
   Eigen::VectorXd attach_k, attach_c;
+  std::vector<char> attach_weight;  // per state row: its attachment carries the row's weight
 
   // --- derived by prepare() ---
   bool prepared = false;
@@ -30,6 +31,8 @@ struct WorldData {
   std::vector<char> gravity_off; // per state row: its object has Body::gravity false
   bool any_gravity_off = false;
   bool any_attached = false;     // some free row has a soft attachment (assemble_forces skips the term otherwise)
+  RowMatrixX3d attach_anchor;    // per state row: where its attachment spring has zero length: the
+                                 // rest position, raised by m g / k where it carries the weight
   // Elements of all deformable objects in groups, for the force pass. A group is the edges and
   // tets owned by a cluster of kClusterRows vertices (world.cpp) of one object, neighbours in
   // space (consecutive in the Morton order of the rest positions; an element belongs to the

@@ -56,6 +56,8 @@ struct ScenePin {
   double distance = 0;                 // surface: m, > 0
   std::optional<double> stiffness;     // N/m per vertex, > 0; empty: a hard pin
   double damping = 0;                  // N·s/m per vertex, >= 0 (soft attachments only)
+  bool carries_weight = false;         // soft attachments only: the spring carries its vertices' weight
+                                       // at rest (World::attach carry_weight), so they start in equilibrium
   /// The key naming the selection in messages: "box", "near" or "surface".
   const char* key() const;
 };

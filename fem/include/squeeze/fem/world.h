@@ -99,8 +99,14 @@ class World {
   /// Calling it again for a row adds to its coefficients (springs in parallel); a pinned row stays
   /// pinned. stable_time_step counts k / m and c / m in the row's frequency bound.
   ///   stiffness  N/m, >= 0;  damping  N·s/m, >= 0
-  /// Throws InputError if the row is out of range or a coefficient is negative or not finite.
-  void attach(int row, double stiffness, double damping = 0.0);
+  /// With carry_weight the spring also carries the row's weight at rest: its anchor is raised to
+  /// x0 − m g / k (g the row's object's gravity, m its mass), so at x = x0 it pulls with −m g and
+  /// the vertex starts in equilibrium (the tissue that holds an organ in a body and that the scene
+  /// does not model; scene key pinned[].carries_weight). The anchor is fixed by prepare(); the
+  /// rows of one call sum their weights over the stiffnesses of all their springs.
+  /// Throws InputError if the row is out of range, a coefficient is negative or not finite, or
+  /// carry_weight is asked of a spring without stiffness.
+  void attach(int row, double stiffness, double damping = 0.0, bool carry_weight = false);
   /// The soft attachment of a state row: stiffness (N/m) and damping (N·s/m), 0 if none.
   double attachment_stiffness(int row) const;
   double attachment_damping(int row) const;
