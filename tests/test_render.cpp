@@ -223,6 +223,24 @@ TEST(RenderParse, RenderBlockValidation) {
             std::string::npos);
   EXPECT_NE(error_of([&] { parse(R"({"camera": {"target": [0,0,0]}})"); }).find("render.camera.eye: missing"),
             std::string::npos);
+  // Camera presets (issue 18): a named side and the objects to frame.
+  const RenderSettings p = parse(R"({"camera": {"preset": "front", "frame": ["heart", "liver"], "fov_deg": 30}})");
+  EXPECT_FALSE(p.camera);
+  ASSERT_TRUE(p.camera_preset);
+  EXPECT_EQ(p.camera_preset->view, "front");
+  EXPECT_EQ(p.camera_preset->frame, (std::vector<std::string>{"heart", "liver"}));
+  EXPECT_EQ(p.camera_preset->fov_deg, 30);
+  EXPECT_NE(error_of([&] { parse(R"({"camera": {"preset": "side"}})"); }).find("render.camera.preset: must be one of"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { parse(R"({"camera": {"preset": "front", "eye": [1,1,1]}})"); }).find("render.camera.eye: unknown key"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { parse(R"({"camera": {"preset": "front", "frame": []}})"); }).find("render.camera.frame"),
+            std::string::npos);
+  // The front view looks along -z at the bounds' centre.
+  const Camera c = frame_bounds(Eigen::AlignedBox3d(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1)), 1.0, 35,
+                                Eigen::Vector3d(0, 0, 1));
+  EXPECT_NEAR((c.eye - c.target).normalized().z(), 1.0, 1e-12);
+  EXPECT_NEAR(c.target.norm(), 0.0, 1e-12);
 }
 
 TEST(RenderPng, RoundTripAndAtomicity) {

@@ -307,6 +307,7 @@ std::vector<Object> load_objects(const fem::Scene& scene, const Trajectory& traj
 struct Motion {
   std::vector<std::vector<double>> volume;  // per object and trajectory frame: change from frame 0 (%)
   Eigen::AlignedBox3d view_bounds;          // rest surfaces and coarse motion, grown by 5 %, down to the floor
+  std::vector<Eigen::AlignedBox3d> object_bounds;  // per object: its rest surface and coarse motion
 };
 
 // Reads every trajectory frame once: the objects' volumes (plot) and the bounds of the motion
@@ -316,8 +317,9 @@ Motion scan_trajectory(const Trajectory& traj, const std::vector<Object>& object
   m.volume.resize(objects.size());
   std::vector<double> rest_volume(objects.size());
   Eigen::AlignedBox3d bounds;
-  for (const Object& ob : objects)
-    for (Eigen::Index v = 0; v < ob.rest.rows(); ++v) bounds.extend(Eigen::Vector3d(ob.rest.row(v).transpose()));
+  m.object_bounds.resize(objects.size());
+  for (size_t b = 0; b < objects.size(); ++b)
+    for (Eigen::Index v = 0; v < objects[b].rest.rows(); ++v) m.object_bounds[b].extend(Eigen::Vector3d(objects[b].rest.row(v).transpose()));
   Eigen::MatrixX3d X;
   if (progress) progress->stage("reading the trajectory", traj.frames);
   for (int f = 0; f < traj.frames; ++f) {
@@ -328,11 +330,12 @@ Motion scan_trajectory(const Trajectory& traj, const std::vector<Object>& object
       const double vol = mesh_volume(ob.T, Xb);
       if (f == 0) rest_volume[b] = vol;
       m.volume[b].push_back(rest_volume[b] > 0 ? 100.0 * (vol / rest_volume[b] - 1.0) : 0.0);
-      for (Eigen::Index v = 0; v < Xb.rows(); ++v) bounds.extend(Eigen::Vector3d(Xb.row(v).transpose()));
+      for (Eigen::Index v = 0; v < Xb.rows(); ++v) m.object_bounds[b].extend(Eigen::Vector3d(Xb.row(v).transpose()));
     }
     if (progress) progress->update(f + 1);
   }
   if (progress) progress->finish();
+  for (const Eigen::AlignedBox3d& b : m.object_bounds) bounds.extend(b);
   // The surfaces may stick out of the coarse meshes a little: grow by 5 %.
   const Eigen::Vector3d grow = 0.05 * bounds.diagonal();
   bounds.min() -= grow;
@@ -347,12 +350,37 @@ Motion scan_trajectory(const Trajectory& traj, const std::vector<Object>& object
 
 // Floor, bounds and camera (the scene's, else framing the motion), and every object's mesh (and
 // with `coarse` its wireframe) added to `renderer`.
-void set_up_scene(Renderer& renderer, std::vector<Object>& objects, const Inputs& in,
-                  const Eigen::AlignedBox3d& view_bounds, bool coarse) {
+void set_up_scene(Renderer& renderer, std::vector<Object>& objects, const Inputs& in, const Motion& motion,
+                  bool coarse) {
+  const Eigen::AlignedBox3d& view_bounds = motion.view_bounds;
   renderer.set_floor(in.scene.floor);
   renderer.set_bounds(view_bounds);
-  renderer.set_camera(in.settings.camera ? *in.settings.camera
-                                         : frame_bounds(view_bounds, double(in.width) / in.height));
+  const double aspect = double(in.width) / in.height;
+  if (in.settings.camera) {
+    renderer.set_camera(*in.settings.camera);
+  } else if (const auto& p = in.settings.camera_preset) {
+    // The named objects' bounds over the motion (grown by 5 %), seen from the preset's side.
+    Eigen::AlignedBox3d framed;
+    if (p->frame.empty()) framed = view_bounds;
+    for (const std::string& name : p->frame) {
+      size_t b = 0;
+      while (b < objects.size() && objects[b].name != name) ++b;
+      if (b == objects.size())
+        throw InputError(in.scene.file.string() + ": render.camera.frame: no object named '" + name + "'");
+      framed.extend(motion.object_bounds[b]);
+    }
+    if (!p->frame.empty()) {
+      const Eigen::Vector3d grow = 0.05 * framed.diagonal();
+      framed.min() -= grow;
+      framed.max() += grow;
+    }
+    Eigen::Vector3d dir(0.55, 0.45, 1.0);
+    for (const auto& [n, d] : camera_views())
+      if (n == p->view) dir = d;
+    renderer.set_camera(frame_bounds(framed, aspect, p->fov_deg, dir));
+  } else {
+    renderer.set_camera(frame_bounds(view_bounds, aspect));
+  }
   for (Object& ob : objects) {
     const int drawn = static_cast<int>(ob.draw_source.size() ? ob.draw_source.size() : ob.rest.rows());
     ob.mesh_id = renderer.add_mesh(ob.draw_F, drawn, ob.colour, ob.rigid ? 0.6f : 0.25f, ob.closed);
@@ -529,7 +557,7 @@ RenderStats render_trajectory(const RenderOptions& o, std::vector<std::unique_pt
   ro.height = in.height;
   ro.samples = o.samples;
   Renderer renderer(*ctx, ro);
-  set_up_scene(renderer, objects, in, motion.view_bounds, o.coarse);
+  set_up_scene(renderer, objects, in, motion, o.coarse);
 
   create_output_folder(o.output);
   begin_exports(exporters, o.output / "export", objects, in);

@@ -467,7 +467,7 @@ void Renderer::set_camera(const Camera& camera) {
   impl_->camera_set = true;
 }
 
-Camera frame_bounds(const Eigen::AlignedBox3d& bounds, double aspect, double fov_deg) {
+Camera frame_bounds(const Eigen::AlignedBox3d& bounds, double aspect, double fov_deg, const Eigen::Vector3d& direction) {
   Camera c;
   c.fov_deg = fov_deg;
   const Eigen::Vector3d centre = bounds.center();
@@ -476,8 +476,9 @@ Camera frame_bounds(const Eigen::AlignedBox3d& bounds, double aspect, double fov
   const double half_h = std::atan(std::tan(half_v) * aspect);
   const double dist = 1.08 * radius / std::sin(std::min(half_v, half_h));
   c.target = centre;
-  c.eye = centre + dist * Eigen::Vector3d(0.55, 0.45, 1.0).normalized();
-  c.up = Eigen::Vector3d(0, 1, 0);
+  const Eigen::Vector3d dir = direction.norm() > 0 ? direction.normalized() : Eigen::Vector3d(0.55, 0.45, 1.0).normalized();
+  c.eye = centre + dist * dir;
+  c.up = std::abs(dir.y()) > 0.99 ? Eigen::Vector3d(0, 0, -1) : Eigen::Vector3d(0, 1, 0);
   return c;
 }
 

@@ -6,6 +6,14 @@
 
 namespace squeeze::render {
 
+const std::vector<std::pair<std::string, Eigen::Vector3d>>& camera_views() {
+  static const std::vector<std::pair<std::string, Eigen::Vector3d>> views = {
+      {"three_quarter", Eigen::Vector3d(0.55, 0.45, 1.0)}, {"front", Eigen::Vector3d(0, 0, 1)},
+      {"back", Eigen::Vector3d(0, 0, -1)},                  {"left", Eigen::Vector3d(-1, 0, 0)},
+      {"right", Eigen::Vector3d(1, 0, 0)},                  {"top", Eigen::Vector3d(0, 1, 0)}};
+  return views;
+}
+
 RenderSettings parse_render_settings(const nlohmann::json& r, const std::string& file) {
   RenderSettings s;
   if (r.is_null()) return s;
@@ -18,7 +26,29 @@ RenderSettings parse_render_settings(const nlohmann::json& r, const std::string&
     s.fps = c.positive(r["fps"], "render.fps");
     if (*s.fps > 10000) c.fail("render.fps", "must be <= 10000, got " + format_number(*s.fps));
   }
-  if (r.contains("camera")) {
+  if (r.contains("camera") && r["camera"].is_object() && r["camera"].contains("preset")) {
+    const nlohmann::json& j = r["camera"];
+    c.keys(j, "render.camera", {"preset", "frame", "fov_deg"});
+    CameraPreset p;
+    p.view = c.string(j["preset"], "render.camera.preset");
+    std::string names;
+    bool known = false;
+    for (const auto& [n, d] : camera_views()) {
+      names += (names.empty() ? "\"" : ", \"") + n + "\"";
+      known = known || n == p.view;
+    }
+    if (!known) c.fail("render.camera.preset", "must be one of " + names + ", got \"" + p.view + "\"");
+    if (j.contains("frame")) {
+      if (!j["frame"].is_array() || j["frame"].empty()) c.fail("render.camera.frame", "must be a non-empty array of object names");
+      for (size_t i = 0; i < j["frame"].size(); ++i)
+        p.frame.push_back(c.string(j["frame"][i], "render.camera.frame[" + std::to_string(i) + "]"));
+    }
+    if (j.contains("fov_deg")) {
+      p.fov_deg = c.positive(j["fov_deg"], "render.camera.fov_deg");
+      if (!(p.fov_deg < 180)) c.fail("render.camera.fov_deg", "must be < 180, got " + format_number(p.fov_deg));
+    }
+    s.camera_preset = p;
+  } else if (r.contains("camera")) {
     const nlohmann::json& j = r["camera"];
     c.keys(j, "render.camera", {"eye", "target", "up", "fov_deg"});
     Camera cam;

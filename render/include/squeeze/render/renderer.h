@@ -76,8 +76,10 @@ class Renderer {
 /// it in opposite directions (consistently oriented, no boundary, no non-manifold edge).
 bool is_closed_oriented(const Eigen::MatrixX3i& F);
 
-/// A camera looking at `bounds` from the front, right and above (direction (0.55, 0.45, 1)
-/// with +y up) at the distance that fits its bounding sphere into the field of view.
-Camera frame_bounds(const Eigen::AlignedBox3d& bounds, double aspect, double fov_deg = 35);
+/// A camera looking at `bounds` from `direction` (from the centre towards the eye; default the front,
+/// right and above, (0.55, 0.45, 1)) with +y up (−z up when looking along y) at the distance that
+/// fits its bounding sphere into the field of view.
+Camera frame_bounds(const Eigen::AlignedBox3d& bounds, double aspect, double fov_deg = 35,
+                    const Eigen::Vector3d& direction = Eigen::Vector3d(0.55, 0.45, 1.0));
 
 }  // namespace squeeze::render

@@ -1,11 +1,15 @@
 // squeeze::render — the scene's `render` block (scenes/README.md, "render"):
 //   "render": {"width": 1280, "height": 720, "fps": 30,
 //              "camera": {"eye": [x,y,z], "target": [x,y,z], "up": [0,1,0], "fov_deg": 35}}
+//   or a camera preset that frames objects automatically from a named side:
+//              "camera": {"preset": "front", "frame": ["heart", "liver"], "fov_deg": 30}
 #pragma once
 #include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace squeeze::render {
 
@@ -17,11 +21,25 @@ struct Camera {
   double fov_deg = 35;              // vertical field of view, degrees, in (0, 180)
 };
 
+/// A camera placed automatically (frame_bounds): looking from the side `view` at the bounds of the
+/// objects named in `frame` (all objects if empty) over the whole motion, +y up.
+struct CameraPreset {
+  std::string view = "three_quarter";  // a name of camera_views()
+  std::vector<std::string> frame;      // object names; empty: every object
+  double fov_deg = 35;                 // vertical field of view, degrees, in (0, 180)
+};
+
+/// The preset views: name and the direction from the framed bounds' centre to the eye.
+/// "front" +z, "back" −z, "left" −x, "right" +x, "top" +y (up −z), "three_quarter" (0.55, 0.45, 1)
+/// (the default framing).
+const std::vector<std::pair<std::string, Eigen::Vector3d>>& camera_views();
+
 /// The render block, each value empty when the scene does not give it.
 struct RenderSettings {
   std::optional<int> width, height;  // pixels, [16, 16384]
   std::optional<double> fps;         // output frames per second (default: the trajectory's)
   std::optional<Camera> camera;      // default: framed automatically on the objects' bounds
+  std::optional<CameraPreset> camera_preset;  // render.camera with "preset" (camera then empty)
 };
 
 /// Validates `render` (null: no block, all defaults). Throws InputError
