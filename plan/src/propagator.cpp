@@ -36,6 +36,28 @@ int robot_index(const fem::Scene& scene) {
   return robot;
 }
 
+bool placed_inside(const fem::World& world, int a, int b) {
+  auto centre_in = [](const fem::Body& p, const fem::Body& q) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    double m = 0;
+    for (int i = 0; i < p.vertices(); ++i) {
+      const double mi = p.mass.size() ? p.mass(i) : 1.0;
+      c += mi * p.rest.row(i).transpose();
+      m += mi;
+    }
+    if (!(m > 0)) return false;
+    c /= m;
+    for (int t = 0; t < q.tets(); ++t) {
+      const fem::TetFrame f(q.rest.row(q.T(t, 0)).transpose(), q.rest.row(q.T(t, 1)).transpose(),
+                            q.rest.row(q.T(t, 2)).transpose(), q.rest.row(q.T(t, 3)).transpose());
+      Eigen::Vector4d l;
+      if (f.contains(c, &l) && l.minCoeff() > -1e-12) return true;
+    }
+    return false;
+  };
+  return centre_in(world.body(a), world.body(b)) || centre_in(world.body(b), world.body(a));
+}
+
 void check_robot_start(const fem::SceneWorld& w) {
   const fem::Scene& scene = w.scene;
   const int r = robot_index(scene);
@@ -68,25 +90,16 @@ void check_robot_start(const fem::SceneWorld& w) {
     return count;
   };
   // With rest overlaps (contact.rest_overlap), a robot touching its neighbours at rest is at rest
-  // there (the heart at its atlas place); only a deep overlap is an error: a vertex of either one
-  // more than a tenth of the smaller object's size inside the other.
+  // there (the heart at its atlas place); only an object placed inside the other is an error.
   const bool tolerant = w.world.options().rest_overlap;
-  std::vector<double> deepest(static_cast<size_t>(w.world.bodies()), 0.0);
-  for (const fem::World::RestOverlap& o : w.world.rest_overlaps()) {
-    if (o.body == r) deepest[o.penetrated] = std::max(deepest[o.penetrated], o.depth);
-    if (o.penetrated == r) deepest[o.body] = std::max(deepest[o.body], o.depth);
-  }
-  auto diagonal = [](const fem::Body& B) { return (B.rest.colwise().maxCoeff() - B.rest.colwise().minCoeff()).norm(); };
   for (int b = 0; b < w.world.bodies(); ++b) {
     if (b == r) continue;
     const int n = inside(robot, w.world.body(b)) + inside(w.world.body(b), robot);
     if (n == 0) continue;
-    const double limit = 0.1 * std::min(diagonal(robot), diagonal(w.world.body(b)));
-    if (tolerant && deepest[b] <= limit) continue;
+    if (tolerant && !placed_inside(w.world, r, b)) continue;
     throw InputError(where + "the robot starts inside \"" + scene.objects[b].name + "\" (" + std::to_string(n) +
                      " vertices of one coarse mesh are inside the other's tetrahedra" +
-                     (tolerant ? ", " + format_number(deepest[b]) + " m deep: more than a tenth of the smaller object, no contact at rest"
-                               : std::string()) +
+                     (tolerant ? ", and the centre of one inside the other: placed inside it, not touching it" : std::string()) +
                      ")");
   }
 }

@@ -8,6 +8,7 @@
 
 #include "squeeze/fem/forces.h"
 #include "squeeze/meshing/point_triangle_distance.h"
+#include "squeeze/plan/propagator.h"
 
 namespace squeeze::plan {
 namespace {
@@ -174,7 +175,6 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
       warn.push_back(who(scene, b) + ": the robot is rigid and never moves: squeeze plan refuses it");
   }
   const bool tolerant = world.options().rest_overlap;
-  auto diagonal = [](const fem::Body& B) { return (B.rest.colwise().maxCoeff() - B.rest.colwise().minCoeff()).norm(); };
   for (const OverlapCheck& c : out.overlaps) {
     if (c.a == c.b && c.overlapping()) {
       warn.push_back(who(scene, c.a) + ": overlaps itself at rest (" + std::to_string(c.a_in_b) +
@@ -183,9 +183,9 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
                                : ": self-collision pushes them apart at once; set \"self_collision\": false or mend the mesh"));
       continue;
     }
-    // As plan::check_robot_start: with rest overlaps, only an overlap deeper than a tenth of the
-    // smaller object's size is no contact at rest.
-    const bool deep = !tolerant || c.depth > 0.1 * std::min(diagonal(world.body(c.a)), diagonal(world.body(c.b)));
+    // As plan::check_robot_start: with rest overlaps, only an object placed inside the other (the
+    // centre of one inside the other) is no contact at rest.
+    const bool deep = !tolerant || plan::placed_inside(world, c.a, c.b);
     const bool robot_pair = scene.objects[c.a].robot || scene.objects[c.b].robot;
     const std::string counts = std::to_string(c.a_in_b) + " vertices of '" + scene.objects[c.a].name + "' inside '" +
                                scene.objects[c.b].name + "', " + std::to_string(c.b_in_a) + " of '" +

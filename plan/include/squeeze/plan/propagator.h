@@ -97,9 +97,13 @@ int goal_object_index(const fem::Scene& scene);
 /// Throws InputError "FILE: objects[i].transform: the robot starts inside NAME (…)" if, at rest, a
 /// vertex of the robot's coarse mesh lies strictly inside a tetrahedron of another object or a
 /// vertex of another object strictly inside a robot tetrahedron (barycentric coordinates all
-/// > 1e-9) — with rest overlaps on (contact.rest_overlap, the default) only if more than a fifth of
-/// the vertices of either object are inside the other (a touching overlap is a contact at rest) —
-/// or the robot starts below the floor or outside the bounds.
+/// > 1e-9) — with rest overlaps on (contact.rest_overlap, the default) only if one was placed
+/// inside the other (placed_inside: a touching overlap, however deep its coarse meshes make it, is
+/// a contact at rest) — or the robot starts below the floor or outside the bounds.
 void check_robot_start(const fem::SceneWorld& world);
+
+/// Whether, at rest, the centre of mass of object a lies inside a tetrahedron of object b or the
+/// centre of b inside a tetrahedron of a: one object placed inside the other, not touching it.
+bool placed_inside(const fem::World& world, int a, int b);
 
 }  // namespace squeeze::plan
