@@ -107,9 +107,19 @@ PlannerOptions planner_options(const fem::SceneWorld& w) {
   }
   if (!(o.interpolation_omega > 0)) o.interpolation_omega = 2 * M_PI / o.t_max;
   // Default: enough to lift the robot against its own gravity twice over, and to move it about
-  // half its own size within t_max from rest (½ a t² = d / 2).
-  const double g = w.world.gravity_of(r).norm();
-  o.max_force = max_force ? *max_force : mass * std::max(2.0 * g, size / (o.t_max * o.t_max));
+  // half its own size within t_max from rest (½ a t² = d / 2). Weight its attachments carry
+  // (pinned[].carries_weight) need not be lifted: g counts only the share of mass they do not.
+  // A robot held by soft attachments (total stiffness K) also gets enough to hold it half its size
+  // away from their rest (K d / 2).
+  double carried = 0, total = 0, stiffness = 0;
+  for (int i = w.world.first_state_row(r), e = i + w.world.body(r).vertices(); i < e; ++i) {
+    total += w.world.masses()(i);
+    if (w.world.attachment_carries_weight(i)) carried += w.world.masses()(i);
+    if (!w.world.pinned(i)) stiffness += w.world.attachment_stiffness(i);
+  }
+  const double g = w.world.gravity_of(r).norm() * (total > 0 ? 1.0 - carried / total : 1.0);
+  o.max_force = max_force ? *max_force
+                          : std::max(mass * std::max(2.0 * g, size / (o.t_max * o.t_max)), 0.5 * stiffness * size);
   return o;
 }
 

@@ -110,6 +110,8 @@ class World {
   /// The soft attachment of a state row: stiffness (N/m) and damping (N·s/m), 0 if none.
   double attachment_stiffness(int row) const;
   double attachment_damping(int row) const;
+  /// Whether the soft attachment of a state row carries the row's weight (attach carry_weight).
+  bool attachment_carries_weight(int row) const;
   /// Builds the derived rest data now (element groups, collision numbering) instead of at the
   /// first step: copies made afterwards share it. Idempotent.
   void prepare();
