@@ -151,6 +151,41 @@ TEST(PlanForces, InterpolationForceVanishesAtTheGoalConfiguration) {
   }
 }
 
+// Issue 18: a robot held by soft attachments that carry its weight (the heart of Body Parts): the
+// interpolation force cancels their pull as it cancels gravity, so the net passive force on every
+// vertex under the control is zero wherever the robot is, and the robot settles at the goal.
+TEST(PlanForces, InterpolationCancelsTheRobotsAttachments) {
+  const sqt::TempDir tmp("plan-interp-attached");
+  const fs::path& d = tmp.path();
+  nlohmann::json j = mini_scene();
+  j["objects"][0]["pinned"] = {{{"near", {-0.8, 0.16, 0.0}}, {"radius", 1.0}, {"stiffness", 50.0}, {"carries_weight", true}}};
+  const fem::Scene scene = fem::load_scene(write_scene(d, j));
+  SimulationPropagator p(fem::build_scene(scene), {});
+  const Robot& r = p.robot();
+  fem::State s = p.world().initial_state();
+  s.x.middleRows(r.first_row, r.vertices).rowwise() += Eigen::RowVector3d(0.1, 0.05, 0);  // displaced
+  Control c;
+  c.kind = &control_kind("interpolation");
+  c.target = r.com(s);  // the goal configuration is where it is now: only the passive forces remain
+  c.force = 1e6;
+  c.omega = 10;
+  // Interpolation + gravity + the attachments' springs = the spring toward the goal shape only.
+  fem::RowMatrixX3d F = fem::RowMatrixX3d::Zero(s.x.rows(), 3);
+  apply_control(r, c, s)->add_forces(s, F);
+  const fem::World& w = p.world().world;
+  for (int i = 0; i < r.vertices; ++i) {
+    const int row = r.first_row + i;
+    const Eigen::Vector3d passive = r.mass(i) * r.gravity - w.attachment_stiffness(row) *
+                                                                (s.x.row(row) - r.anchor.row(i)).transpose();
+    const Eigen::Vector3d goal = r.rest.row(i).transpose() + (c.target - r.rest_com);
+    const Eigen::Vector3d spring = r.mass(i) * c.omega * c.omega * (goal - s.x.row(row).transpose());
+    EXPECT_NEAR((F.row(row).transpose() + passive - spring).norm(), 0.0, 1e-9) << i;
+  }
+  // The anchors are raised by m g / k: at rest the springs carry the weight.
+  for (int i = 0; i < r.vertices; ++i)
+    EXPECT_NEAR((r.anchor.row(i) - r.rest.row(i)).y(), r.mass(i) * 9.81 / 50.0, 1e-12) << i;
+}
+
 // --- the planner ---
 
 namespace {

@@ -23,6 +23,15 @@ Robot::Robot(const fem::World& world, int b) : body(b), gravity(world.gravity_of
   }
   if (!(total_mass > 0)) throw InputError("the robot (object " + std::to_string(b) + ") has no movable vertex");
   rest_com /= total_mass;
+  attach_k.setZero(vertices);
+  anchor = rest;
+  for (int i = 0; i < vertices; ++i) {
+    const int row = first_row + i;
+    if (!(mass(i) > 0)) continue;
+    attach_k(i) = world.attachment_stiffness(row);
+    if (attach_k(i) > 0 && world.attachment_carries_weight(row))
+      anchor.row(i) -= (world.masses()(row) / attach_k(i)) * gravity.transpose();
+  }
   for (int i = 0; i < vertices; ++i)
     if (B.on_boundary[i] && mass(i) > 0) surface.push_back(i);
   if (surface.empty())

@@ -1,5 +1,6 @@
 // The interpolation force (Rodriguez 2006, Sec. V-A and V-B): every robot vertex pulled toward its
-// place in the goal configuration by a critically damped spring with a capped acceleration.
+// place in the goal configuration by a critically damped spring with a capped acceleration, the
+// robot's gravity and the springs of its soft attachments cancelled.
 #include "squeeze/common/json_check.h"
 #include "squeeze/plan/control.h"
 
@@ -22,6 +23,9 @@ class InterpolationForces : public AppliedControl {
       const double n = a.norm();
       if (n > a_max) a *= a_max / n;
       F.row(row) += (r.mass(i) * (a - r.gravity)).transpose();
+      // The passive forces on the robot are cancelled: its gravity above, and the pull of its soft
+      // attachments (which, carrying the weight, would otherwise hold it back from the goal).
+      if (r.attach_k(i) > 0) F.row(row) += r.attach_k(i) * (s.x.row(row) - r.anchor.row(i));
     }
   }
 

@@ -60,6 +60,9 @@ struct Robot {
   Eigen::Vector3d rest_com;   // m, mass-weighted
   Eigen::Vector3d gravity{0, 0, 0};  // m/s², what gravity does to it (World::gravity_of)
   std::vector<int> surface;   // movable vertices on the surface (all movable ones if none is)
+  Eigen::VectorXd attach_k;   // #vertices N/m: stiffness of each vertex's soft attachment (World::attach; 0: none)
+  fem::RowMatrixX3d anchor;   // #vertices by 3 (m): where each attachment spring has zero length (the rest
+                              // position, raised by m g / k where it carries the weight)
   /// Throws InputError if object `b` is rigid or has no movable vertex.
   Robot(const fem::World& world, int b);
   Robot() = default;
