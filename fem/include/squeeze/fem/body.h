@@ -122,7 +122,7 @@ Eigen::VectorXd vertex_stiffness(const Body& body, Eigen::VectorXd* damping = nu
 void vertex_frequency_bounds(const Body& body, const Eigen::VectorXd& mass, Eigen::VectorXd& w2,
                              Eigen::VectorXd* gamma = nullptr);
 
-/// Signed volume of every tetrahedron of `body` at positions X (#V by 3), m³.
+/// The volume of `body` at positions X (#V by 3): the sum of its tetrahedra's signed volumes, m³.
 double volume(const Body& body, const Eigen::Ref<const RowMatrixX3d>& X);
 
 /// A box [lo, hi] split into n[0]×n[1]×n[2] cells of 6 tetrahedra each (Kuhn / Freudenthal
