@@ -71,7 +71,9 @@ TEST(FemKernels, DistanceHessianMatchesFiniteDifferences) {
     }
     const Eigen::Matrix3d P = distance_hessian(pi, pj, D0, k, true);
     EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P).eigenvalues().minCoeff(), -1e-12 * P.norm());
-    if ((pj - pi).norm() > D0) EXPECT_LT((P - H).norm(), 1e-12 * H.norm());
+    if ((pj - pi).norm() > D0) {
+      EXPECT_LT((P - H).norm(), 1e-12 * H.norm());
+    }
   }
 }
 

@@ -500,8 +500,12 @@ TEST(ControlRegistry, EveryKindRoundTripsThroughThePlanFile) {
     EXPECT_EQ(a.target, b.target);
     EXPECT_EQ(a.force, b.force);
     EXPECT_EQ(f.path[i].steps, g.path[i].steps);
-    if (std::string(a.kind->name()) == "control_point") EXPECT_EQ(a.vertex, b.vertex);
-    if (std::string(a.kind->name()) == "interpolation") EXPECT_EQ(a.omega, b.omega);
+    if (std::string(a.kind->name()) == "control_point") {
+      EXPECT_EQ(a.vertex, b.vertex);
+    }
+    if (std::string(a.kind->name()) == "interpolation") {
+      EXPECT_EQ(a.omega, b.omega);
+    }
   }
   EXPECT_EQ(g.final_state_hash, f.final_state_hash);
   // Unknown names list the registered kinds.

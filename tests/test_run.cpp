@@ -240,7 +240,9 @@ TEST(CheckCli, EveryBundledSceneChecksAndPrintsEveryObject) {
     EXPECT_GT(j["time_step"]["h"].get<double>(), 0);
     // The warnings of stdout are the JSON's.
     for (const auto& w : j["warnings"]) EXPECT_NE(r.out.find("warning: " + w.get<std::string>()), std::string::npos);
-    if (j["warnings"].empty()) EXPECT_NE(r.out.find("no warnings"), std::string::npos);
+    if (j["warnings"].empty()) {
+      EXPECT_NE(r.out.find("no warnings"), std::string::npos);
+    }
   }
   EXPECT_GE(scenes, 7);
 }
