@@ -16,6 +16,7 @@
 #include "commands.h"
 #include "scene_options.h"
 #include "squeeze/common/atomic_file.h"
+#include "squeeze/common/format.h"
 #include "squeeze/common/error.h"
 #include "squeeze/common/log.h"
 #include "squeeze/common/progress.h"
@@ -34,19 +35,13 @@ struct CheckArgs {
   double settle = 0.1;
 };
 
-std::string g3(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
-
 std::string fixed2(double x) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.2f", x);
   return buf;
 }
 
-std::string vec(const Eigen::Vector3d& v) { return "[" + g3(v.x()) + ", " + g3(v.y()) + ", " + g3(v.z()) + "]"; }
+std::string vec(const Eigen::Vector3d& v) { return "[" + format_g3(v.x()) + ", " + format_g3(v.y()) + ", " + format_g3(v.z()) + "]"; }
 
 // Columns padded to their widest cell; `right` marks right-aligned columns.
 std::string table(const std::vector<std::vector<std::string>>& rows, const std::vector<bool>& right) {
@@ -130,10 +125,10 @@ Runner add_check_command(CLI::App& app, const Global& global) {
     s += a.scene + ": " + std::to_string(c.objects.size()) + " objects, " + std::to_string(tets) + " tets, " +
          std::to_string(vertices) + " vertices\n";
     s += "  time step " + c.time_step.describe(scene) + "\n";
-    s += "  gravity " + vec(scene.gravity) + " m/s², floor " + (scene.floor ? "y = " + g3(*scene.floor) + " m" : "none") +
+    s += "  gravity " + vec(scene.gravity) + " m/s², floor " + (scene.floor ? "y = " + format_g3(*scene.floor) + " m" : "none") +
          ", bounds " + vec(w.bounds.min()) + " .. " + vec(w.bounds.max()) + " m\n";
     if (scene.goal)
-      s += "  goal " + vec(scene.goal->position) + " ± " + g3(scene.goal->tolerance) + " m for '" + scene.goal->object + "'\n";
+      s += "  goal " + vec(scene.goal->position) + " ± " + format_g3(scene.goal->tolerance) + " m for '" + scene.goal->object + "'\n";
     s += "\n";
     std::vector<std::vector<std::string>> rows = {
         {"object", "kind", "role", "material", "tets", "vertices", "mass kg", "volume m³", "pins hard/soft",
@@ -142,11 +137,11 @@ Runner add_check_command(CLI::App& app, const Global& global) {
       const plan::ObjectCheck& ob = c.objects[b];
       const fem::SceneObject& so = scene.objects[b];
       rows.push_back({ob.name, ob.rigid ? "rigid" : "deformable", ob.robot ? "robot" : "obstacle",
-                      ob.rigid ? "-" : so.preset.empty() ? "E " + g3(so.youngs_modulus) + " Pa" : so.preset, std::to_string(ob.tets),
-                      std::to_string(ob.vertices), ob.rigid ? "-" : g3(ob.mass), g3(ob.volume),
+                      ob.rigid ? "-" : so.preset.empty() ? "E " + format_g3(so.youngs_modulus) + " Pa" : so.preset, std::to_string(ob.tets),
+                      std::to_string(ob.vertices), ob.rigid ? "-" : format_g3(ob.mass), format_g3(ob.volume),
                       ob.rigid ? "-" : std::to_string(ob.hard_pins) + "/" + std::to_string(ob.soft_pins),
-                      ob.below_floor ? std::to_string(ob.below_floor) + " (" + g3(ob.below_floor_depth) + " m)" : "-",
-                      ob.time_step.h > 0 ? g3(ob.time_step.h) + " s (" + ob.time_step.term + ")" : "-",
+                      ob.below_floor ? std::to_string(ob.below_floor) + " (" + format_g3(ob.below_floor_depth) + " m)" : "-",
+                      ob.time_step.h > 0 ? format_g3(ob.time_step.h) + " s (" + ob.time_step.term + ")" : "-",
                       ob.rigid || c.settle <= 0 ? "-" : fixed2(100 * ob.settle_volume_change) + " %"});
     }
     s += table(rows, {false, false, false, false, true, true, true, true, true, true, false, true});
@@ -154,12 +149,12 @@ Runner add_check_command(CLI::App& app, const Global& global) {
     std::vector<std::vector<std::string>> pairs = {{"A", "B", "A in B", "B in A", "deepest m", "gap m"}};
     for (const plan::OverlapCheck& p : c.overlaps)
       pairs.push_back({scene.objects[p.a].name, p.a == p.b ? "(itself)" : scene.objects[p.b].name, std::to_string(p.a_in_b),
-                       std::to_string(p.b_in_a), p.overlapping() ? g3(p.depth) : "-", p.gap >= 0 ? g3(p.gap) : "-"});
+                       std::to_string(p.b_in_a), p.overlapping() ? format_g3(p.depth) : "-", p.gap >= 0 ? format_g3(p.gap) : "-"});
     if (pairs.size() == 1) s += "  (one object)\n";
     else s += table(pairs, {false, false, true, true, true, true});
     if (c.settle > 0) {
-      s += "\n  settle: " + g3(c.settle) + " s from the start without control" + (c.settle_diverged ? " (diverged)" : "");
-      s += c.max_volume_change ? "; planner.max_volume_change " + g3(100 * *c.max_volume_change) + " %\n" : "\n";
+      s += "\n  settle: " + format_g3(c.settle) + " s from the start without control" + (c.settle_diverged ? " (diverged)" : "");
+      s += c.max_volume_change ? "; planner.max_volume_change " + format_g3(100 * *c.max_volume_change) + " %\n" : "\n";
     }
     s += "\n";
     if (c.warnings.empty()) s += "no warnings\n";

@@ -1,5 +1,6 @@
 #include "squeeze/fem/scene.h"
 
+#include "squeeze/common/format.h"
 #include "squeeze/fem/constraints.h"
 #include "squeeze/fem/integrator.h"
 
@@ -454,9 +455,19 @@ std::vector<int> pinned_vertices(const Body& body, const ScenePin& pin) {
 // a third of the undamped one (F − 1/F with F = 3).
 constexpr double kDampingStepCost = 8.0 / 3.0;
 
-double stable_time_step(const World& world) {
+namespace {
+
+// The Verlet stability bound, vertex by vertex (see stable_time_step): the step and the vertex
+// that sets it, with its terms.
+struct VerletBound {
+  double h = 1e-3;      // s, at most 1 ms
+  int body = -1, vertex = -1;
+  double w2e = 0, w2c = 0, w2a = 0, w2 = 0, gamma = 0;  // ω² terms (1/s²) and damping rate (1/s) there
+};
+
+VerletBound verlet_bound(const World& world) {
   const WorldOptions& o = world.options();
-  double h = 1e-3;
+  VerletBound v;
   for (int b = 0; b < world.bodies(); ++b) {
     const Body& B = world.body(b);
     const int r0 = world.first_state_row(b);
@@ -466,23 +477,21 @@ double stable_time_step(const World& world) {
     for (int i = 0; i < B.vertices(); ++i) {
       const double m = world.masses()(r0 + i), cs = world.contact_scale(r0 + i);
       if (!(m > 0)) continue;
-      double w2 = w2e(i) + cs * o.contact_stiffness / m, gamma = ge(i) + cs * o.contact_damping / m;
+      const double w2c = cs * o.contact_stiffness / m;
+      double w2 = w2e(i) + w2c, gamma = ge(i) + cs * o.contact_damping / m;
       const double ka = world.attachment_stiffness(r0 + i), ca = world.attachment_damping(r0 + i);
-      if (ka > 0 || ca > 0) w2 += ka / m, gamma += ca / m;
+      const double w2a = ka / m;
+      if (ka > 0 || ca > 0) w2 += w2a, gamma += ca / m;
       const double d = gamma + std::sqrt(gamma * gamma + 4 * w2);
-      if (d > 0) h = std::min(h, 2.0 / d);
+      if (d > 0 && 2.0 / d < v.h) v = {2.0 / d, b, i, w2e(i), w2c, w2a, w2, gamma};
     }
   }
-  return h;
+  return v;
 }
 
-namespace {
-std::string short_number(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
 }  // namespace
+
+double stable_time_step(const World& world) { return verlet_bound(world).h; }
 
 TimeStepChoice auto_time_step(const World& world, const Scene& scene) {
   TimeStepChoice c;
@@ -499,50 +508,33 @@ TimeStepChoice auto_time_step(const World& world, const Scene& scene) {
         c.h = hb;
         c.object = b;
         c.term = "initial speed";
-        c.detail = short_number(v) + " m/s over half its mean edge length " + short_number(0.5 * B.mean_edge_length()) + " m";
+        c.detail = format_g3(v) + " m/s over half its mean edge length " + format_g3(0.5 * B.mean_edge_length()) + " m";
       }
     }
     return c;
   }
   // Verlet: the stability bound, vertex by vertex (stable_time_step), and the tightest term.
-  const WorldOptions& o = world.options();
-  c.h = 1e-3;
-  c.term = "cap";
-  c.detail = "1 ms at most";
-  for (int b = 0; b < world.bodies(); ++b) {
-    const Body& B = world.body(b);
-    const int r0 = world.first_state_row(b);
-    if (B.rigid || r0 < 0) continue;
-    Eigen::VectorXd w2e, ge;
-    vertex_frequency_bounds(B, world.masses().segment(r0, B.vertices()), w2e, &ge);
-    for (int i = 0; i < B.vertices(); ++i) {
-      const double m = world.masses()(r0 + i), cs = world.contact_scale(r0 + i);
-      if (!(m > 0)) continue;
-      const double w2c = cs * o.contact_stiffness / m;
-      double w2 = w2e(i) + w2c, gamma = ge(i) + cs * o.contact_damping / m;
-      const double ka = world.attachment_stiffness(r0 + i), ca = world.attachment_damping(r0 + i);
-      const double w2a = ka / m;
-      if (ka > 0 || ca > 0) w2 += w2a, gamma += ca / m;
-      const double d = gamma + std::sqrt(gamma * gamma + 4 * w2);
-      if (d > 0 && 2.0 / d < c.h) {
-        c.h = 2.0 / d;
-        c.object = b;
-        // The stiffest of elasticity, contact and a soft attachment at this vertex; "and damping"
-        // where the damping rate exceeds the frequency (2 / h = γ + sqrt(γ² + 4ω²) is then well above 2ω).
-        const char* stiffest = w2e(i) >= w2c && w2e(i) >= w2a ? "elastic" : w2c >= w2a ? "contact" : "attachment";
-        c.term = std::string(stiffest) + (gamma > std::sqrt(w2) ? " and damping" : "");
-        c.detail = "vertex " + std::to_string(i) + ": ω " + short_number(std::sqrt(w2)) + " rad/s (elastic " +
-                   short_number(std::sqrt(w2e(i))) + ", contact " + short_number(std::sqrt(w2c)) +
-                   (ka > 0 ? ", attachment " + short_number(std::sqrt(w2a)) : std::string()) + "), damping rate γ " +
-                   short_number(gamma) + " 1/s";
-      }
-    }
+  const VerletBound v = verlet_bound(world);
+  c.h = v.h;
+  if (v.body < 0) {
+    c.term = "cap";
+    c.detail = "1 ms at most";
+    return c;
   }
+  c.object = v.body;
+  // The stiffest of elasticity, contact and a soft attachment at this vertex; "and damping"
+  // where the damping rate exceeds the frequency (2 / h = γ + sqrt(γ² + 4ω²) is then well above 2ω).
+  const char* stiffest = v.w2e >= v.w2c && v.w2e >= v.w2a ? "elastic" : v.w2c >= v.w2a ? "contact" : "attachment";
+  c.term = std::string(stiffest) + (v.gamma > std::sqrt(v.w2) ? " and damping" : "");
+  c.detail = "vertex " + std::to_string(v.vertex) + ": ω " + format_g3(std::sqrt(v.w2)) + " rad/s (elastic " +
+             format_g3(std::sqrt(v.w2e)) + ", contact " + format_g3(std::sqrt(v.w2c)) +
+             (v.w2a > 0 ? ", attachment " + format_g3(std::sqrt(v.w2a)) : std::string()) + "), damping rate γ " +
+             format_g3(v.gamma) + " 1/s";
   return c;
 }
 
 std::string TimeStepChoice::describe(const Scene& scene) const {
-  std::string s = short_number(h) + " s (" + scene.integrator + ": ";
+  std::string s = format_g3(h) + " s (" + scene.integrator + ": ";
   if (term == "given") return s + "time_step of the scene)";
   if (object >= 0 && static_cast<size_t>(object) < scene.objects.size())
     s += term + (term == "initial speed" ? " of '" : " stability of '") + scene.objects[object].name + "', ";

@@ -6,18 +6,13 @@
 #include <limits>
 #include <map>
 
+#include "squeeze/common/format.h"
 #include "squeeze/fem/forces.h"
 #include "squeeze/meshing/point_triangle_distance.h"
 #include "squeeze/plan/propagator.h"
 
 namespace squeeze::plan {
 namespace {
-
-std::string g3(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
 
 std::string percent(double x) {
   char buf[32];
@@ -164,8 +159,8 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
     const ObjectCheck& o = out.objects[b];
     if (!o.rigid && o.below_floor > 0)
       warn.push_back(who(scene, b) + ": " + std::to_string(o.below_floor) + " of its " + std::to_string(o.vertices) +
-                     " vertices start below the floor (y = " + g3(*scene.floor) + " m), the deepest by " +
-                     g3(o.below_floor_depth) + " m: the floor penalty pushes them up at once");
+                     " vertices start below the floor (y = " + format_g3(*scene.floor) + " m), the deepest by " +
+                     format_g3(o.below_floor_depth) + " m: the floor penalty pushes them up at once");
     if (!o.rigid && o.hard_pins == o.vertices)
       warn.push_back(who(scene, b) + ": its pins hold every vertex, so it never moves (make it \"kind\": \"rigid\")");
     if (o.robot && (o.hard_pins > 0 || o.soft_pins > 0))
@@ -178,7 +173,7 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
   for (const OverlapCheck& c : out.overlaps) {
     if (c.a == c.b && c.overlapping()) {
       warn.push_back(who(scene, c.a) + ": overlaps itself at rest (" + std::to_string(c.a_in_b) +
-                     " vertices inside its own tetrahedra, deepest " + g3(c.depth) + " m)" +
+                     " vertices inside its own tetrahedra, deepest " + format_g3(c.depth) + " m)" +
                      (tolerant ? ": a contact at rest (contact.rest_overlap)"
                                : ": self-collision pushes them apart at once; set \"self_collision\": false or mend the mesh"));
       continue;
@@ -190,7 +185,7 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
     const std::string counts = std::to_string(c.a_in_b) + " vertices of '" + scene.objects[c.a].name + "' inside '" +
                                scene.objects[c.b].name + "', " + std::to_string(c.b_in_a) + " of '" +
                                scene.objects[c.b].name + "' inside '" + scene.objects[c.a].name + "', deepest " +
-                               g3(c.depth) + " m";
+                               format_g3(c.depth) + " m";
     if (c.overlapping() && robot_pair) {
       const int r = scene.objects[c.a].robot ? c.a : c.b, other = r == c.a ? c.b : c.a;
       if (deep)
@@ -207,8 +202,8 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
       const int r = scene.objects[c.a].robot ? c.a : c.b, other = r == c.a ? c.b : c.a;
       const double edge = world.body(r).mean_edge_length();
       if (c.gap < 0.01 * edge)
-        warn.push_back(who(scene, r) + ": the robot starts touching '" + scene.objects[other].name + "' (gap " + g3(c.gap) +
-                       " m, below 1 % of its mean edge length " + g3(edge) + " m)");
+        warn.push_back(who(scene, r) + ": the robot starts touching '" + scene.objects[other].name + "' (gap " + format_g3(c.gap) +
+                       " m, below 1 % of its mean edge length " + format_g3(edge) + " m)");
     }
   }
   if (robots.size() > 1) {
@@ -223,23 +218,23 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
   if (scene.goal) {
     const Eigen::Vector3d& g = scene.goal->position;
     if (!w.bounds.contains(g))
-      warn.push_back("goal.position: [" + g3(g.x()) + ", " + g3(g.y()) + ", " + g3(g.z()) +
+      warn.push_back("goal.position: [" + format_g3(g.x()) + ", " + format_g3(g.y()) + ", " + format_g3(g.z()) +
                      "] lies outside the bounds of the scene: squeeze plan refuses it");
     if (scene.floor && g.y() < *scene.floor)
-      warn.push_back("goal.position: lies below the floor (y = " + g3(*scene.floor) + " m): no object can reach it");
+      warn.push_back("goal.position: lies below the floor (y = " + format_g3(*scene.floor) + " m): no object can reach it");
   }
   if (scene.time_step && scene.integrator == "verlet") {
     const fem::TimeStepChoice a = fem::auto_time_step(world, scene);
     if (*scene.time_step > a.h * (1 + 1e-9))
-      warn.push_back("time_step: " + g3(*scene.time_step) + " s is " + g3(*scene.time_step / a.h) +
-                     " times the stable Verlet step estimated for the meshes (" + g3(a.h) + " s, " + a.term + " of '" +
+      warn.push_back("time_step: " + format_g3(*scene.time_step) + " s is " + format_g3(*scene.time_step / a.h) +
+                     " times the stable Verlet step estimated for the meshes (" + format_g3(a.h) + " s, " + a.term + " of '" +
                      (a.object >= 0 ? scene.objects[a.object].name : std::string("?")) +
                      "'): it may diverge; the estimate is conservative" +
-                     (out.settle > 0 && !out.settle_diverged ? " and the " + g3(out.settle) + " s settle did not diverge"
+                     (out.settle > 0 && !out.settle_diverged ? " and the " + format_g3(out.settle) + " s settle did not diverge"
                                                               : std::string()));
   }
   if (out.settle_diverged)
-    warn.push_back("the simulation diverges within " + g3(out.settle) + " s at the time step " + g3(w.time_step()) +
+    warn.push_back("the simulation diverges within " + format_g3(out.settle) + " s at the time step " + format_g3(w.time_step()) +
                    " s: lower time_step or the stiffnesses");
   if (out.max_volume_change && !out.settle_diverged) {
     const double limit = *out.max_volume_change;
@@ -247,12 +242,12 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
       const double c = out.objects[b].settle_volume_change;
       if (out.objects[b].rigid) continue;
       if (c >= limit)
-        warn.push_back(who(scene, b) + ": its volume changes by " + percent(c) + " within " + g3(out.settle) +
-                       " s without any control, beyond planner.max_volume_change (" + g3(100 * limit) + " %" +
+        warn.push_back(who(scene, b) + ": its volume changes by " + percent(c) + " within " + format_g3(out.settle) +
+                       " s without any control, beyond planner.max_volume_change (" + format_g3(100 * limit) + " %" +
                        "): every expansion will be discarded");
       else if (c >= 0.5 * limit)
-        warn.push_back(who(scene, b) + ": its volume changes by " + percent(c) + " within " + g3(out.settle) +
-                       " s without any control, more than half of planner.max_volume_change (" + g3(100 * limit) + " %" +
+        warn.push_back(who(scene, b) + ": its volume changes by " + percent(c) + " within " + format_g3(out.settle) +
+                       " s without any control, more than half of planner.max_volume_change (" + format_g3(100 * limit) + " %" +
                        "): many expansions will be discarded");
     }
   }
