@@ -271,6 +271,7 @@ void World::attach(int row, double stiffness, double damping, bool carry_weight)
 double World::attachment_stiffness(int row) const { return data_->attach_k(row); }
 double World::attachment_damping(int row) const { return data_->attach_c(row); }
 bool World::attachment_carries_weight(int row) const { return data_->attach_weight[static_cast<size_t>(row)] != 0; }
+Eigen::Vector3d World::attachment_anchor(int row) const { return data().attach_anchor.row(row).transpose(); }
 
 int World::bodies() const { return static_cast<int>(data_->bodies.size()); }
 const Body& World::body(int b) const { return data_->bodies[b]; }

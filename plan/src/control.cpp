@@ -26,11 +26,9 @@ Robot::Robot(const fem::World& world, int b) : body(b), gravity(world.gravity_of
   attach_k.setZero(vertices);
   anchor = rest;
   for (int i = 0; i < vertices; ++i) {
-    const int row = first_row + i;
     if (!(mass(i) > 0)) continue;
-    attach_k(i) = world.attachment_stiffness(row);
-    if (attach_k(i) > 0 && world.attachment_carries_weight(row))
-      anchor.row(i) -= (world.masses()(row) / attach_k(i)) * gravity.transpose();
+    attach_k(i) = world.attachment_stiffness(first_row + i);
+    if (attach_k(i) > 0) anchor.row(i) = world.attachment_anchor(first_row + i).transpose();
   }
   for (int i = 0; i < vertices; ++i)
     if (B.on_boundary[i] && mass(i) > 0) surface.push_back(i);

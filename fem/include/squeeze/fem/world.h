@@ -112,6 +112,9 @@ class World {
   double attachment_damping(int row) const;
   /// Whether the soft attachment of a state row carries the row's weight (attach carry_weight).
   bool attachment_carries_weight(int row) const;
+  /// Where the attachment spring of a state row has zero length (m): its rest position, raised by
+  /// m g / k where it carries the weight. prepare() first (std::logic_error otherwise).
+  Eigen::Vector3d attachment_anchor(int row) const;
   /// Builds the derived rest data now (element groups, collision numbering) instead of at the
   /// first step: copies made afterwards share it. Idempotent.
   void prepare();

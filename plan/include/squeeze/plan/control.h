@@ -63,7 +63,8 @@ struct Robot {
   Eigen::VectorXd attach_k;   // #vertices N/m: stiffness of each vertex's soft attachment (World::attach; 0: none)
   fem::RowMatrixX3d anchor;   // #vertices by 3 (m): where each attachment spring has zero length (the rest
                               // position, raised by m g / k where it carries the weight)
-  /// Throws InputError if object `b` is rigid or has no movable vertex.
+  /// Throws InputError if object `b` is rigid or has no movable vertex; std::logic_error if the robot
+  /// has soft attachments and `world` is not prepared (World::attachment_anchor).
   Robot(const fem::World& world, int b);
   Robot() = default;
   /// Mass-weighted centre of the robot's movable vertices in state s (m).
