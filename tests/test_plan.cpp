@@ -335,6 +335,8 @@ TEST(Planner, BadPlannerParametersNameTheKey) {
       {{{"iterations", 2.5}}, "planner.iterations: must be an integer"},
       {{{"max_volume_change", "NaN"}}, "planner.max_volume_change: must be a number"},
       {{{"speed", 3}}, "planner.speed: unknown key"},
+      {{{"settle_start", -1}}, "planner.settle_start: must be >= 0"},
+      {{{"settle_start", "soon"}}, "planner.settle_start: must be a number"},
   };
   for (const Case& c : cases) {
     const fs::path scene = write_scene(d, mini_scene({{"planner", c.planner}}));

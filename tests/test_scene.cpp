@@ -450,6 +450,10 @@ TEST_F(SceneTest, BadPinsAndPresetsNameTheKeyPath) {
        "objects[0].pinned[0].damping: only for soft attachments"},
       {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "stiffness": 1, "damping": -1}]}]})",
        "objects[0].pinned[0].damping: must be >= 0"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "carries_weight": true}]}]})",
+       "objects[0].pinned[0].carries_weight: only for soft attachments"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "stiffness": 1, "carries_weight": 1}]}]})",
+       "objects[0].pinned[0].carries_weight: must be"},
   };
   for (const auto& [text, expected] : cases) {
     const fs::path p = scene_file(text);
