@@ -152,7 +152,6 @@ TEST_P(TargetTest, CountMetAndContractAndQualityHold) {
   const std::string what = std::string(c.file) + " --target-tets " + std::to_string(c.target);
   squeeze::meshing::MeshOptions options;
   options.tetrahedralize.target_tets = c.target;
-  options.check_self_intersection = false;
   const auto r = squeeze::meshing::mesh_file(data(c.file), options);
   const SurfaceMesh surface = read_off(data(c.file));
   // The organs are unions of touching, overlapping closed parts: their summed enclosed volume is
