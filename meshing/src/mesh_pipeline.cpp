@@ -1,6 +1,7 @@
 #include "squeeze/meshing/mesh_pipeline.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/Geometry>
 
@@ -9,6 +10,8 @@
 #include <cstdlib>
 #include <algorithm>
 #include <cmath>
+
+#include <spdlog/spdlog.h>
 
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
@@ -96,6 +99,69 @@ double area(const SurfaceMesh& m) {
   return a;
 }
 
+// The faces `faces` of m (sorted) with the vertices they use, renumbered in order of first use.
+SurfaceMesh sub_mesh(const SurfaceMesh& m, const std::vector<int>& faces) {
+  std::vector<int> map(static_cast<size_t>(m.V.rows()), -1);
+  SurfaceMesh out;
+  out.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  int n = 0;
+  for (size_t i = 0; i < faces.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      int& v = map[static_cast<size_t>(m.F(faces[i], k))];
+      if (v < 0) v = n++;
+      out.F(static_cast<Eigen::Index>(i), k) = v;
+    }
+  out.V.resize(n, 3);
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v)
+    if (map[static_cast<size_t>(v)] >= 0) out.V.row(map[static_cast<size_t>(v)]) = m.V.row(v);
+  return out;
+}
+
+SurfaceMesh concatenate(const std::vector<SurfaceMesh>& ms) {
+  Eigen::Index nv = 0, nf = 0;
+  for (const auto& m : ms) nv += m.V.rows(), nf += m.F.rows();
+  SurfaceMesh out;
+  out.V.resize(nv, 3);
+  out.F.resize(nf, 3);
+  Eigen::Index v = 0, f = 0;
+  for (const auto& m : ms) {
+    out.V.middleRows(v, m.V.rows()) = m.V;
+    out.F.middleRows(f, m.F.rows()) = m.F.array() + static_cast<int>(v);
+    v += m.V.rows(), f += m.F.rows();
+  }
+  return out;
+}
+
+TetMesh concatenate(const std::vector<TetMesh>& ms) {
+  Eigen::Index nv = 0, nt = 0;
+  for (const auto& m : ms) nv += m.V.rows(), nt += m.T.rows();
+  TetMesh out;
+  out.V.resize(nv, 3);
+  out.T.resize(nt, 4);
+  Eigen::Index v = 0, t = 0;
+  for (const auto& m : ms) {
+    out.V.middleRows(v, m.V.rows()) = m.V;
+    out.T.middleRows(t, m.T.rows()) = m.T.array() + static_cast<int>(v);
+    v += m.V.rows(), t += m.T.rows();
+  }
+  return out;
+}
+
+// One part of the input and what becomes of it.
+struct Part {
+  SurfaceMesh surface;        // closed, outward, 2-manifold, no self-intersection
+  bool from_input = false;    // a component of the input (else of the solid's surface)
+  std::vector<int> input_faces;  // a component: its faces in the input
+  bool check = false;         // it intersects itself: check its simplified boundary
+  bool failed = false;        // ... which still did
+  double volume = 0;
+  int target_faces = 0;
+  SurfaceMesh boundary;
+  EnvelopeStats envelope;
+  TetMesh tets;
+  TetrahedralizeStats tet_stats;
+};
+
 std::string percent(double x) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.2g%%", 100.0 * x);
@@ -128,42 +194,166 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   r.hull_budget = dopt.max_hulls;
   r.decomposition = decompose(r.input, dopt, progress);
 
-  // The boundary: the input itself when it bounds its solid cleanly, else the solid's surface.
+  // The parts: each face-connected component of the input that is a closed oriented 2-manifold
+  // enclosing volume bounds its own solid and is its own boundary (when it intersects itself, only
+  // if its simplified boundary no longer does: slivers of zero area, say, collapse away); the
+  // other components together (open, non-manifold, and self-intersecting ones whose simplified
+  // boundary still is) are replaced by the surface of the solid their winding number bounds
+  // (solid_surface.h), whose connected components are parts too. Parts are meshed one by one, so
+  // touching or overlapping parts stay as the input has them.
   timer.start("boundary");
-  r.boundary_from_input = r.info.closed && !r.info.self_intersecting &&
-                          is_oriented_two_manifold(r.input.F, static_cast<int>(r.input.V.rows()));
-  SurfaceMesh solid;
-  if (r.boundary_from_input) {
-    solid = r.input;
-  } else {
-    const FastWindingNumber wn(r.input.V, r.input.F);
-    const TriangleBvh bvh(r.input.V, r.input.F);
-    solid = solid_surface(r.input, wn, bvh, opt.solid_grid * diag, progress);
+  std::vector<Part> parts;
+  std::vector<int> rest;  // faces of the input for the solid's surface
+  {
+    Eigen::VectorXi C;
+    const int nc = face_components(r.input.F, C);
+    std::vector<std::vector<int>> faces(static_cast<size_t>(nc));
+    for (Eigen::Index f = 0; f < r.input.F.rows(); ++f) faces[static_cast<size_t>(C(f))].push_back(static_cast<int>(f));
+    std::vector<Part> component(static_cast<size_t>(nc));
+    std::vector<char> usable(static_cast<size_t>(nc), 0);
+    tbb::parallel_for(0, nc, [&](int c) {
+      tbb::this_task_arena::isolate([&] {
+        Part& p = component[static_cast<size_t>(c)];
+        p.input_faces = faces[static_cast<size_t>(c)];
+        p.surface = sub_mesh(r.input, p.input_faces);
+        const SurfaceMesh& m = p.surface;
+        const bool closed = is_closed(m.F), manifold = is_oriented_two_manifold(m.F, static_cast<int>(m.V.rows()));
+        p.volume = signed_volume(m);
+        // Enclosing volume: a mean thickness (3 volume / area) above a millionth of the diagonal
+        // (a face and its twin, say, enclose none).
+        usable[static_cast<size_t>(c)] = closed && manifold && 3.0 * p.volume > 1e-6 * diag * area(m);
+        p.from_input = true;
+        p.check = usable[static_cast<size_t>(c)] && does_self_intersect(m);
+        spdlog::debug("component {}: {} faces, closed {}, oriented 2-manifold {}, volume {:.4g}, self-intersecting {}", c,
+                      m.F.rows(), closed, manifold, p.volume, p.check);
+      });
+    });
+    for (int c = 0; c < nc; ++c) {
+      if (usable[static_cast<size_t>(c)]) parts.push_back(std::move(component[static_cast<size_t>(c)]));
+      else rest.insert(rest.end(), faces[static_cast<size_t>(c)].begin(), faces[static_cast<size_t>(c)].end());
+    }
   }
-  r.solid_surface_faces = static_cast<int>(solid.F.rows());
-  if (solid.F.rows() == 0 || !(signed_volume(solid) > 0))
-    throw InputError("the surface encloses no volume (winding number above 1/2 nowhere)");
-  r.input_volume_from_winding_number = !r.info.closed;
-  if (r.info.closed && !r.info.self_intersecting) r.input_volume = r.info.volume;
-  else r.input_volume = signed_volume(solid);  // overlapping closed parts: their union's volume
-  if (r.info.closed) r.info.volume = r.input_volume;
-  else r.info.volume = r.input_volume;
+  // The parts of the solid the faces `rest` bound.
+  auto solid_parts = [&](std::vector<int> rest_faces) {
+    std::vector<Part> out;
+    std::sort(rest_faces.begin(), rest_faces.end());
+    const SurfaceMesh soup = sub_mesh(r.input, rest_faces);
+    const FastWindingNumber wn(soup.V, soup.F);
+    const TriangleBvh bvh(soup.V, soup.F);
+    const SurfaceMesh solid = solid_surface(soup, wn, bvh, opt.solid_grid * diag, progress);
+    r.solid_surface_faces += static_cast<int>(solid.F.rows());
+    Eigen::VectorXi S;
+    const int ns = solid.F.rows() > 0 ? face_components(solid.F, S) : 0;
+    std::vector<std::vector<int>> sf(static_cast<size_t>(ns));
+    for (Eigen::Index f = 0; f < solid.F.rows(); ++f) sf[static_cast<size_t>(S(f))].push_back(static_cast<int>(f));
+    for (int c = 0; c < ns; ++c) {
+      Part p;
+      p.surface = sub_mesh(solid, sf[static_cast<size_t>(c)]);
+      p.volume = signed_volume(p.surface);
+      // A cavity's wall belongs with its part; specks smaller than a grid cell are below what the
+      // grid resolves (stray faces of the input inside other parts make them) and are dropped.
+      const double h = opt.solid_grid * diag;
+      if (p.volume > h * h * h) out.push_back(std::move(p));
+      else spdlog::debug("solid part of {} faces and volume {:.3g} dropped (a grid cell is {:.3g})", p.surface.F.rows(), p.volume, h * h * h);
+    }
+    return out;
+  };
+  if (!rest.empty())
+    for (Part& p : solid_parts(rest)) parts.push_back(std::move(p));
+  if (parts.empty()) throw InputError("the surface encloses no volume (winding number above 1/2 nowhere)");
+  double total_volume = 0;
+  for (const Part& p : parts) total_volume += p.volume;
 
-  // As many boundary faces as a mesh of target_tets tetrahedra has (edge length from the volume;
-  // a regular tetrahedron of edge L has volume L³/(6√2), Delaunay meshes average about half),
-  // fewer where the deviation bounds allow nothing coarser.
+  // Each part gets the share of target_tets its volume has; its boundary as many faces as a mesh
+  // of that many tetrahedra has (edge length from the volume: a regular tetrahedron of edge L has
+  // volume L³/(6√2), Delaunay meshes average about half), fewer where the deviation bounds allow
+  // nothing coarser. The bounds are fractions of the whole input's diagonal.
   const double target = opt.tetrahedralize.target_tets;
-  const double L = std::cbrt(6.0 * std::sqrt(2.0) * r.input_volume / (0.5 * target));
+  const double L = std::cbrt(6.0 * std::sqrt(2.0) * total_volume / (0.5 * target));
   EnvelopeOptions eopt;
   eopt.max_outside = opt.max_deviation * diag;
   eopt.max_inside = opt.inner_deviation * opt.max_deviation * diag;
-  eopt.target_faces = std::max(8, static_cast<int>(std::lround(area(solid) / (0.433 * L * L))));
-  r.boundary = simplify_envelope(solid, eopt, &r.envelope, progress);
-
-  if (const char* dbg = std::getenv("SQUEEZE_DEBUG_BOUNDARY")) save_surface(dbg, r.boundary);  // TEMP
-  timer.start("tetrahedralizing");
-  r.tets = tetrahedralize(r.boundary, opt.tetrahedralize, &r.tet_stats, progress);
-  if (r.tets.T.rows() == 0) throw InputError("tetrahedralization produced no tetrahedra");
+  timer.start("simplifying and tetrahedralizing");
+  auto mesh_parts = [&](std::vector<Part>& ps, size_t first) {
+    const bool progress_here = ps.size() == 1;
+    tbb::parallel_for(first, ps.size(), size_t(1), [&](size_t i) {
+      // Isolated: a thread waiting inside one part's work (CGAL, TBB loops) takes no other part's
+      // work, so each part runs start to end on one thread with its own CGAL random state.
+      tbb::this_task_arena::isolate([&] {
+        Part& p = ps[i];
+        EnvelopeOptions e = eopt;
+        e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
+        p.target_faces = e.target_faces;
+        p.boundary = simplify_envelope(p.surface, e, &p.envelope, progress_here ? progress : nullptr);
+        if (p.check && does_self_intersect(p.boundary)) {
+          p.failed = true;
+          return;
+        }
+        TetrahedralizeOptions t = opt.tetrahedralize;
+        t.target_tets = std::max(1, static_cast<int>(std::lround(target * p.volume / total_volume)));
+        t.max_tets = std::max(1000, static_cast<int>(std::lround(opt.tetrahedralize.max_tets * p.volume / total_volume)));
+        p.tets = tetrahedralize(p.boundary, t, &p.tet_stats, progress_here ? progress : nullptr);
+        if (p.tets.T.rows() == 0) {
+          // The simplified boundary defeated the tetrahedralization: the part's own surface.
+          spdlog::debug("part {}: no tetrahedra from its simplified boundary; meshing its surface as it is", i);
+          p.boundary = p.surface;
+          p.tets = tetrahedralize(p.boundary, t, &p.tet_stats, progress_here ? progress : nullptr);
+        }
+        spdlog::debug("part {}: {} faces, volume {:.4g}, boundary {} faces, target {}, {} tetrahedra, conforming {}", i,
+                      p.surface.F.rows(), p.volume, p.boundary.F.rows(), t.target_tets, p.tets.T.rows(),
+                      p.tet_stats.conforming);
+      });
+    });
+  };
+  mesh_parts(parts, 0);
+  {
+    // Self-intersecting components whose simplified boundary still intersects itself: their solid's surface.
+    std::vector<int> again;
+    std::vector<Part> kept;
+    for (size_t i = 0; i < parts.size(); ++i) {
+      if (parts[i].failed) {
+        spdlog::debug("part {}: its simplified boundary intersects itself; meshing its solid's surface", i);
+        again.insert(again.end(), parts[i].input_faces.begin(), parts[i].input_faces.end());
+      } else {
+        kept.push_back(std::move(parts[i]));
+      }
+    }
+    if (!again.empty()) {
+      const size_t first = kept.size();
+      for (Part& p : solid_parts(again)) kept.push_back(std::move(p));
+      mesh_parts(kept, first);
+    }
+    parts = std::move(kept);
+  }
+  r.parts = static_cast<int>(parts.size());
+  r.boundary_from_input = std::all_of(parts.begin(), parts.end(), [](const Part& p) { return p.from_input; });
+  r.input_volume_from_winding_number = !r.info.closed;
+  r.input_volume = 0;
+  for (const Part& p : parts) r.input_volume += p.volume;
+  r.info.volume = r.input_volume;
+  // Concatenated in part order.
+  {
+    std::vector<SurfaceMesh> b;
+    std::vector<TetMesh> t;
+    for (Part& p : parts) {
+      b.push_back(std::move(p.boundary));
+      t.push_back(std::move(p.tets));
+      r.envelope.faces += p.envelope.faces;
+      r.envelope.collapses += p.envelope.collapses;
+      r.envelope.bounded = r.envelope.bounded || p.envelope.bounded;
+      r.boundary_target_faces += p.target_faces;
+      TetrahedralizeStats& s = r.tet_stats;
+      s.attempts = std::max(s.attempts, p.tet_stats.attempts);
+      s.edge_length = std::max(s.edge_length, p.tet_stats.edge_length);
+      s.minimum_tets += p.tet_stats.minimum_tets;
+      s.boundary_splits += p.tet_stats.boundary_splits;
+      s.steiner_points += p.tet_stats.steiner_points;
+      s.peeled += p.tet_stats.peeled;
+      s.conforming = s.conforming && p.tet_stats.conforming;
+    }
+    r.boundary = concatenate(b);
+    r.tets = concatenate(t);
+  }
   // Label: the convex shell that holds the centroid (the most interior one).
   r.tets.label.resize(r.tets.T.rows());
   for (Eigen::Index t = 0; t < r.tets.T.rows(); ++t) {
@@ -221,25 +411,27 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
 
   // Why the count is off the target, when it is by more than 35%.
   const double tets = r.quality.tets;
+  const std::string dihedral = std::to_string(static_cast<int>(opt.tetrahedralize.refine_dihedral));
+  const std::string in_parts =
+      r.parts > 1 ? " over the input's " + std::to_string(r.parts) + " parts (each meshed on its own)" : "";
   if (tets > 1.35 * target) {
     if (r.envelope.bounded)
       r.target_exceeded_because =
           "keeping the boundary within " + percent(opt.max_deviation) + " of the bounding-box diagonal outside and " +
           percent(opt.inner_deviation * opt.max_deviation) + " inside the input surface takes " +
-          std::to_string(r.boundary.F.rows()) + " boundary triangles (a mesh of " + std::to_string(r.target_tets) +
-          " tetrahedra has about " + std::to_string(eopt.target_faces) + "), and tetrahedra with dihedral angles of at least " +
-          std::to_string(static_cast<int>(opt.tetrahedralize.refine_dihedral)) + " degrees between them need " +
+          std::to_string(r.boundary.F.rows()) + " boundary triangles" + in_parts + " (a mesh of " +
+          std::to_string(r.target_tets) + " tetrahedra has about " + std::to_string(r.boundary_target_faces) +
+          "), and tetrahedra with dihedral angles of at least " + dihedral + " degrees between them need " +
           std::to_string(r.quality.tets);
     else
-      r.target_exceeded_because = "the boundary's " + std::to_string(r.boundary.F.rows()) +
-                                  " triangles and tetrahedra with dihedral angles of at least " +
-                                  std::to_string(static_cast<int>(opt.tetrahedralize.refine_dihedral)) +
+      r.target_exceeded_because = "the boundary's " + std::to_string(r.boundary.F.rows()) + " triangles" + in_parts +
+                                  " and tetrahedra with dihedral angles of at least " + dihedral +
                                   " degrees (flatter where the solid is thinner than the edge length) need " +
                                   std::to_string(r.quality.tets) + " tetrahedra";
   } else if (tets < 0.65 * target) {
     r.target_exceeded_because = "the solid's boundary holds only " + std::to_string(r.boundary.F.rows()) +
-                                " triangles and refining the inside stopped at " + std::to_string(r.quality.tets) +
-                                " tetrahedra";
+                                " triangles" + in_parts + " and refining the inside stopped at " +
+                                std::to_string(r.quality.tets) + " tetrahedra";
   }
   timer.stop();
   return r;
@@ -293,7 +485,7 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"vertices", r.info.vertices},
         {"faces", r.info.faces},
         {"components", r.info.components},
-        {"connected_parts", r.decomposition.parts},
+        {"connected_parts", r.parts},
         {"closed", r.info.closed},
         {"boundary_edges", r.info.boundary_edges},
         {"nonmanifold_edges", r.info.nonmanifold_edges},
@@ -312,6 +504,8 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"hull_budget", r.hull_budget}}},
       {"boundary",
        {{"source", r.boundary_from_input ? "input" : "solid_surface"},
+        {"parts", r.parts},
+        {"target_faces", r.boundary_target_faces},
         {"faces_before", r.solid_surface_faces},
         {"faces", r.boundary.F.rows()},
         {"collapses", r.envelope.collapses},

@@ -359,7 +359,9 @@ class Mesher {
     for (uint64_t key : crease) {
       const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xFFFFFFFFu);
       const double len = (P_[b] - P_[a]).norm();
-      const int k = std::isfinite(spacing) ? std::max(1, static_cast<int>(std::ceil(len / spacing - 1e-9))) : 1;
+      // (At most 64 pieces: a spacing far below the surface's own edges comes from a part with next
+      // to no volume, whose faces need no points between their corners.)
+      const int k = std::isfinite(spacing) ? std::clamp(static_cast<int>(std::ceil(len / spacing - 1e-9)), 1, 64) : 1;
       std::vector<int> c{a};
       for (int i = 1; i < k; ++i) {
         c.push_back(static_cast<int>(P_.size()));
@@ -451,6 +453,8 @@ class Mesher {
             if (near < 0.5 * spacing) continue;
             inner.emplace_back(q, 0);
           }
+        spdlog::trace("patch {}: {} faces, {} boundary edges, {} lattice points, spacing {:.3g}, extent {:.3g} x {:.3g}", pi,
+                      fs.size(), boundary.size(), inner.size(), spacing, x1 - x0, y1 - y0);
         for (auto& [q, id] : inner) {
           id = static_cast<int>(P_.size());
           P_.push_back(origin + q.x() * u + q.y() * v + offset * nc);
@@ -937,7 +941,7 @@ TetMesh tetrahedralize(const SurfaceMesh& boundary, const TetrahedralizeOptions&
     Mesher mesher(boundary, wn, opt, L);
     RunResult r = mesher.run(progress);
     const double n = static_cast<double>(r.mesh.T.rows());
-    spdlog::info("tetrahedralize attempt {}: edge length {:.4g}: {} tetrahedra, {} boundary splits, {} Steiner points "
+    spdlog::debug("tetrahedralize attempt {}: edge length {:.4g}: {} tetrahedra, {} boundary splits, {} Steiner points "
                  "({} for size), {:.2f} s",
                  attempt + 1, L, r.mesh.T.rows(), r.boundary_splits, r.steiner, r.size_driven,
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());

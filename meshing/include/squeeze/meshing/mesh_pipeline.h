@@ -36,7 +36,7 @@ struct MeshOptions {
                                         // report's deviation_out)
   double inner_deviation = 0.45;        // how far input surface points may lie outside the tet mesh
                                         // (deviation_in), as a share of max_deviation
-  double solid_grid = 0.005;            // fraction of the diagonal: grid spacing of the solid's
+  double solid_grid = 0.008;            // fraction of the diagonal: grid spacing of the solid's
                                         // surface for inputs that are not a closed 2-manifold
                                         // without self-intersections (solid_surface.h)
   double coverage_tolerance = 0.005;    // fraction of the bbox diagonal for the coverage figure
@@ -48,17 +48,21 @@ struct MeshResult {
   SurfaceInfo info;             // counts, closedness, self-intersection, volume
   Decomposition decomposition;  // convex shells
   int hull_budget = 0;          // max_hulls the decomposition ran with (see hull_budget())
-  bool boundary_from_input = false;  // the input was a closed 2-manifold without self-intersection
-                                // and is simplified as it is; else its solid's surface is
-  int solid_surface_faces = 0;  // faces of that surface before simplification
-  SurfaceMesh boundary;         // the simplified boundary the tet mesh has
+  int parts = 0;                // parts meshed on their own: the input's components that are closed
+                                // oriented 2-manifolds without self-intersection, and the connected
+                                // components of the solid's surface of the other components
+  bool boundary_from_input = false;  // every part is a component of the input (no solid surface)
+  int solid_surface_faces = 0;  // faces of the solid's surface before simplification (0: none made)
+  SurfaceMesh boundary;         // the simplified boundaries of all parts (one closed surface each)
+  int boundary_target_faces = 0;  // the face count the target asked of them, summed
   EnvelopeStats envelope;
-  TetMesh tets;                 // the coarse tetrahedral mesh
+  TetMesh tets;                 // the coarse tetrahedral mesh: one conforming mesh per part, in part order
   TetQuality quality;
   TetrahedralizeStats tet_stats;
   int target_tets = 0;
   std::string target_exceeded_because;  // empty: the count is within ±35% of the target
-  double input_volume = 0;      // closed: enclosed volume; open: winding-number volume
+  double input_volume = 0;      // the parts' enclosed volumes, summed (overlapping parts count twice,
+                                // as their tet meshes do)
   bool input_volume_from_winding_number = false;
   std::optional<double> volume_ratio;  // tet volume / the solid's volume, closed inputs only
   double deviation_out = 0;     // largest distance of tet-boundary points from the input surface (units)
