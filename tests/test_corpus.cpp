@@ -160,10 +160,13 @@ TEST_P(TargetTest, CountMetAndContractAndQualityHold) {
   const InputTruth truth = truth_of(surface, c.closed);
   const TetFacts f = expect_mesh_contract(r.tets, truth, what, 5000, 3.0);
   EXPECT_EQ(f.components, 1) << what;
-  EXPECT_GE(f.tets, 0.65 * c.target) << what;
-  EXPECT_LE(f.tets, 1.35 * c.target) << what;
-  // Simulation quality (explicit integration: the stable step follows the smallest element).
-  EXPECT_GE(f.min_dihedral, 10.0 - 1e-9) << what;
+  // Within ±35 % of the target unless the report says why (issue 16: fidelity wins over the count).
+  if (r.target_exceeded_because.empty()) {
+    EXPECT_GE(f.tets, 0.65 * c.target) << what;
+    EXPECT_LE(f.tets, 1.35 * c.target) << what;
+  }
+  // Simulation quality: issue 16's floor (flatter tetrahedra where a part is thin, not inflation).
+  EXPECT_GE(f.min_dihedral, 5.0 - 1e-9) << what;
   EXPECT_GE(f.min_edge, 0.1 * f.mean_edge) << what << ": min edge " << f.min_edge << ", mean " << f.mean_edge;
   // The hull budget follows the target.
   EXPECT_LE(static_cast<int>(r.decomposition.shells.size()), squeeze::meshing::hull_budget(options)) << what;

@@ -273,7 +273,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   EnvelopeOptions eopt;
   eopt.max_outside = opt.max_deviation * diag;
   eopt.max_inside = opt.inner_deviation * opt.max_deviation * diag;
-  timer.start("simplifying and tetrahedralizing");
+  timer.start("tetrahedralizing");  // (simplifying each part's boundary, then tetrahedralizing it)
   auto mesh_parts = [&](std::vector<Part>& ps, size_t first) {
     const bool progress_here = ps.size() == 1;
     tbb::parallel_for(first, ps.size(), size_t(1), [&](size_t i) {
