@@ -285,6 +285,9 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
         e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
         p.target_faces = e.target_faces;
         p.boundary = simplify_envelope(p.surface, e, &p.envelope, progress_here ? progress : nullptr);
+        if (spdlog::should_log(spdlog::level::debug))
+          spdlog::debug("part {}: simplified boundary of {} faces intersects itself: {}", i, p.boundary.F.rows(),
+                        does_self_intersect(p.boundary));
         if (p.check && does_self_intersect(p.boundary)) {
           p.failed = true;
           return;

@@ -655,9 +655,15 @@ class Mesher {
                                  }),
                   split.end());
       if (split.empty()) {
+        spdlog::debug("conformity round {}: gave up, {} missing edges, only edges of triangles split 10 times left", round,
+                      missing.size());
         return false;
       }
-      if (static_cast<int>(P_.size()) + static_cast<int>(split.size()) > conformity_cap_) return false;
+      if (static_cast<int>(P_.size()) + static_cast<int>(split.size()) > conformity_cap_) {
+        spdlog::debug("conformity round {}: gave up at the cap ({} points + {} splits > {})", round, P_.size(), split.size(),
+                      conformity_cap_);
+        return false;
+      }
       for (uint64_t k : split) split_edge(k);
     }
     return false;
