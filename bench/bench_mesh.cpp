@@ -5,9 +5,9 @@
 //                             --target-tets, per-stage seconds as counters
 //  BM_MeshTarget/<model>_<N>  the same with --target-tets N: tets, hulls, min dihedral, min/mean
 //                             edge, volume ratio and coverage as counters
-//  BM_TetrahedralizeVsTetgen  squeeze's tetrahedralization of the bunny's convex shells (their union,
-//                             one conforming mesh) against the Debian `tetgen` binary meshing each
-//                             shell on its own (`tetgen -pq1.414 -Q shell.off`), and their ratio
+//  BM_TetrahedralizeVsTetgen  squeeze's tetrahedralization of the bunny's surface (the boundary
+//                             version 4 meshes) against the Debian `tetgen` binary meshing the same
+//                             surface (`tetgen -pq1.414 -Q bunny.off`), and their ratio
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -31,15 +31,9 @@ fs::path data(const std::string& name) { return fs::path(SQUEEZE_TEST_DATA) / na
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// The options of `squeeze mesh` without --target-tets (cli/cmd_mesh.cpp): max_hulls shells, a
-// boundary within 0.7% of the diagonal, slivers perturbed up to 6 degrees.
-squeeze::meshing::MeshOptions boundary_first_options() {
-  squeeze::meshing::MeshOptions o;
-  o.tets_per_hull = 0;
-  o.tetrahedralize.facet_distance = 0.007;
-  o.tetrahedralize.sliver_bound = 6.0;
-  return o;
-}
+// The options of `squeeze mesh` without flags (cli/cmd_mesh.cpp): since meshing version 4 the
+// library's defaults.
+squeeze::meshing::MeshOptions boundary_first_options() { return {}; }
 
 // The whole pipeline, as `squeeze mesh MODEL -o out.mesh` runs it (without writing the file).
 void BM_Mesh(benchmark::State& state, const std::string& model) {
@@ -103,8 +97,8 @@ BENCHMARK_CAPTURE(BM_MeshTarget, dragon_150, std::string("ChineseDragon-10kv.off
 BENCHMARK_CAPTURE(BM_MeshTarget, heart_300, std::string("organs/heart.off"), 300)
     ->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
-// One convex shell as an OFF file (TetGen 1.5 reads .off with -p).
-void write_shell_off(const fs::path& p, const squeeze::meshing::ConvexHull& h) {
+// A surface as an OFF file (TetGen 1.5 reads .off with -p).
+void write_shell_off(const fs::path& p, const squeeze::meshing::SurfaceMesh& h) {
   std::ofstream out(p);
   out.precision(17);
   out << "OFF\n" << h.V.rows() << ' ' << h.F.rows() << " 0\n";
@@ -119,32 +113,28 @@ long tets_in_ele(const fs::path& ele) {
   return n;
 }
 
-// squeeze's tetrahedralization of the bunny's shells vs tetgen on each shell.
+// squeeze's tetrahedralization of the bunny's surface vs tetgen on the same surface.
 void BM_TetrahedralizeVsTetgen(benchmark::State& state) {
   const char* tetgen = "/usr/bin/tetgen";
   if (::access(tetgen, X_OK) != 0) {
     state.SkipWithError("/usr/bin/tetgen not found (apt-get install tetgen)");
     return;
   }
-  // Decompose once, outside the timing.
   const squeeze::meshing::MeshOptions options = boundary_first_options();
   const squeeze::meshing::SurfaceMesh bunny = squeeze::meshing::load_surface(data("bunny00.off"));
-  squeeze::meshing::SurfaceMesh oriented{bunny.V, squeeze::meshing::orient_outward(bunny.V, bunny.F)};
-  const squeeze::meshing::Decomposition d = squeeze::meshing::decompose(oriented, options.decomposition);
+  const squeeze::meshing::SurfaceMesh oriented{bunny.V, squeeze::meshing::orient_outward(bunny.V, bunny.F)};
   const fs::path dir = fs::temp_directory_path() / ("squeeze-bench-tetgen-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::vector<fs::path> files;
-  for (size_t i = 0; i < d.shells.size(); ++i) {
-    files.push_back(dir / ("shell" + std::to_string(i) + ".off"));
-    write_shell_off(files.back(), d.shells[i].hull);
-  }
+  files.push_back(dir / "bunny.off");
+  write_shell_off(files.back(), oriented);
 
   double squeeze_s = 0, tetgen_s = 0, squeeze_tets = 0, tetgen_tets = 0;
   int failures = 0;
   for (auto _ : state) {
     auto t0 = Clock::now();
     squeeze::meshing::TetrahedralizeStats stats;
-    const squeeze::meshing::TetMesh m = squeeze::meshing::tetrahedralize(d.shells, options.tetrahedralize, &stats);
+    const squeeze::meshing::TetMesh m = squeeze::meshing::tetrahedralize(oriented, options.tetrahedralize, &stats);
     squeeze_s += seconds_since(t0);
     squeeze_tets = static_cast<double>(m.T.rows());
 
@@ -160,9 +150,8 @@ void BM_TetrahedralizeVsTetgen(benchmark::State& state) {
   }
   std::error_code ec;
   fs::remove_all(dir, ec);
-  if (failures) state.SkipWithError(("tetgen failed on " + std::to_string(failures) + " shell runs").c_str());
+  if (failures) state.SkipWithError(("tetgen failed on " + std::to_string(failures) + " runs").c_str());
   const double n = static_cast<double>(state.iterations());
-  state.counters["shells"] = static_cast<double>(d.shells.size());
   state.counters["squeeze_s"] = squeeze_s / n;
   state.counters["tetgen_s"] = tetgen_s / n;
   state.counters["squeeze_over_tetgen"] = tetgen_s > 0 ? squeeze_s / tetgen_s : 0;

@@ -19,14 +19,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// --facet-distance when --target-tets is not given (fraction of the diagonal).
-constexpr double kBoundaryFirstFacetDistance = 0.007;
-// --sliver-bound when --target-tets is not given (degrees).
-constexpr double kBoundaryFirstSliverBound = 6.0;
-
 struct MeshArgs {
   std::string input, output, shells, report;
   meshing::MeshOptions options;
+  double facet_distance = 0;  // --facet-distance (before version 4; now --max-deviation)
+  double offset = 0;          // --offset (before version 4; no longer used)
 };
 
 
@@ -49,10 +46,13 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
   cmd->add_option("--max-hulls", args->options.decomposition.max_hulls,
                   "At most this many convex shells (and at most target-tets / tets-per-hull)")
       ->capture_default_str();
-  CLI::Option* target = cmd->add_option("--target-tets", args->options.tetrahedralize.target_tets,
-                  "Desired number of tetrahedra (met within about 35%); the planner's cost grows with it. "
-                  "Without it: up to --max-hulls shells and a boundary within 0.7% of the diagonal, "
-                  "whatever count that needs (at most 5000)")
+  cmd->add_option("--target-tets", args->options.tetrahedralize.target_tets,
+                  "Desired number of tetrahedra (met within about 35% when the boundary allows; a boundary that "
+                  "needs more gets more, and the report says why); the planner's cost grows with it")
+      ->capture_default_str();
+  cmd->add_option("--max-deviation", args->options.max_deviation,
+                  "Largest distance of the tetrahedral mesh's boundary from the input surface, as a fraction of the "
+                  "bounding-box diagonal; input points may lie outside the mesh by at most a third of it")
       ->capture_default_str();
   cmd->add_option("--tets-per-hull", args->options.tets_per_hull,
                   "The hull budget is at most target-tets / this (0: --max-hulls alone)")
@@ -60,32 +60,32 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
   cmd->add_option("--voxel-resolution", args->options.decomposition.voxel_resolution,
                   "Voxels along the longest side for inside/outside and cut evaluation")
       ->capture_default_str();
-  CLI::Option* facet = cmd->add_option("--facet-distance", args->options.tetrahedralize.facet_distance,
-                  "Largest distance of boundary facets from the shells, as a fraction of the diagonal "
-                  "(0: a fifth of the cell size, which follows --target-tets)")
+  CLI::Option* facet = cmd->add_option("--facet-distance", args->facet_distance,
+                  "Before meshing version 4: the largest distance of boundary facets from the shells; now the same "
+                  "as --max-deviation (0: not given)")
       ->capture_default_str();
-  cmd->add_option("--offset", args->options.tetrahedralize.offset,
-                  "Dilation of the shells before meshing, as a fraction of the diagonal (keeps their corners inside)")
+  CLI::Option* offset = cmd->add_option("--offset", args->offset,
+                  "Before meshing version 4: a dilation of the shells; version 4 meshes the input's own boundary "
+                  "and does not dilate (accepted and ignored)")
       ->capture_default_str();
-  CLI::Option* sliver = cmd->add_option("--sliver-bound", args->options.tetrahedralize.sliver_bound,
-                  "Degrees: Mesh_3's sliver perturber and exuder work on tetrahedra with a smaller dihedral angle "
-                  "(without --target-tets: 6)")
+  cmd->add_option("--sliver-bound", args->options.tetrahedralize.sliver_bound,
+                  "Degrees: the sliver exuder works on tetrahedra with a smaller dihedral angle")
       ->capture_default_str();
   cmd->add_option("--shells", args->shells,
                   "Also write the convex shells as one surface file (" + meshing::surface_format_examples() + ")");
   cmd->add_option("--report", args->report, "Also write a JSON report (input, hulls, tets, quality, coverage, seconds)");
 
-  return [args, &global, target, facet, sliver]() -> int {
+  return [args, &global, facet, offset]() -> int {
     MeshArgs& a = *args;
-    if (target->count() == 0) {
-      // No target: the boundary-first defaults (as before targets were honoured on curved input),
-      // which keep the tet volume within 1.35 of the input's on the corpus.
-      a.options.tets_per_hull = 0;
-      if (facet->count() == 0) a.options.tetrahedralize.facet_distance = kBoundaryFirstFacetDistance;
-      // Perturbing to 10 degrees costs seconds on these fine boundaries (the bunny: 5 s instead of
-      // 0.3 s); boundary slivers are still peeled at min_dihedral.
-      if (sliver->count() == 0) a.options.tetrahedralize.sliver_bound = kBoundaryFirstSliverBound;
+    if (facet->count() > 0) {
+      if (!(a.facet_distance >= 0)) throw InputError("--facet-distance must be >= 0");
+      if (a.facet_distance > 0) {
+        spdlog::warn("--facet-distance is --max-deviation since meshing version 4: using --max-deviation {}",
+                     a.facet_distance);
+        a.options.max_deviation = a.facet_distance;
+      }
     }
+    if (offset->count() > 0) spdlog::warn("--offset is ignored since meshing version 4 (the mesh is not dilated)");
     // Fail fast, before any work, on outputs that cannot be written.
     if (!meshing::is_tet_format(a.output))
       throw InputError(a.output + ": unknown tetrahedral mesh format (use " + meshing::tet_format_list() + ")");
@@ -100,13 +100,20 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
     if (a.options.decomposition.max_hulls < 1) throw InputError("--max-hulls must be at least 1");
     if (a.options.tetrahedralize.target_tets < 1) throw InputError("--target-tets must be at least 1");
     if (!(a.options.tets_per_hull >= 0)) throw InputError("--tets-per-hull must be >= 0");
-    if (!(a.options.tetrahedralize.facet_distance >= 0)) throw InputError("--facet-distance must be >= 0");
+    if (!(a.options.max_deviation > 0 && a.options.max_deviation < 1))
+      throw InputError("--max-deviation must be between 0 and 1 (a fraction of the bounding-box diagonal)");
+    if (!(a.options.tetrahedralize.sliver_bound >= 0 && a.options.tetrahedralize.sliver_bound < 90))
+      throw InputError("--sliver-bound must be between 0 and 90 degrees");
 
     Progress progress(!global.quiet);
     meshing::MeshResult r = meshing::mesh_file(a.input, a.options, &progress);
     progress.finish();
-    if (r.quality.min_dihedral < 5.0)
-      spdlog::warn("{}: smallest dihedral angle {:.2f} deg is below 5 deg", a.input, r.quality.min_dihedral);
+    if (r.quality.min_dihedral < a.options.tetrahedralize.min_dihedral)
+      spdlog::warn("{}: smallest dihedral angle {:.2f} deg is below {} deg", a.input, r.quality.min_dihedral,
+                   a.options.tetrahedralize.min_dihedral);
+    if (!r.target_exceeded_because.empty())
+      spdlog::info("{}: {} tetrahedra for a target of {}: {}", a.input, r.quality.tets, r.target_tets,
+                   r.target_exceeded_because);
     if (r.decomposition.hit_max_hulls)
       spdlog::info("{}: stopped at the hull budget {} with concavity {:.4g} above the threshold {:.4g}", a.input,
                    r.hull_budget, r.decomposition.max_concavity, r.decomposition.threshold);
@@ -124,14 +131,14 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
     if (!global.quiet) {
       double total = 0;
       for (const auto& s : r.seconds) total += s.second;
+      const double diag = meshing::bounding_box_diagonal(r.input.V);
       std::fprintf(stderr,
                    "squeeze: %s: %zu convex shells (max concavity %.3g%% of diagonal), %d tetrahedra, %d vertices, "
-                   "dihedral %.1f..%.1f deg, min/mean edge %.2f, volume ratio %.3f, %.2f%% of input vertices covered, "
-                   "%.2f s\n",
-                   a.input.c_str(), r.decomposition.shells.size(),
-                   100.0 * r.decomposition.max_concavity / meshing::bounding_box_diagonal(r.input.V), r.quality.tets,
-                   r.quality.vertices, r.quality.min_dihedral, r.quality.max_dihedral,
-                   r.quality.mean_edge > 0 ? r.quality.min_edge / r.quality.mean_edge : 0.0, r.input_volume > 0 ? r.quality.volume / r.input_volume : 0.0, 100.0 * r.covered_fraction, total);
+                   "dihedral %.1f..%.1f deg, volume ratio %.3f, deviation out %.3g%% / in %.3g%% of diagonal, %.2f s\n",
+                   a.input.c_str(), r.decomposition.shells.size(), 100.0 * r.decomposition.max_concavity / diag,
+                   r.quality.tets, r.quality.vertices, r.quality.min_dihedral, r.quality.max_dihedral,
+                   r.input_volume > 0 ? r.quality.volume / r.input_volume : 0.0, 100.0 * r.deviation_out / diag,
+                   100.0 * r.deviation_in / diag, total);
     }
     return kExitOk;
   };

@@ -152,7 +152,6 @@ TEST_P(TargetTest, CountMetAndContractAndQualityHold) {
   const std::string what = std::string(c.file) + " --target-tets " + std::to_string(c.target);
   squeeze::meshing::MeshOptions options;
   options.tetrahedralize.target_tets = c.target;
-  options.check_self_intersection = false;
   const auto r = squeeze::meshing::mesh_file(data(c.file), options);
   const SurfaceMesh surface = read_off(data(c.file));
   // The organs are unions of touching, overlapping closed parts: their summed enclosed volume is
@@ -161,11 +160,23 @@ TEST_P(TargetTest, CountMetAndContractAndQualityHold) {
   const InputTruth truth = truth_of(surface, c.closed);
   const TetFacts f = expect_mesh_contract(r.tets, truth, what, 5000, 3.0);
   EXPECT_EQ(f.components, 1) << what;
-  EXPECT_GE(f.tets, 0.65 * c.target) << what;
-  EXPECT_LE(f.tets, 1.35 * c.target) << what;
-  // Simulation quality (explicit integration: the stable step follows the smallest element).
-  EXPECT_GE(f.min_dihedral, 10.0 - 1e-9) << what;
-  EXPECT_GE(f.min_edge, 0.1 * f.mean_edge) << what << ": min edge " << f.min_edge << ", mean " << f.mean_edge;
+  // Within ±35 % of the target unless the report says why (issue 16: fidelity wins over the count).
+  if (r.target_exceeded_because.empty()) {
+    EXPECT_GE(f.tets, 0.65 * c.target) << what;
+    EXPECT_LE(f.tets, 1.35 * c.target) << what;
+  }
+  // Simulation quality: issue 16's floor (flatter tetrahedra where a part is thin, not inflation).
+  EXPECT_GE(f.min_dihedral, 5.0 - 1e-9) << what;
+  // Where the input's own boundary was meshed (issue 16's route), the deviation bounds hold; short
+  // edges are allowed there (the boundary follows the input's features), slivers are not (above).
+  if (r.method == "boundary") {
+    const double diag = squeeze::meshing::bounding_box_diagonal(r.input.V);
+    EXPECT_LE(r.deviation_out, 0.015 * diag) << what;
+    EXPECT_LE(r.deviation_in, 0.005 * diag) << what;
+  } else {
+    EXPECT_FALSE(r.fallback_because.empty()) << what << ": the fallback says why";
+    EXPECT_GE(f.min_edge, 0.1 * f.mean_edge) << what << ": min edge " << f.min_edge << ", mean " << f.mean_edge;
+  }
   // The hull budget follows the target.
   EXPECT_LE(static_cast<int>(r.decomposition.shells.size()), squeeze::meshing::hull_budget(options)) << what;
   // The library's own figures agree with ours.

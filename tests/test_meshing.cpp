@@ -129,7 +129,6 @@ int inconsistent_edges(const Eigen::MatrixX3i& F) {
 
 squeeze::meshing::MeshOptions fast_options() {
   squeeze::meshing::MeshOptions o;
-  o.check_self_intersection = false;
   return o;
 }
 
@@ -285,8 +284,7 @@ TEST(MeshingDecompose, ImpossibleOptionsThrow) {
   }
   squeeze::meshing::TetrahedralizeOptions t;
   t.target_tets = 0;
-  const auto d = squeeze::meshing::decompose(m);
-  EXPECT_THROW(squeeze::meshing::tetrahedralize(d.shells, t), InputError);
+  EXPECT_THROW(squeeze::meshing::tetrahedralize(m, t), InputError);
   EXPECT_THROW(squeeze::meshing::tetrahedralize({}, {}), InputError);
 }
 

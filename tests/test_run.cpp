@@ -66,7 +66,14 @@ TEST(BundledScenes, LoadBuildAndPassTheStartChecks) {
       EXPECT_TRUE(scene.objects[0].robot);
       continue;
     }
-    // Roughly the paper's Table I tet counts.
+    if (std::string(name) == "falling_objects") {
+      // Issue 16: the bunny robot is meshed from its own boundary within the deviation bound, so
+      // its count follows fidelity, not the paper's 396 (the report says why); still one object each.
+      EXPECT_EQ(scene.objects.size(), 3u);
+      EXPECT_GT(w.world.tets(), 396);
+      continue;
+    }
+    // Roughly the paper's Table I tet counts (hand-made plates and walls).
     const int tets = w.world.tets();
     const int paper = std::string(name) == "barriers1"         ? 673
                       : std::string(name) == "barriers2"       ? 2343

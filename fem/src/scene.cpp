@@ -354,7 +354,6 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
   if (meshing::is_tet_format(mesh)) return meshing::load_tet_mesh(mesh);
   meshing::MeshOptions options;
   options.tetrahedralize.target_tets = tets;
-  options.check_self_intersection = false;
   // The cache key: format version, the input's extension and bytes, every meshing option.
   const std::string bytes = read_file_bytes(mesh);
   std::ostringstream opt;
@@ -362,10 +361,12 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
       << options.decomposition.concavity << ',' << options.decomposition.max_hulls << ','
       << options.decomposition.max_hull_volume_ratio << ',' << options.decomposition.voxel_resolution << ','
       << options.decomposition.cut_samples << ',' << options.decomposition.flat_thickness << '|'
-      << options.tetrahedralize.target_tets << ',' << options.tetrahedralize.facet_distance << ','
-      << options.tetrahedralize.offset << ',' << options.tetrahedralize.max_tets << ','
-      << options.tetrahedralize.coverage_tolerance << ',' << options.tetrahedralize.min_dihedral << ','
-      << options.tetrahedralize.optimize_seconds << ',' << options.tetrahedralize.seed << '|' << bytes.size() << '|';
+      << options.tets_per_hull << ',' << options.max_deviation << ',' << options.inner_deviation << ','
+      << options.shells.facet_distance << ',' << options.shells.facet_distance_per_size << ','
+      << options.shells.offset << ',' << options.shells.max_tets << ',' << options.shells.coverage_tolerance << ','
+      << options.shells.min_dihedral << ',' << options.shells.sliver_bound << '|' << options.tetrahedralize.target_tets << ','
+      << options.tetrahedralize.refine_dihedral << ',' << options.tetrahedralize.sliver_bound << ','
+      << options.tetrahedralize.max_tets << ',' << options.tetrahedralize.seed << '|' << bytes.size() << '|';
   Hash128 h;
   h.add(opt.str());
   h.add(bytes);

@@ -1,15 +1,29 @@
 #include "squeeze/meshing/mesh_pipeline.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <Eigen/Geometry>
 
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <algorithm>
+#include <array>
+#include <set>
 #include <cmath>
 
+#include <spdlog/spdlog.h>
+
 #include "squeeze/common/error.h"
+#include "squeeze/common/format.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/shell_tetrahedralize.h"
+#include "squeeze/meshing/tet_faces.h"
 #include "squeeze/meshing/tet_locator.h"
+#include "squeeze/meshing/triangle_bvh.h"
+#include "squeeze/meshing/winding_number.h"
 
 namespace squeeze::meshing {
 namespace {
@@ -46,43 +60,183 @@ int hull_budget(const MeshOptions& opt) {
   return static_cast<int>(std::clamp(n, 1.0, static_cast<double>(std::max(1, opt.decomposition.max_hulls))));
 }
 
-MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
-  if (!(opt.coverage_tolerance >= 0)) throw InputError("coverage tolerance must be >= 0");
-  if (!(opt.tets_per_hull >= 0)) throw InputError("tets_per_hull must be >= 0");
-  if (opt.tetrahedralize.target_tets < 1) throw InputError("--target-tets must be at least 1");
-  MeshResult r;
-  StageTimer timer(r, progress);
-  timer.start("analysing input");
-  r.input.V = surface.V;
-  r.input.F = orient_outward(surface.V, surface.F);
-  r.info = analyse_surface(r.input);
-  if (opt.check_self_intersection) r.info.self_intersecting = does_self_intersect(r.input);
+namespace {
+
+// Samples of the triangles (V, F): every vertex, and points of each triangle at most `spacing`
+// apart (barycentric lattice), at most 64 along an edge.
+std::vector<Eigen::Vector3d> surface_samples(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double spacing) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(static_cast<size_t>(V.rows()));
+  std::vector<char> used(static_cast<size_t>(V.rows()), 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) used[static_cast<size_t>(F(f, k))] = 1;
+  for (Eigen::Index i = 0; i < V.rows(); ++i)
+    if (used[static_cast<size_t>(i)]) out.push_back(V.row(i).transpose());
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    const int n = std::min(64, static_cast<int>(std::ceil(longest / spacing)));
+    if (n < 2) continue;
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; j <= n - i; ++j) {
+        if ((i == 0 && j == 0) || (i == n && j == 0) || (i == 0 && j == n)) continue;
+        out.push_back(a + (static_cast<double>(i) / n) * (b - a) + (static_cast<double>(j) / n) * (c - a));
+      }
+  }
+  return out;
+}
+
+double signed_volume(const SurfaceMesh& m) {
+  if (m.V.rows() == 0) return 0;
+  const Eigen::RowVector3d o = m.V.colwise().mean();
+  double v = 0;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    v += (m.V.row(m.F(f, 0)) - o).dot((m.V.row(m.F(f, 1)) - o).cross(m.V.row(m.F(f, 2)) - o)) / 6.0;
+  return v;
+}
+
+double area(const SurfaceMesh& m) {
+  double a = 0;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    a += 0.5 * (m.V.row(m.F(f, 1)) - m.V.row(m.F(f, 0))).cross(m.V.row(m.F(f, 2)) - m.V.row(m.F(f, 0))).norm();
+  return a;
+}
+
+// The faces `faces` of m (sorted) with the vertices they use, renumbered in order of first use.
+SurfaceMesh sub_mesh(const SurfaceMesh& m, const std::vector<int>& faces) {
+  std::vector<int> map(static_cast<size_t>(m.V.rows()), -1);
+  SurfaceMesh out;
+  out.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  int n = 0;
+  for (size_t i = 0; i < faces.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      int& v = map[static_cast<size_t>(m.F(faces[i], k))];
+      if (v < 0) v = n++;
+      out.F(static_cast<Eigen::Index>(i), k) = v;
+    }
+  out.V.resize(n, 3);
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v)
+    if (map[static_cast<size_t>(v)] >= 0) out.V.row(map[static_cast<size_t>(v)]) = m.V.row(v);
+  return out;
+}
+
+SurfaceMesh concatenate(const std::vector<SurfaceMesh>& ms) {
+  Eigen::Index nv = 0, nf = 0;
+  for (const auto& m : ms) nv += m.V.rows(), nf += m.F.rows();
+  SurfaceMesh out;
+  out.V.resize(nv, 3);
+  out.F.resize(nf, 3);
+  Eigen::Index v = 0, f = 0;
+  for (const auto& m : ms) {
+    out.V.middleRows(v, m.V.rows()) = m.V;
+    out.F.middleRows(f, m.F.rows()) = m.F.array() + static_cast<int>(v);
+    v += m.V.rows(), f += m.F.rows();
+  }
+  return out;
+}
+
+TetMesh concatenate(const std::vector<TetMesh>& ms) {
+  Eigen::Index nv = 0, nt = 0;
+  for (const auto& m : ms) nv += m.V.rows(), nt += m.T.rows();
+  TetMesh out;
+  out.V.resize(nv, 3);
+  out.T.resize(nt, 4);
+  Eigen::Index v = 0, t = 0;
+  for (const auto& m : ms) {
+    out.V.middleRows(v, m.V.rows()) = m.V;
+    out.T.middleRows(t, m.T.rows()) = m.T.array() + static_cast<int>(v);
+    v += m.V.rows(), t += m.T.rows();
+  }
+  return out;
+}
+
+// F without faces of zero area (three collinear vertices, to 1e-5 of the longest edge; the loader
+// has already dropped those with a repeated vertex) and without repeats of a face (the same three vertices in any order:
+// a duplicated face, or a face and its twin, which enclose nothing); the first of each kept.
+Eigen::MatrixX3i without_duplicate_and_flat_faces(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+  std::set<std::array<int, 3>> seen;
+  std::vector<Eigen::Index> keep;
+  keep.reserve(static_cast<size_t>(F.rows()));
+  int flat = 0, repeated = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::RowVector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    // Zero area: height over the longest edge below 1e-5 of it (a needle: collinear corners,
+    // up to the rounding of a float32 file).
+    const double longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+    if ((b - a).cross(c - a).squaredNorm() <= 1e-10 * longest2 * longest2) {
+      ++flat;
+      continue;
+    }
+    std::array<int, 3> k{F(f, 0), F(f, 1), F(f, 2)};
+    std::sort(k.begin(), k.end());
+    if (!seen.insert(k).second) {
+      ++repeated;
+      continue;
+    }
+    keep.push_back(f);
+  }
+  if (flat + repeated == 0) return F;
+  spdlog::debug("input: {} faces of zero area and {} repeated faces dropped", flat, repeated);
+  Eigen::MatrixX3i out(static_cast<Eigen::Index>(keep.size()), 3);
+  for (size_t i = 0; i < keep.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = F.row(keep[i]);
+  return out;
+}
+
+// One part of the input and what becomes of it.
+struct Part {
+  SurfaceMesh surface;        // closed, outward, 2-manifold, no self-intersection
+  bool from_input = false;    // a component of the input (else of the solid's surface)
+  std::vector<int> input_faces;  // a component: its faces in the input
+  bool check = false;         // it intersects itself: check its simplified boundary
+  bool failed = false;        // ... which still did
+  double volume = 0;
+  int target_faces = 0;
+  SurfaceMesh boundary;
+  EnvelopeStats envelope;
+  TetMesh tets;
+  TetrahedralizeStats tet_stats;
+};
+
+std::string percent(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2g%%", 100.0 * x);
+  return buf;
+}
+
+// The report's measures of r.tets against r.input: quality, volume ratio (closed inputs),
+// deviation_out / deviation_in, coverage of the input's vertices.
+void measure(MeshResult& r, const MeshOptions& opt) {
   const double diag = bounding_box_diagonal(r.input.V);
-  if (!(diag > 0)) throw InputError("input has zero extent (all vertices coincide)");
-
-  timer.start("decomposing");
-  DecompositionOptions dopt = opt.decomposition;
-  if (dopt.max_hulls >= 1) dopt.max_hulls = hull_budget(opt);
-  r.hull_budget = dopt.max_hulls;
-  r.decomposition = decompose(r.input, dopt, progress);
-  r.input_volume_from_winding_number = !r.info.closed;
-  r.input_volume = r.info.closed ? r.info.volume : r.decomposition.solid_volume;
-  if (!r.info.closed) r.info.volume = r.input_volume;
-
-  timer.start("tetrahedralizing");
-  r.tets = tetrahedralize(r.decomposition.shells, opt.tetrahedralize, &r.tet_stats, progress, &r.input.V);
-  if (r.tets.T.rows() == 0) throw InputError("tetrahedralization produced no tetrahedra");
-
-  timer.start("measuring");
   r.quality = tet_quality(r.tets);
+  if (r.info.closed && r.input_volume > 0) r.volume_ratio = r.quality.volume / r.input_volume;
   const TetLocator locator(r.tets);
+  const Eigen::MatrixX3i tet_boundary = boundary_faces(r.tets.T);
+  const TriangleBvh tet_surface(r.tets.V, tet_boundary);
+  const TriangleBvh input_surface(r.input.V, r.input.F);
+  // Deviations, at points at most 0.2% of the diagonal apart (coarser if that would be more than
+  // about 200,000 points on either surface): the largest distance is then found to within
+  // spacing / √3 (0.12% of the diagonal).
+  const double spacing = std::max({2e-3 * diag, std::sqrt(area(r.input) / 2e5), std::sqrt(area(SurfaceMesh{r.tets.V, tet_boundary}) / 2e5)});
+  r.deviation_sample_spacing = spacing;
+  {
+    const auto pts = surface_samples(r.tets.V, tet_boundary, spacing);
+    std::vector<double> d(pts.size(), 0.0);
+    tbb::parallel_for(size_t(0), pts.size(), [&](size_t i) { d[i] = input_surface.nearest(pts[i]); });
+    for (double x : d) r.deviation_out = std::max(r.deviation_out, x);
+  }
+  {
+    const auto pts = surface_samples(r.input.V, r.input.F, spacing);
+    std::vector<double> d(pts.size(), 0.0);
+    tbb::parallel_for(size_t(0), pts.size(), [&](size_t i) {
+      if (locator.locate(pts[i].transpose()) < 0) d[i] = tet_surface.nearest(pts[i]);
+    });
+    for (double x : d) r.deviation_in = std::max(r.deviation_in, x);
+  }
   const Eigen::Index n = r.input.V.rows();
   std::vector<double> dist(static_cast<size_t>(n), 0.0);
   tbb::parallel_for(Eigen::Index(0), n, [&](Eigen::Index i) {
     if (locator.locate(r.input.V.row(i)) >= 0) return;
-    double d = 0;
-    locator.nearest(r.input.V.row(i), &d);
-    dist[static_cast<size_t>(i)] = d;
+    dist[static_cast<size_t>(i)] = tet_surface.nearest(r.input.V.row(i).transpose());
   });
   Eigen::Index inside = 0, covered = 0;
   for (double d : dist) {
@@ -92,6 +246,251 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   }
   r.inside_fraction = static_cast<double>(inside) / static_cast<double>(n);
   r.covered_fraction = static_cast<double>(covered) / static_cast<double>(n);
+
+}
+
+}  // namespace
+
+MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
+  if (!(opt.coverage_tolerance >= 0)) throw InputError("coverage tolerance must be >= 0");
+  if (!(opt.tets_per_hull >= 0)) throw InputError("tets_per_hull must be >= 0");
+  if (opt.tetrahedralize.target_tets < 1) throw InputError("--target-tets must be at least 1");
+  if (!(opt.max_deviation > 0 && opt.max_deviation < 1)) throw InputError("--max-deviation must be between 0 and 1");
+  if (!(opt.inner_deviation > 0 && opt.inner_deviation <= 1)) throw InputError("inner_deviation must be in (0, 1]");
+  MeshResult r;
+  r.target_tets = opt.tetrahedralize.target_tets;
+  StageTimer timer(r, progress);
+  timer.start("analysing input");
+  r.input.V = surface.V;
+  r.input.F = orient_outward(surface.V, without_duplicate_and_flat_faces(surface.V, surface.F));
+  r.info = analyse_surface(r.input);
+  r.info.self_intersecting = does_self_intersect(r.input);
+  const double diag = bounding_box_diagonal(r.input.V);
+  if (!(diag > 0)) throw InputError("input has zero extent (all vertices coincide)");
+
+  timer.start("decomposing");
+  DecompositionOptions dopt = opt.decomposition;
+  if (dopt.max_hulls >= 1) dopt.max_hulls = hull_budget(opt);
+  r.hull_budget = dopt.max_hulls;
+  r.decomposition = decompose(r.input, dopt, progress);
+
+  // The fallback (meshing version 3): the union of the convex shells tetrahedralized with Mesh_3,
+  // for the whole input, with the reason in the report.
+  auto shells_route = [&](const std::string& why) {
+    spdlog::info("meshing the convex shells instead of the input's boundary: {}", why);
+    r.method = "convex_shells";
+    r.fallback_because = why;
+    Eigen::VectorXi C;
+    r.parts = face_components(r.input.F, C);
+    r.boundary_from_input = false;
+    r.boundary = SurfaceMesh{};
+    r.envelope = EnvelopeStats{};
+    r.boundary_target_faces = 0;
+    r.tet_stats = TetrahedralizeStats{};
+    r.input_volume_from_winding_number = !r.info.closed;
+    r.input_volume = r.info.closed ? r.info.volume : r.decomposition.solid_volume;
+    r.info.volume = r.input_volume;
+    timer.start("tetrahedralizing");
+    ShellTetrahedralizeOptions so = opt.shells;
+    so.target_tets = opt.tetrahedralize.target_tets;
+    so.seed = opt.tetrahedralize.seed;
+    r.tets = tetrahedralize_shells(r.decomposition.shells, so, &r.shell_stats, progress, &r.input.V);
+    if (r.tets.T.rows() == 0) throw InputError("tetrahedralization produced no tetrahedra");
+    timer.start("measuring");
+    measure(r, opt);
+    const double n = r.quality.tets, target = opt.tetrahedralize.target_tets;
+    if (n > 1.35 * target || n < 0.65 * target)
+      r.target_exceeded_because = "the convex shells' Mesh_3 refinement (the fallback: " + why + ") landed at " +
+                                  std::to_string(r.quality.tets) + " tetrahedra after " +
+                                  std::to_string(r.shell_stats.attempts) + " attempts";
+    timer.stop();
+    return std::move(r);
+  };
+
+  // The parts: each face-connected component of the input that is a closed oriented 2-manifold
+  // enclosing volume bounds its own solid and is its own boundary (when it intersects itself, only
+  // if its simplified boundary no longer does: slivers of zero area, say, collapse away). Parts are
+  // meshed one by one, so touching or overlapping parts stay as the input has them. Where a
+  // component is not such a part (open, non-manifold, welded to another) or a part's mesh is not
+  // conforming or has a dihedral angle below the floor, the whole input takes the fallback: its
+  // convex shells meshed with Mesh_3 (shells_route above).
+  timer.start("boundary");
+  std::vector<Part> parts;
+  std::vector<int> rest;  // faces of components that are not parts (then: the fallback)
+  {
+    Eigen::VectorXi C;
+    const int nc = face_components(r.input.F, C);
+    std::vector<std::vector<int>> faces(static_cast<size_t>(nc));
+    for (Eigen::Index f = 0; f < r.input.F.rows(); ++f) faces[static_cast<size_t>(C(f))].push_back(static_cast<int>(f));
+    std::vector<Part> component(static_cast<size_t>(nc));
+    std::vector<char> usable(static_cast<size_t>(nc), 0);
+    tbb::parallel_for(0, nc, [&](int c) {
+      tbb::this_task_arena::isolate([&] {
+        Part& p = component[static_cast<size_t>(c)];
+        p.input_faces = faces[static_cast<size_t>(c)];
+        p.surface = sub_mesh(r.input, p.input_faces);
+        const SurfaceMesh& m = p.surface;
+        const bool closed = is_closed(m.F), manifold = is_oriented_two_manifold(m.F, static_cast<int>(m.V.rows()));
+        p.volume = signed_volume(m);
+        // Enclosing volume: a mean thickness (3 volume / area) above a millionth of the diagonal
+        // (a face and its twin, say, enclose none).
+        usable[static_cast<size_t>(c)] = closed && manifold && 3.0 * p.volume > 1e-6 * diag * area(m);
+        p.from_input = true;
+        p.check = usable[static_cast<size_t>(c)] && does_self_intersect(m);
+        spdlog::debug("component {}: {} faces, closed {}, oriented 2-manifold {}, volume {:.4g}, self-intersecting {}", c,
+                      m.F.rows(), closed, manifold, p.volume, p.check);
+      });
+    });
+    for (int c = 0; c < nc; ++c) {
+      if (usable[static_cast<size_t>(c)]) parts.push_back(std::move(component[static_cast<size_t>(c)]));
+      else rest.insert(rest.end(), faces[static_cast<size_t>(c)].begin(), faces[static_cast<size_t>(c)].end());
+    }
+  }
+  if (!rest.empty()) {
+    Eigen::VectorXi C;
+    const int nc = face_components(r.input.F, C);
+    std::vector<char> seen(static_cast<size_t>(nc), 0);
+    int unusable = 0;
+    for (int f : rest) unusable += !seen[static_cast<size_t>(C(f))]++;
+    return shells_route(std::to_string(unusable) + " of the input's " + std::to_string(nc) +
+                        " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, "
+                        "or welded to other components)");
+  }
+  if (parts.empty()) throw InputError("the surface encloses no volume (winding number above 1/2 nowhere)");
+  double total_volume = 0;
+  for (const Part& p : parts) total_volume += p.volume;
+
+  // Each part gets the share of target_tets its volume has; its boundary as many faces as a mesh
+  // of that many tetrahedra has (edge length from the volume: a regular tetrahedron of edge L has
+  // volume L³/(6√2), Delaunay meshes average about half), fewer where the deviation bounds allow
+  // nothing coarser. The bounds are fractions of the whole input's diagonal.
+  const double target = opt.tetrahedralize.target_tets;
+  const double L = std::cbrt(6.0 * std::sqrt(2.0) * total_volume / (0.5 * target));
+  EnvelopeOptions eopt;
+  eopt.max_outside = opt.max_deviation * diag;
+  eopt.max_inside = opt.inner_deviation * opt.max_deviation * diag;
+  timer.start("tetrahedralizing");  // (simplifying each part's boundary, then tetrahedralizing it)
+  auto mesh_parts = [&](std::vector<Part>& ps, size_t first) {
+    const bool progress_here = ps.size() == 1;
+    tbb::parallel_for(first, ps.size(), size_t(1), [&](size_t i) {
+      // Isolated: a thread waiting inside one part's work (CGAL, TBB loops) takes no other part's
+      // work, so each part runs start to end on one thread with its own CGAL random state.
+      tbb::this_task_arena::isolate([&] {
+        Part& p = ps[i];
+        EnvelopeOptions e = eopt;
+        e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
+        p.target_faces = e.target_faces;
+        p.boundary = simplify_envelope(p.surface, e, &p.envelope, progress_here ? progress : nullptr);
+        if (spdlog::should_log(spdlog::level::debug))
+          spdlog::debug("part {}: simplified boundary of {} faces intersects itself: {}", i, p.boundary.F.rows(),
+                        does_self_intersect(p.boundary));
+        if (p.check && does_self_intersect(p.boundary)) {
+          p.failed = true;
+          return;
+        }
+        TetrahedralizeOptions t = opt.tetrahedralize;
+        t.target_tets = std::max(1, static_cast<int>(std::lround(target * p.volume / total_volume)));
+        t.max_tets = std::max(1000, static_cast<int>(std::lround(opt.tetrahedralize.max_tets * p.volume / total_volume)));
+        p.tets = tetrahedralize(p.boundary, t, &p.tet_stats, progress_here ? progress : nullptr);
+        if (p.tets.T.rows() == 0) {
+          // The simplified boundary defeated the tetrahedralization: the part's own surface.
+          spdlog::debug("part {}: no tetrahedra from its simplified boundary; meshing its surface as it is", i);
+          p.boundary = p.surface;
+          p.tets = tetrahedralize(p.boundary, t, &p.tet_stats, progress_here ? progress : nullptr);
+        }
+        spdlog::debug("part {}: {} faces, volume {:.4g}, boundary {} faces, target {}, {} tetrahedra, conforming {}", i,
+                      p.surface.F.rows(), p.volume, p.boundary.F.rows(), t.target_tets, p.tets.T.rows(),
+                      p.tet_stats.conforming);
+      });
+    });
+  };
+  mesh_parts(parts, 0);
+  // The boundary route holds only where every part came out as a conforming mesh of its boundary
+  // with no dihedral angle below the floor; else the convex shells for the whole input.
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const Part& p = parts[i];
+    const std::string which = parts.size() > 1 ? "part " + std::to_string(i + 1) + " of " + std::to_string(parts.size()) : "the input";
+    if (p.failed)
+      return shells_route(which + " intersects itself, and so does its simplified boundary");
+    if (p.tets.T.rows() == 0) return shells_route("the tetrahedralization of " + which + "'s boundary produced no tetrahedra");
+    if (!p.tet_stats.conforming)
+      return shells_route("the tetrahedralization of " + which + "'s simplified boundary is not conforming (" +
+                          "boundary edges still missing after splitting)");
+    const double md = tet_quality(p.tets).min_dihedral;
+    if (md < opt.tetrahedralize.min_dihedral)
+      return shells_route("the tetrahedralization of " + which + "'s simplified boundary has a dihedral angle of " +
+                          format_g3(md) + " degrees, below the floor of " + format_g3(opt.tetrahedralize.min_dihedral));
+  }
+  r.parts = static_cast<int>(parts.size());
+  r.boundary_from_input = std::all_of(parts.begin(), parts.end(), [](const Part& p) { return p.from_input; });
+  r.input_volume_from_winding_number = !r.info.closed;
+  r.input_volume = 0;
+  for (const Part& p : parts) r.input_volume += p.volume;
+  r.info.volume = r.input_volume;
+  // Concatenated in part order.
+  {
+    std::vector<SurfaceMesh> b;
+    std::vector<TetMesh> t;
+    for (Part& p : parts) {
+      b.push_back(std::move(p.boundary));
+      t.push_back(std::move(p.tets));
+      r.envelope.faces += p.envelope.faces;
+      r.envelope.collapses += p.envelope.collapses;
+      r.envelope.bounded = r.envelope.bounded || p.envelope.bounded;
+      r.boundary_target_faces += p.target_faces;
+      TetrahedralizeStats& s = r.tet_stats;
+      s.attempts = std::max(s.attempts, p.tet_stats.attempts);
+      s.edge_length = std::max(s.edge_length, p.tet_stats.edge_length);
+      s.minimum_tets += p.tet_stats.minimum_tets;
+      s.boundary_splits += p.tet_stats.boundary_splits;
+      s.steiner_points += p.tet_stats.steiner_points;
+      s.peeled += p.tet_stats.peeled;
+      s.conforming = s.conforming && p.tet_stats.conforming;
+    }
+    r.boundary = concatenate(b);
+    r.tets = concatenate(t);
+  }
+  // Label: the convex shell that holds the centroid (the most interior one).
+  r.tets.label.resize(r.tets.T.rows());
+  for (Eigen::Index t = 0; t < r.tets.T.rows(); ++t) {
+    const Eigen::RowVector3d c = (r.tets.V.row(r.tets.T(t, 0)) + r.tets.V.row(r.tets.T(t, 1)) +
+                                  r.tets.V.row(r.tets.T(t, 2)) + r.tets.V.row(r.tets.T(t, 3))) / 4.0;
+    int arg = 0;
+    double v = INFINITY;
+    for (size_t s = 0; s < r.decomposition.shells.size(); ++s) {
+      const double sv = r.decomposition.shells[s].hull.signed_value(c);
+      if (sv < v) v = sv, arg = static_cast<int>(s);
+    }
+    r.tets.label(t) = arg + 1;
+  }
+
+  timer.start("measuring");
+  measure(r, opt);
+
+  // Why the count is off the target, when it is by more than 35%.
+  const double tets = r.quality.tets;
+  const std::string dihedral = std::to_string(static_cast<int>(opt.tetrahedralize.refine_dihedral));
+  const std::string in_parts =
+      r.parts > 1 ? " over the input's " + std::to_string(r.parts) + " parts (each meshed on its own)" : "";
+  if (tets > 1.35 * target) {
+    if (r.envelope.bounded)
+      r.target_exceeded_because =
+          "keeping the boundary within " + percent(opt.max_deviation) + " of the bounding-box diagonal outside and " +
+          percent(opt.inner_deviation * opt.max_deviation) + " inside the input surface takes " +
+          std::to_string(r.boundary.F.rows()) + " boundary triangles" + in_parts + " (a mesh of " +
+          std::to_string(r.target_tets) + " tetrahedra has about " + std::to_string(r.boundary_target_faces) +
+          "), and tetrahedra with dihedral angles of at least " + dihedral + " degrees between them need " +
+          std::to_string(r.quality.tets);
+    else
+      r.target_exceeded_because = "the boundary's " + std::to_string(r.boundary.F.rows()) + " triangles" + in_parts +
+                                  " and tetrahedra with dihedral angles of at least " + dihedral +
+                                  " degrees (flatter where the solid is thinner than the edge length) need " +
+                                  std::to_string(r.quality.tets) + " tetrahedra";
+  } else if (tets < 0.65 * target) {
+    r.target_exceeded_because = "the solid's boundary holds only " + std::to_string(r.boundary.F.rows()) +
+                                " triangles" + in_parts + " and refining the inside stopped at " +
+                                std::to_string(r.quality.tets) + " tetrahedra";
+  }
   timer.stop();
   return r;
 }
@@ -127,18 +526,26 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
   json seconds = json::object();
   double total = 0;
   for (const auto& [name, s] : r.seconds) {
-    seconds[name] = s;
+    seconds[name] = seconds.value(name, 0.0) + s;  // a stage run twice (the fallback after the boundary route)
     total += s;
   }
   seconds["total"] = total;
   const double diag = bounding_box_diagonal(r.input.V);
+  auto frac = [&](double x) { return diag > 0 ? x / diag : 0.0; };
   return json{
+      {"deviation_out", frac(r.deviation_out)},
+      {"deviation_in", frac(r.deviation_in)},
+      {"volume_ratio", r.volume_ratio ? json(*r.volume_ratio) : json(nullptr)},
+      {"target_tets", r.target_tets},
+      {"method", r.method},
+      {"fallback_because", r.fallback_because.empty() ? json(nullptr) : json(r.fallback_because)},
+      {"target_exceeded_because", r.target_exceeded_because.empty() ? json(nullptr) : json(r.target_exceeded_because)},
       {"input",
        {{"file", input_name},
         {"vertices", r.info.vertices},
         {"faces", r.info.faces},
         {"components", r.info.components},
-        {"connected_parts", r.decomposition.parts},
+        {"connected_parts", r.parts},
         {"closed", r.info.closed},
         {"boundary_edges", r.info.boundary_edges},
         {"nonmanifold_edges", r.info.nonmanifold_edges},
@@ -149,10 +556,17 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
       {"decomposition",
        {{"hulls", r.decomposition.shells.size()},
         {"max_concavity", r.decomposition.max_concavity},
-        {"max_concavity_fraction", diag > 0 ? r.decomposition.max_concavity / diag : 0.0},
+        {"max_concavity_fraction", frac(r.decomposition.max_concavity)},
         {"concavity_threshold", r.decomposition.threshold},
         {"hit_max_hulls", r.decomposition.hit_max_hulls},
         {"hull_budget", r.hull_budget}}},
+      {"boundary",
+       {{"source", r.method == "boundary" ? json("input") : json(nullptr)},
+        {"parts", r.parts},
+        {"target_faces", r.boundary_target_faces},
+        {"faces", r.boundary.F.rows()},
+        {"collapses", r.envelope.collapses},
+        {"stopped_by_deviation", r.envelope.bounded}}},
       {"tets",
        {{"tets", r.quality.tets},
         {"vertices", r.quality.vertices},
@@ -166,16 +580,26 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"volume_ratio", r.input_volume > 0 ? r.quality.volume / r.input_volume : 0.0},
         {"components", r.quality.components},
         {"faces_shared_by_more_than_two", r.quality.overshared_faces},
-        {"mesh3_attempts", r.tet_stats.attempts},
-        {"cell_size", r.tet_stats.cell_size},
-        {"facet_distance", r.tet_stats.facet_distance},
-        {"offset", r.tet_stats.offset},
-        {"peeled_slivers", r.tet_stats.peeled_slivers}}},
+        {"attempts", r.tet_stats.attempts},
+        {"edge_length", r.tet_stats.edge_length},
+        {"boundary_splits", r.tet_stats.boundary_splits},
+        {"steiner_points", r.tet_stats.steiner_points},
+        {"conforming", r.tet_stats.conforming},
+        {"peeled_slivers", r.method == "convex_shells" ? r.shell_stats.peeled_slivers : r.tet_stats.peeled}}},
+      {"convex_shells",
+       r.method == "convex_shells"
+           ? json{{"attempts", r.shell_stats.attempts},
+                  {"cell_size", r.shell_stats.cell_size},
+                  {"offset", r.shell_stats.offset},
+                  {"facet_distance", r.shell_stats.facet_distance},
+                  {"covered", r.shell_stats.covered}}
+           : json(nullptr)},
       {"coverage",
        {{"inside_fraction", r.inside_fraction},
         {"within_tolerance_fraction", r.covered_fraction},
         {"max_outside_distance", r.max_outside_distance},
-        {"max_outside_distance_fraction", diag > 0 ? r.max_outside_distance / diag : 0.0}}},
+        {"max_outside_distance_fraction", frac(r.max_outside_distance)},
+        {"deviation_sample_spacing", r.deviation_sample_spacing}}},
       {"seconds", seconds}};
 }
 

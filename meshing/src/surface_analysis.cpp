@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <climits>
 #include <queue>
 #include <vector>
 
@@ -125,6 +126,35 @@ bool is_closed(const Eigen::MatrixX3i& F) {
   bool closed = true;
   for_each_edge(e, [&](size_t i, size_t j) { closed = closed && j - i == 2; });
   return closed;
+}
+
+bool is_oriented_two_manifold(const Eigen::MatrixX3i& F, int vertices) {
+  const auto e = edge_incidences(F);
+  bool ok = true;
+  // Every edge in exactly two faces, traversed once each way.
+  for_each_edge(e, [&](size_t i, size_t j) { ok = ok && j - i == 2 && e[i].forward != e[i + 1].forward; });
+  if (!ok) return false;
+  // Every vertex's faces form one fan: walk around it through the edges from each face's
+  // outgoing edge at the vertex to the face that has that edge incoming.
+  std::vector<std::vector<std::pair<int, int>>> out(static_cast<size_t>(vertices));  // (next vertex, face)
+  for (int f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) out[static_cast<size_t>(F(f, k))].emplace_back(F(f, (k + 1) % 3), F(f, (k + 2) % 3));
+  for (int v = 0; v < vertices; ++v) {
+    auto& fan = out[static_cast<size_t>(v)];
+    if (fan.empty()) continue;
+    // Map: next vertex -> the vertex after it around v.
+    std::sort(fan.begin(), fan.end());
+    size_t steps = 0;
+    int at = fan.front().first;
+    do {
+      const auto it = std::lower_bound(fan.begin(), fan.end(), std::make_pair(at, INT_MIN));
+      if (it == fan.end() || it->first != at) return false;
+      at = it->second;
+      ++steps;
+    } while (at != fan.front().first && steps <= fan.size());
+    if (steps != fan.size()) return false;
+  }
+  return true;
 }
 
 SurfaceInfo analyse_surface(const SurfaceMesh& mesh) {

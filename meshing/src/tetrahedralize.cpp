@@ -1,342 +1,1005 @@
-// CGAL translation unit: Mesh_3. Keep other code out of it, it is the slowest file to compile.
+// CGAL translation unit: the Delaunay tetrahedralization of a closed surface, made conforming,
+// refined and exuded. Keep other code out of it, it is one of the slowest files to compile.
 #include "squeeze/meshing/tetrahedralize.h"
 
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/Labeled_mesh_domain_3.h>
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
-#include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
 #include <CGAL/Random.h>
-#include <CGAL/make_mesh_3.h>
-#include <CGAL/refine_mesh_3.h>
+#include <CGAL/exude_mesh_3.h>
+#include <CGAL/spatial_sort.h>
 
 #include <spdlog/spdlog.h>
-#include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
-#include <chrono>
+#include <Eigen/LU>
 #include <algorithm>
+#include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <functional>
+#include <deque>
 #include <map>
-#include <numeric>
+#include <queue>
+#include <unordered_map>
 #include <vector>
 
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
+#include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/tet_cleanup.h"
-#include "squeeze/meshing/tet_faces.h"
 #include "squeeze/meshing/tet_geometry.h"
-#include "squeeze/meshing/tet_locator.h"
+#include "squeeze/meshing/winding_number.h"
 
 namespace squeeze::meshing {
 namespace {
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point = K::Point_3;
+// Mesh_3's regular triangulation (all weights 0 until the exuder: a Delaunay triangulation), so
+// that CGAL's exuder can work on the result.
 using Domain = CGAL::Labeled_mesh_domain_3<K>;
 using Tr = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
 using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr>;
-using Criteria = CGAL::Mesh_criteria_3<Tr>;
-namespace params = CGAL::parameters;
+using Vh = Tr::Vertex_handle;
+using Ch = Tr::Cell_handle;
+using Facet = Tr::Facet;
+using WPoint = Tr::Weighted_point;
+using BPoint = Tr::Bare_point;
+using Vec3 = Eigen::Vector3d;
 
-// Union of the shells, dilated by `offset`, as an inside test. Shells whose (dilated) box does not
-// hold p are skipped.
-struct UnionFunction {
-  struct Shell {
-    Eigen::MatrixX4d planes;
-    Eigen::Vector3d lo, hi;
-  };
-  std::vector<Shell> shells;
-  double offset = 0.0;  // dilation
+// 2-D constrained Delaunay triangulations of the flat patches of the surface.
+using Vb2 = CGAL::Triangulation_vertex_base_with_info_2<int, K>;
+using Fb2 = CGAL::Constrained_triangulation_face_base_2<K, CGAL::Triangulation_face_base_with_info_2<int, K>>;
+using Tds2 = CGAL::Triangulation_data_structure_2<Vb2, Fb2>;
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<K, Tds2, CGAL::No_constraint_intersection_requiring_constructions_tag>;
 
-  explicit UnionFunction(const std::vector<ConvexShell>& in) {
-    for (const auto& s : in) {
-      Shell sh;
-      sh.planes = s.hull.planes;
-      sh.lo = s.hull.V.colwise().minCoeff().transpose();
-      sh.hi = s.hull.V.colwise().maxCoeff().transpose();
-      shells.push_back(std::move(sh));
+uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
+}
+
+struct Key3 {
+  int a, b, c;  // sorted
+  bool operator==(const Key3& o) const { return a == o.a && b == o.b && c == o.c; }
+};
+Key3 key3(int a, int b, int c) {
+  if (a > b) std::swap(a, b);
+  if (b > c) std::swap(b, c);
+  if (a > b) std::swap(a, b);
+  return {a, b, c};
+}
+struct Key3Hash {
+  size_t operator()(const Key3& k) const {
+    uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(k.a)) * 0x9E3779B97F4A7C15ULL;
+    h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.b)) + 0x7F4A7C159E3779B9ULL + (h << 6) + (h >> 2);
+    h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.c)) + 0x94D049BB133111EBULL + (h << 6) + (h >> 2);
+    return static_cast<size_t>(h);
+  }
+};
+
+// Circumcentre of the tetrahedron (a, b, c, d); false when it is flat.
+bool circumcentre(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, Vec3& x) {
+  Eigen::Matrix3d M;
+  M.row(0) = (b - a).transpose();
+  M.row(1) = (c - a).transpose();
+  M.row(2) = (d - a).transpose();
+  const Vec3 rhs(0.5 * (b - a).squaredNorm(), 0.5 * (c - a).squaredNorm(), 0.5 * (d - a).squaredNorm());
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(M);
+  if (!lu.isInvertible()) return false;
+  x = a + lu.solve(rhs);
+  return x.allFinite();
+}
+
+// The centre of the circle through the largest of the four faces of tetrahedron abcd (flat ones
+// included); false if every face is degenerate.
+bool circumcircle_centre_of_largest_face(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, Vec3& x) {
+  const Vec3* p[4] = {&a, &b, &c, &d};
+  double best = 0;
+  for (int skip = 0; skip < 4; ++skip) {
+    const Vec3* f[3];
+    for (int k = 0, j = 0; k < 4; ++k)
+      if (k != skip) f[j++] = p[k];
+    const Vec3 ab = *f[1] - *f[0], ac = *f[2] - *f[0], n = ab.cross(ac);
+    const double n2 = n.squaredNorm();
+    if (!(n2 > best)) continue;
+    best = n2;
+    x = *f[0] + (ac.squaredNorm() * n.cross(ab) + ab.squaredNorm() * ac.cross(n)) / (2.0 * n2);
+  }
+  return best > 0 && x.allFinite();
+}
+
+double min_dihedral(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const auto ang = dihedral_angles(a.transpose(), b.transpose(), c.transpose(), d.transpose());
+  return *std::min_element(ang.begin(), ang.end());
+}
+
+// One meshing run at one interior edge length.
+struct RunResult {
+  TetMesh mesh;
+  int boundary_splits = 0;
+  int steiner = 0;
+  int size_driven = 0;  // insertions and splits asked for by the size bound (not quality)
+  bool conforming = true;
+  int peeled = 0;
+};
+
+class Mesher {
+ public:
+  Mesher(const SurfaceMesh& s, const FastWindingNumber& wn, const TetrahedralizeOptions& opt, double edge_length)
+      : opt_(opt), L_(edge_length), wn_(wn), tr_(c3t3_.triangulation()) {
+    build_surface(s);
+  }
+
+  RunResult run(Progress* progress) {
+    RunResult r;
+    build_delaunay();
+    conformity_cap_ = static_cast<int>(P_.size()) * 3 / 2 + 200;
+    r.conforming = make_conforming();
+    classify(r.conforming);
+    // Quality splits stop at edges a third as long as the shorter of the interior edge length
+    // and the surface's median edge (near a sharp crease refinement would otherwise not end).
+    std::vector<double> len;
+    for (const auto& [k, ts] : edge_tris_) len.push_back(edge_length(k));
+    std::nth_element(len.begin(), len.begin() + static_cast<long>(len.size() / 2), len.end());
+    min_split_ = std::min(L_, len.empty() ? L_ : len[len.size() / 2]) / 3.0;
+    const int max_vertices = std::max(64, opt_.max_tets / 3);
+    // Refinement leans on the surface faces being faces of the triangulation; where they are not
+    // (a failed recovery), it runs for a few rounds only.
+    for (int round = 0; round < (r.conforming ? 200 : 8); ++round) {
+      if (progress) progress->update(round);
+      if (static_cast<int>(P_.size()) > max_vertices) break;
+      if (!refine_round()) break;
+      if (r.conforming) r.conforming = make_conforming();
+      classify(r.conforming);
+      spdlog::debug("round {}: {} points, conforming {}, {} splits, {} steiner", round, P_.size(), r.conforming, splits_,
+                    steiner_);
+    }
+    if (!r.conforming)
+      spdlog::debug("tetrahedralize: some boundary faces are not faces of the triangulation; tetrahedra classified by "
+                    "the winding number at their centroids");
+    setup_complex();
+    exude();
+    r.mesh = extract();
+    // Boundary tetrahedra still below the floor (flat caps over the surface that refinement could
+    // not reach without splitting the surface below min_split_) are peeled off.
+    r.peeled = peel_boundary_slivers(r.mesh, opt_.min_dihedral);
+    if (r.peeled > 0) remove_unused_vertices(r.mesh);
+    r.boundary_splits = splits_;
+    r.steiner = steiner_;
+    r.size_driven = size_driven_;
+    return r;
+  }
+
+  // Inside or outside, per cell: by the parity of surface crossings where every surface face is a
+  // face of the triangulation, else by the winding number at the centroid (exact away from the
+  // faces that are missing, and right wherever the cell does not straddle the surface).
+  void classify(bool conforming) {
+    if (conforming) classify_by_parity();
+    else classify_by_winding_number();
+  }
+
+  void classify_by_winding_number() {
+    for (auto c = tr_.finite_cells_begin(); c != tr_.finite_cells_end(); ++c) {
+      Vec3 g = Vec3::Zero();
+      for (int k = 0; k < 4; ++k) {
+        const auto& p = tr_.point(c->vertex(k));
+        g += Vec3(p.x(), p.y(), p.z());
+      }
+      c->set_subdomain_index(wn_(g.transpose() / 4.0) > 0.5 ? 1 : 0);
     }
   }
-  bool inside(double x, double y, double z) const {
-    for (const Shell& s : shells) {
-      if (x < s.lo(0) - offset || y < s.lo(1) - offset || z < s.lo(2) - offset || x > s.hi(0) + offset ||
-          y > s.hi(1) + offset || z > s.hi(2) + offset)
+
+ private:
+  const TetrahedralizeOptions& opt_;
+  const double L_;  // interior edge length (INFINITY: quality refinement only)
+  const FastWindingNumber& wn_;  // of the surface (the fallback classification)
+  int conformity_cap_ = 0;       // make_conforming gives up beyond this many points
+  C3t3 c3t3_;
+  Tr& tr_;
+  std::vector<Vec3> P_;            // every vertex: the surface's, split points, Steiner points
+  std::vector<Vh> vh_;             // its vertex in the triangulation (null before build_delaunay)
+  std::vector<char> on_surface_;   // 1: on the surface
+  std::unordered_map<const void*, int> id_;
+  std::vector<std::array<int, 3>> tri_;  // surface triangles, outward; dead ones have tri_alive_ 0
+  std::vector<char> tri_alive_;
+  std::vector<int> tri_patch_;     // flat patch of the input each triangle lies in
+  std::vector<int> tri_depth_;     // how many splits made it from a triangle of the first surface
+  std::unordered_map<uint64_t, std::array<int, 2>> edge_tris_;
+  std::unordered_map<Key3, int, Key3Hash> face_;
+  int splits_ = 0, steiner_ = 0, size_driven_ = 0;
+  double min_split_ = 0;           // quality does not split surface edges shorter than this
+
+  int count_inside() const {
+    int n = 0;
+    for (auto c = tr_.finite_cells_begin(); c != tr_.finite_cells_end(); ++c) n += c->subdomain_index() != 0;
+    return n;
+  }
+  double max_radius() const { return 0.85 * L_; }  // circumradius above which a tetrahedron is too large
+
+  // ---- the surface ----
+  void add_tri(int a, int b, int c, int patch, int depth = 0) {
+    const int t = static_cast<int>(tri_.size());
+    tri_.push_back({a, b, c});
+    tri_alive_.push_back(1);
+    tri_patch_.push_back(patch);
+    tri_depth_.push_back(depth);
+    const int e[3][2] = {{a, b}, {b, c}, {c, a}};
+    for (const auto& ed : e) {
+      auto [it, fresh] = edge_tris_.try_emplace(edge_key(ed[0], ed[1]), std::array<int, 2>{-1, -1});
+      (it->second[0] < 0 ? it->second[0] : it->second[1]) = t;
+    }
+    face_[key3(a, b, c)] = t;
+  }
+  void remove_tri(int t) {
+    tri_alive_[static_cast<size_t>(t)] = 0;
+    const auto& v = tri_[static_cast<size_t>(t)];
+    for (int k = 0; k < 3; ++k) {
+      auto it = edge_tris_.find(edge_key(v[k], v[(k + 1) % 3]));
+      if (it == edge_tris_.end()) continue;
+      if (it->second[0] == t) it->second[0] = -1;
+      if (it->second[1] == t) it->second[1] = -1;
+      if (it->second[0] < 0 && it->second[1] < 0) edge_tris_.erase(it);
+    }
+    face_.erase(key3(v[0], v[1], v[2]));
+  }
+  double edge_length(uint64_t key) const {
+    return (P_[key >> 32] - P_[key & 0xFFFFFFFFu]).norm();
+  }
+  uint64_t longest_edge(int t) const {
+    const auto& v = tri_[static_cast<size_t>(t)];
+    uint64_t best = 0;
+    double len = -1;
+    for (int k = 0; k < 3; ++k) {
+      const double l = (P_[v[k]] - P_[v[(k + 1) % 3]]).squaredNorm();
+      if (l > len) len = l, best = edge_key(v[k], v[(k + 1) % 3]);
+    }
+    return best;
+  }
+  // Splits surface edge `key` at its midpoint (a point of the surface); inserts the point in the
+  // triangulation when it exists. Returns the new vertex, -1 if the edge is gone.
+  int split_edge(uint64_t key) {
+    auto it = edge_tris_.find(key);
+    if (it == edge_tris_.end()) return -1;
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xFFFFFFFFu);
+    const std::array<int, 2> ts = it->second;
+    // Not quite the midpoint: a fixed hash of the edge moves it by up to a tenth of the edge, so
+    // that splits of parallel faces (the two sides of a plate) do not line up into cospherical
+    // configurations. On the edge's line either way (exactly so for axis-parallel edges).
+    uint64_t h = key * 0x9E3779B97F4A7C15ULL;
+    h ^= h >> 31;
+    const double s = 0.5 + 0.2 * (static_cast<double>(h & 0xFFFF) / 65535.0 - 0.5);
+    const int m = add_point(P_[a] + s * (P_[b] - P_[a]), true, vh_[static_cast<size_t>(a)]);
+    for (int t : ts) {
+      if (t < 0) continue;
+      const auto v = tri_[static_cast<size_t>(t)];
+      int k = 0;
+      while (!((v[k] == a && v[(k + 1) % 3] == b) || (v[k] == b && v[(k + 1) % 3] == a))) ++k;
+      const int x = v[k], y = v[(k + 1) % 3], z = v[(k + 2) % 3];
+      const int pa = tri_patch_[static_cast<size_t>(t)], depth = tri_depth_[static_cast<size_t>(t)] + 1;
+      remove_tri(t);
+      add_tri(x, m, z, pa, depth);
+      add_tri(m, y, z, pa, depth);
+    }
+    ++splits_;
+    return m;
+  }
+  bool is_surface_facet(const Ch& c, int i) const {
+    int v[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vh h = c->vertex((i + 1 + k) & 3);
+      if (tr_.is_infinite(h)) return false;
+      v[k] = id(h);
+    }
+    return face_.count(key3(v[0], v[1], v[2])) > 0;
+  }
+  int surface_tri(const Ch& c, int i) const {
+    int v[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vh h = c->vertex((i + 1 + k) & 3);
+      if (tr_.is_infinite(h)) return -1;
+      v[k] = id(h);
+    }
+    const auto it = face_.find(key3(v[0], v[1], v[2]));
+    return it == face_.end() ? -1 : it->second;
+  }
+
+  // The surface the mesh will have: each flat patch of the input surface (adjacent triangles in
+  // one plane) is triangulated anew in 2-D (CGAL's constrained Delaunay triangulation) from its
+  // boundary, whose edges (creases between patches) are split into equal pieces no longer than
+  // the boundary spacing, plus points of a lattice of that spacing inside it. The lattice is
+  // laid in a frame that depends only on the plane's normal direction, so the two faces of a plate
+  // get the same points seen along the normal and their triangulations line up: the tetrahedra
+  // between them form prisms instead of slivers. Every point lies on the input surface
+  // (creases: on their edge; lattice points: in their plane), so the boundary stays exact.
+  void build_surface(const SurfaceMesh& s) {
+    const Eigen::Index nf = s.F.rows();
+    for (Eigen::Index i = 0; i < s.V.rows(); ++i) P_.push_back(s.V.row(i).transpose());
+    Eigen::RowVector3d lo, hi;
+    bounding_box(s.V, lo, hi);
+    const double diag = (hi - lo).norm();
+    const double tol = 1e-9 * diag;
+    const Vec3 origin = lo.transpose();
+    // Edge -> faces.
+    std::unordered_map<uint64_t, std::array<int, 2>> ef;
+    for (Eigen::Index f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        auto [it, fresh] = ef.try_emplace(edge_key(s.F(f, k), s.F(f, (k + 1) % 3)), std::array<int, 2>{-1, -1});
+        (it->second[0] < 0 ? it->second[0] : it->second[1]) = static_cast<int>(f);
+      }
+    auto normal = [&](Eigen::Index f) {
+      const Vec3 a = P_[s.F(f, 0)], b = P_[s.F(f, 1)], c = P_[s.F(f, 2)];
+      return Vec3((b - a).cross(c - a));
+    };
+    auto plane_distance = [&](Eigen::Index f, int v) {
+      const Vec3 n = normal(f);
+      const double len = n.norm();
+      return len > 0 ? std::abs(n.dot(P_[v] - P_[s.F(f, 0)])) / len : INFINITY;
+    };
+    // Patches: flood fill across edges whose two faces lie in one plane (within a billionth of
+    // the diagonal, and facing the same way).
+    std::vector<int> patch(static_cast<size_t>(nf), -1);
+    int patches = 0;
+    for (Eigen::Index f0 = 0; f0 < nf; ++f0) {
+      if (patch[f0] >= 0) continue;
+      std::vector<int> stack{static_cast<int>(f0)};
+      patch[f0] = patches;
+      while (!stack.empty()) {
+        const int f = stack.back();
+        stack.pop_back();
+        for (int k = 0; k < 3; ++k) {
+          const auto& two = ef[edge_key(s.F(f, k), s.F(f, (k + 1) % 3))];
+          const int g = two[0] == f ? two[1] : two[0];
+          if (g < 0 || patch[g] >= 0) continue;
+          int opp = -1;
+          for (int j = 0; j < 3; ++j)
+            if (s.F(g, j) != s.F(f, k) && s.F(g, j) != s.F(f, (k + 1) % 3)) opp = s.F(g, j);
+          int mine = s.F(f, (k + 2) % 3);
+          if (opp < 0 || !(plane_distance(f, opp) <= tol && plane_distance(g, mine) <= tol) ||
+              normal(f).dot(normal(g)) <= 0)
+            continue;
+          patch[g] = patches;
+          stack.push_back(g);
+        }
+      }
+      ++patches;
+    }
+    // Crease edges, split into equal pieces no longer than the spacing.
+    const double spacing = std::isfinite(L_) ? L_ : INFINITY;
+    std::unordered_map<uint64_t, std::vector<int>> chain;  // from the lower vertex id to the higher
+    std::vector<uint64_t> crease;
+    for (const auto& [key, two] : ef)
+      if (two[1] < 0 || patch[two[0]] != patch[two[1]]) crease.push_back(key);
+    std::sort(crease.begin(), crease.end());
+    for (uint64_t key : crease) {
+      const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xFFFFFFFFu);
+      const double len = (P_[b] - P_[a]).norm();
+      // (At most 64 pieces: a spacing far below the surface's own edges comes from a part with next
+      // to no volume, whose faces need no points between their corners.)
+      const int k = std::isfinite(spacing) ? std::clamp(static_cast<int>(std::ceil(len / spacing - 1e-9)), 1, 64) : 1;
+      std::vector<int> c{a};
+      for (int i = 1; i < k; ++i) {
+        c.push_back(static_cast<int>(P_.size()));
+        P_.push_back(P_[a] + (static_cast<double>(i) / k) * (P_[b] - P_[a]));
+      }
+      c.push_back(b);
+      chain[key] = std::move(c);
+    }
+    // Each patch in 2-D.
+    std::vector<std::vector<int>> faces_of(static_cast<size_t>(patches));
+    for (Eigen::Index f = 0; f < nf; ++f) faces_of[patch[f]].push_back(static_cast<int>(f));
+    for (int pi = 0; pi < patches; ++pi) {
+      const auto& fs = faces_of[static_cast<size_t>(pi)];
+      Vec3 n = Vec3::Zero(), centre = Vec3::Zero();
+      double area = 0;
+      for (int f : fs) {
+        const Vec3 nn = normal(f);
+        n += nn;
+        area += nn.norm();
+        centre += nn.norm() * (P_[s.F(f, 0)] + P_[s.F(f, 1)] + P_[s.F(f, 2)]) / 3.0;
+      }
+      if (!(n.norm() > 0) || !(area > 0)) {  // degenerate faces: keep them as they are
+        for (int f : fs) add_tri(s.F(f, 0), s.F(f, 1), s.F(f, 2), pi);
         continue;
-      bool in = true;
-      for (Eigen::Index i = 0; i < s.planes.rows() && in; ++i)
-        in = s.planes(i, 0) * x + s.planes(i, 1) * y + s.planes(i, 2) * z - s.planes(i, 3) < offset;
-      if (in) return true;
+      }
+      centre /= area;
+      n.normalize();
+      // The frame depends on the normal's direction only (n and -n give the same).
+      int big;
+      n.cwiseAbs().maxCoeff(&big);
+      const Vec3 nc = n(big) < 0 ? Vec3(-n) : n;
+      int least;
+      nc.cwiseAbs().minCoeff(&least);
+      const Vec3 u = nc.cross(Vec3::Unit(least)).normalized(), v = nc.cross(u);
+      const bool flip = n.dot(nc) < 0;  // outward is -nc: reverse the 2-D orientation
+      auto to2 = [&](const Vec3& p) { return K::Point_2((p - origin).dot(u), (p - origin).dot(v)); };
+      Cdt cdt;
+      std::unordered_map<int, Cdt::Vertex_handle> vmap;
+      auto vertex = [&](int id) {
+        auto it = vmap.find(id);
+        if (it != vmap.end()) return it->second;
+        Cdt::Vertex_handle h = cdt.insert(to2(P_[id]));
+        h->info() = id;
+        vmap.emplace(id, h);
+        return h;
+      };
+      std::vector<std::pair<K::Point_2, K::Point_2>> segments;
+      std::vector<uint64_t> boundary;
+      for (int f : fs)
+        for (int k = 0; k < 3; ++k) {
+          const uint64_t key = edge_key(s.F(f, k), s.F(f, (k + 1) % 3));
+          if (chain.count(key)) boundary.push_back(key);
+        }
+      std::sort(boundary.begin(), boundary.end());
+      boundary.erase(std::unique(boundary.begin(), boundary.end()), boundary.end());
+      for (uint64_t key : boundary) {
+        const auto& c = chain[key];
+        for (size_t i = 0; i + 1 < c.size(); ++i) {
+          const auto h0 = vertex(c[i]), h1 = vertex(c[i + 1]);
+          cdt.insert_constraint(h0, h1);
+          segments.emplace_back(h0->point(), h1->point());
+        }
+      }
+      mark_domain(cdt);
+      // Lattice points inside, at least half a spacing from the patch's boundary.
+      if (std::isfinite(spacing)) {
+        double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+        for (const auto& [id, h] : vmap) {
+          x0 = std::min(x0, h->point().x()), x1 = std::max(x1, h->point().x());
+          y0 = std::min(y0, h->point().y()), y1 = std::max(y1, h->point().y());
+        }
+        const double offset = nc.dot(centre - origin);
+        std::vector<std::pair<K::Point_2, int>> inner;
+        for (long i = static_cast<long>(std::floor(x0 / spacing)); i <= static_cast<long>(std::ceil(x1 / spacing)); ++i)
+          for (long j = static_cast<long>(std::floor(y0 / spacing)); j <= static_cast<long>(std::ceil(y1 / spacing)); ++j) {
+            uint64_t h = (static_cast<uint64_t>(i) * 0x9E3779B97F4A7C15ULL) ^ (static_cast<uint64_t>(j) * 0xC2B2AE3D27D4EB4FULL);
+            h ^= h >> 29;
+            h *= 0xBF58476D1CE4E5B9ULL;
+            h ^= h >> 32;
+            const double jx = (static_cast<double>(h & 0xFFFF) / 65535.0 - 0.5) * 0.1 * spacing;
+            const double jy = (static_cast<double>((h >> 16) & 0xFFFF) / 65535.0 - 0.5) * 0.1 * spacing;
+            const K::Point_2 q(static_cast<double>(i) * spacing + jx, static_cast<double>(j) * spacing + jy);
+            if (q.x() < x0 || q.x() > x1 || q.y() < y0 || q.y() > y1) continue;
+            const Cdt::Face_handle fh = cdt.locate(q);
+            if (cdt.is_infinite(fh) || !(fh->info() & 1)) continue;
+            double near = INFINITY;
+            for (const auto& sg : segments)
+              near = std::min(near, std::sqrt(CGAL::squared_distance(q, K::Segment_2(sg.first, sg.second))));
+            if (near < 0.5 * spacing) continue;
+            inner.emplace_back(q, 0);
+          }
+        spdlog::trace("patch {}: {} faces, {} boundary edges, {} lattice points, spacing {:.3g}, extent {:.3g} x {:.3g}", pi,
+                      fs.size(), boundary.size(), inner.size(), spacing, x1 - x0, y1 - y0);
+        for (auto& [q, id] : inner) {
+          id = static_cast<int>(P_.size());
+          P_.push_back(origin + q.x() * u + q.y() * v + offset * nc);
+          Cdt::Vertex_handle h = cdt.insert(q);
+          h->info() = id;
+        }
+        if (!inner.empty()) mark_domain(cdt);
+      }
+      for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+        if (!(f->info() & 1)) continue;
+        const int a = f->vertex(0)->info(), b = f->vertex(1)->info(), c = f->vertex(2)->info();
+        if (flip) add_tri(a, c, b, pi);
+        else add_tri(a, b, c, pi);
+      }
+    }
+    vh_.assign(P_.size(), Vh());
+    on_surface_.assign(P_.size(), 1);
+  }
+  // Nesting levels of the faces of a 2-D constrained triangulation (0 outside; odd: inside the
+  // polygon bounded by the constraints), by a flood fill from the infinite face.
+  static void mark_domain(Cdt& cdt) {
+    for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = -1;
+    std::deque<std::pair<Cdt::Face_handle, int>> q;
+    q.emplace_back(cdt.infinite_face(), 0);
+    while (!q.empty()) {
+      auto [f, level] = q.front();
+      q.pop_front();
+      if (f->info() != -1) continue;
+      f->info() = level;
+      for (int i = 0; i < 3; ++i) {
+        const Cdt::Face_handle g = f->neighbor(i);
+        if (g->info() != -1) continue;
+        if (cdt.is_constrained(Cdt::Edge(f, i))) q.emplace_back(g, level + 1);
+        else q.emplace_front(g, level);
+      }
+    }
+  }
+
+  // ---- the triangulation ----
+  int id(const Vh& v) const {
+    const auto it = id_.find(&*v);
+    return it == id_.end() ? -1 : it->second;
+  }
+  int add_point(const Vec3& p, bool surface, Vh hint) {
+    const int i = static_cast<int>(P_.size());
+    P_.push_back(p);
+    vh_.push_back(Vh());
+    on_surface_.push_back(surface ? 1 : 0);
+    if (tr_.number_of_vertices() > 0) insert(i, hint);
+    return i;
+  }
+  void insert(int i, Vh hint) {
+    const Vec3& p = P_[static_cast<size_t>(i)];
+    const Vh v = hint == Vh() ? tr_.insert(WPoint(BPoint(p(0), p(1), p(2))))
+                              : tr_.insert(WPoint(BPoint(p(0), p(1), p(2))), hint);
+    vh_[static_cast<size_t>(i)] = v;
+    id_[&*v] = i;
+  }
+  void build_delaunay() {
+    // The surface's vertices (input vertices inside a flat patch are no longer on it).
+    std::vector<char> used(P_.size(), 0);
+    for (size_t t = 0; t < tri_.size(); ++t)
+      if (tri_alive_[t])
+        for (int v : tri_[t]) used[static_cast<size_t>(v)] = 1;
+    std::vector<int> order;
+    for (size_t i = 0; i < P_.size(); ++i)
+      if (used[i]) order.push_back(static_cast<int>(i));
+    struct Traits {
+      const std::vector<Vec3>* P;
+      struct Less {
+        const std::vector<Vec3>* P;
+        int axis;
+        bool operator()(int a, int b) const { return (*P)[a](axis) < (*P)[b](axis); }
+      };
+      using Point_3 = int;
+      using Less_x_3 = Less;
+      using Less_y_3 = Less;
+      using Less_z_3 = Less;
+      Less_x_3 less_x_3_object() const { return {P, 0}; }
+      Less_y_3 less_y_3_object() const { return {P, 1}; }
+      Less_z_3 less_z_3_object() const { return {P, 2}; }
+    };
+    CGAL::spatial_sort(order.begin(), order.end(), Traits{&P_}, CGAL::Hilbert_sort_median_policy());
+    Vh hint;
+    for (int i : order) {
+      insert(i, hint);
+      hint = vh_[static_cast<size_t>(i)];
+    }
+  }
+
+  // Flips surface edge (a, b) to (c, d) when its two triangles (a, b, c) and (b, a, d) lie in one
+  // plane (exact predicate) and (c, d) is an edge of the triangulation: where points of a flat
+  // region are cocircular, the triangulation's choice of diagonal is as good as the surface's, and
+  // taking it keeps the surface exactly where it was. Returns whether it flipped.
+  bool flip_to_delaunay(uint64_t key, std::vector<uint64_t>* flipped) {
+    auto it = edge_tris_.find(key);
+    if (it == edge_tris_.end() || it->second[0] < 0 || it->second[1] < 0) return false;
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xFFFFFFFFu);
+    const int t0 = it->second[0], t1 = it->second[1];
+    auto opposite = [&](int t) {
+      const auto& v = tri_[static_cast<size_t>(t)];
+      for (int k = 0; k < 3; ++k)
+        if (v[k] != a && v[k] != b) return v[k];
+      return -1;
+    };
+    const int c = opposite(t0), d = opposite(t1);
+    if (c < 0 || d < 0 || c == d || edge_tris_.count(edge_key(c, d))) return false;
+    // In one flat patch any diagonal will do; across patches that are nearly flat (the quad's
+    // corners within a thousandth of its longest edge of the other triangle's plane) the flip moves
+    // the surface by that much at most.
+    if (tri_patch_[static_cast<size_t>(t0)] != tri_patch_[static_cast<size_t>(t1)]) {
+      const Vec3 &A = P_[a], &B = P_[b], &C = P_[c], &D = P_[d];
+      const double longest = std::max({(A - B).norm(), (A - C).norm(), (A - D).norm(), (B - C).norm(), (B - D).norm()});
+      const Vec3 n0 = (B - A).cross(C - A), n1 = (A - B).cross(D - B);
+      if (!(n0.norm() > 0 && n1.norm() > 0)) return false;
+      if (std::abs(n0.normalized().dot(D - A)) > 1e-3 * longest || std::abs(n1.normalized().dot(C - B)) > 1e-3 * longest ||
+          n0.dot(n1) <= 0)
+        return false;
+    }
+    Ch cell;
+    int i, j;
+    if (!tr_.is_edge(vh_[c], vh_[d], cell, i, j)) return false;
+    // Keep the orientation: t0 = (c, x, y) in its own order, t1 = (d, y, x); flipped: (c, x, d), (c, d, y).
+    const auto v = tri_[static_cast<size_t>(t0)];
+    int k = 0;
+    while (v[k] != c) ++k;
+    const int x = v[(k + 1) % 3], y = v[(k + 2) % 3];
+    const int pa = tri_patch_[static_cast<size_t>(t0)];
+    const int depth = std::max(tri_depth_[static_cast<size_t>(t0)], tri_depth_[static_cast<size_t>(t1)]);
+    remove_tri(t0);
+    remove_tri(t1);
+    add_tri(c, x, d, pa, depth);
+    add_tri(c, d, y, pa, depth);
+    flipped->push_back(edge_key(c, d));
+    flipped->push_back(key);
+    return true;
+  }
+
+  // Splits surface edges until every surface triangle is a face of the triangulation: an edge
+  // that is missing (unless a flip in a flat region recovers it), else the longest edge of a
+  // missing triangle. Returns false if a cap stopped it.
+  bool make_conforming() {
+    std::vector<uint64_t> flipped;  // each new diagonal once: no flipping back and forth
+    for (int round = 0; round < 64; ++round) {
+      std::vector<uint64_t> split, missing;
+      std::vector<int> remove;
+      for (size_t t = 0; t < tri_.size(); ++t) {
+        if (!tri_alive_[t]) continue;
+        const auto& v = tri_[t];
+        Ch c;
+        int i, j, k;
+        if (tr_.is_facet(vh_[v[0]], vh_[v[1]], vh_[v[2]], c, i, j, k)) continue;
+        // Steiner points (inside, not on the surface) in the triangle's diametral ball keep it out
+        // of the triangulation whatever the surface does: they go.
+        const size_t before = remove.size();
+        steiner_in_diametral_ball(static_cast<int>(t), remove);
+        if (remove.size() > before) continue;
+        bool edge_missing = false;
+        for (int e = 0; e < 3; ++e) {
+          int a, b;
+          if (!tr_.is_edge(vh_[v[e]], vh_[v[(e + 1) % 3]], c, a, b)) {
+            missing.push_back(edge_key(v[e], v[(e + 1) % 3]));
+            edge_missing = true;
+          }
+        }
+        if (!edge_missing) split.push_back(longest_edge(static_cast<int>(t)));
+      }
+      if (split.empty() && missing.empty() && remove.empty()) return true;
+      if (!remove.empty()) {
+        std::sort(remove.begin(), remove.end());
+        remove.erase(std::unique(remove.begin(), remove.end()), remove.end());
+        for (int q : remove) remove_steiner(q);
+        spdlog::debug("conformity round {}: removed {} Steiner points", round, remove.size());
+        continue;  // re-check before splitting anything
+      }
+      std::sort(missing.begin(), missing.end());
+      missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+      int flips = 0;
+      for (uint64_t e : missing) {
+        if (std::find(flipped.begin(), flipped.end(), e) == flipped.end() && flip_to_delaunay(e, &flipped)) ++flips;
+        else split.push_back(e);
+      }
+      if (flips > 0) {
+        spdlog::debug("conformity round {}: {} flips", round, flips);
+        continue;  // re-check before splitting anything
+      }
+      std::sort(split.begin(), split.end());
+      split.erase(std::unique(split.begin(), split.end()), split.end());
+      // Edges of triangles split 10 times already are not split further: around a sharp crease
+      // recovery by splitting can go on without end.
+      split.erase(std::remove_if(split.begin(), split.end(),
+                                 [&](uint64_t k) {
+                                   const auto it = edge_tris_.find(k);
+                                   if (it == edge_tris_.end()) return true;
+                                   for (int t : it->second)
+                                     if (t >= 0 && tri_depth_[static_cast<size_t>(t)] >= 10) return true;
+                                   return false;
+                                 }),
+                  split.end());
+      if (split.empty()) {
+        spdlog::debug("conformity round {}: gave up, {} missing edges, only edges of triangles split 10 times left", round,
+                      missing.size());
+        return false;
+      }
+      if (static_cast<int>(P_.size()) + static_cast<int>(split.size()) > conformity_cap_) {
+        spdlog::debug("conformity round {}: gave up at the cap ({} points + {} splits > {})", round, P_.size(), split.size(),
+                      conformity_cap_);
+        return false;
+      }
+      for (uint64_t k : split) split_edge(k);
     }
     return false;
+  }
+
+  // The Steiner points (not surface points) strictly inside the diametral ball of surface
+  // triangle t, among the vertices of the cells around its corners; appended to `out`.
+  void steiner_in_diametral_ball(int t, std::vector<int>& out) const {
+    const auto& v = tri_[static_cast<size_t>(t)];
+    const Vec3 &A = P_[v[0]], &B = P_[v[1]], &C = P_[v[2]];
+    const Vec3 ab = B - A, ac = C - A, n = ab.cross(ac);
+    const double n2 = n.squaredNorm();
+    if (!(n2 > 0)) return;
+    const Vec3 centre = A + (ac.squaredNorm() * n.cross(ab) + ab.squaredNorm() * ac.cross(n)) / (2.0 * n2);
+    const double r2 = (A - centre).squaredNorm();
+    std::vector<Ch> around;
+    for (int k = 0; k < 3; ++k) tr_.incident_cells(vh_[v[k]], std::back_inserter(around));
+    for (const Ch& c : around)
+      for (int k = 0; k < 4; ++k) {
+        const Vh h = c->vertex(k);
+        if (tr_.is_infinite(h)) continue;
+        const int q = id(h);
+        if (q < 0 || on_surface_[static_cast<size_t>(q)]) continue;
+        if ((P_[q] - centre).squaredNorm() < r2 * (1 - 1e-12)) out.push_back(q);
+      }
+  }
+
+  void remove_steiner(int q) {
+    const Vh h = vh_[static_cast<size_t>(q)];
+    if (h == Vh()) return;
+    id_.erase(&*h);
+    tr_.remove(h);
+    vh_[static_cast<size_t>(q)] = Vh();
+    --steiner_;
+  }
+
+  // Inside = an odd number of surface crossings from the infinite cells (0-1 breadth-first search).
+  void classify_by_parity() {
+    std::unordered_map<const void*, int> depth;
+    depth.reserve(tr_.number_of_cells() * 2);
+    std::deque<Ch> dq;
+    for (auto c = tr_.all_cells_begin(); c != tr_.all_cells_end(); ++c)
+      if (tr_.is_infinite(c)) {
+        depth[&*c] = 0;
+        dq.push_back(c);
+      }
+    while (!dq.empty()) {
+      const Ch c = dq.front();
+      dq.pop_front();
+      const int d = depth[&*c];
+      for (int i = 0; i < 4; ++i) {
+        const Ch n = c->neighbor(i);
+        const int w = is_surface_facet(c, i) ? 1 : 0;
+        auto [it, fresh] = depth.try_emplace(&*n, d + w);
+        if (!fresh && it->second <= d + w) continue;
+        it->second = d + w;
+        if (w) dq.push_back(n);
+        else dq.push_front(n);
+      }
+    }
+    for (auto c = tr_.finite_cells_begin(); c != tr_.finite_cells_end(); ++c) {
+      const auto it = depth.find(&*c);
+      c->set_subdomain_index(it != depth.end() && (it->second & 1) ? 1 : 0);
+    }
+  }
+
+  // One round of refinement. Returns whether anything changed.
+  bool refine_round() {
+    struct Bad {
+      double key;
+      std::array<int, 4> v;
+      Vec3 x;
+      bool quality;
+    };
+    std::vector<Bad> bad;
+    const double rmax = max_radius();
+    for (auto c = tr_.finite_cells_begin(); c != tr_.finite_cells_end(); ++c) {
+      if (c->subdomain_index() == 0) continue;
+      std::array<int, 4> v;
+      for (int k = 0; k < 4; ++k) v[static_cast<size_t>(k)] = id(c->vertex(k));
+      const Vec3 &a = P_[v[0]], &b = P_[v[1]], &cc = P_[v[2]], &d = P_[v[3]];
+      Vec3 x;
+      double theta = min_dihedral(a, b, cc, d);
+      if (!circumcentre(a, b, cc, d, x) || !(theta > 1e-3)) {
+        // A flat cell (four points on one circle, say the Steiner points a thin slab's refinement
+        // puts on its mid-plane): the centre of the circle through its largest face, in the plane.
+        if (!circumcircle_centre_of_largest_face(a, b, cc, d, x)) continue;
+        theta = 0;
+      }
+      const double R = (x - a).norm();
+      const bool quality = theta < opt_.refine_dihedral;
+      if (!quality && !(R > rmax)) continue;
+      std::sort(v.begin(), v.end());
+      bad.push_back({quality ? theta : 1000.0 - R / rmax, v, x, quality});
+    }
+    if (bad.empty()) return false;
+    std::sort(bad.begin(), bad.end(), [](const Bad& p, const Bad& q) { return p.key != q.key ? p.key < q.key : p.v < q.v; });
+    std::vector<uint64_t> split;
+    int inserted = 0;
+    int why_gone = 0, why_short = 0, why_outside = 0, why_near = 0;
+    std::vector<Facet> boundary, internal;
+    std::vector<Ch> cells;
+    // Inserts p (inside bad cell c's circumsphere, so c is in conflict with it) unless that would
+    // destroy a surface face (returns the largest such face in *enc) or p is closer than `near_min`
+    // to a vertex of the conflict zone.
+    enum class Try { inserted, encroaches, near, outside };
+    auto try_insert = [&](const Vec3& p, const Ch& c, double near_min, int* enc) {
+      const WPoint wp(BPoint(p(0), p(1), p(2)));
+      // find_conflicts needs c in conflict with p (a rounded circumcentre of a nearly flat cell, or
+      // the circle centre of a flat one, may not be).
+      if (tr_.side_of_power_sphere(c, wp, true) != CGAL::ON_BOUNDED_SIDE) return Try::outside;
+      boundary.clear(), internal.clear(), cells.clear();
+      tr_.find_conflicts(wp, c, std::back_inserter(boundary), std::back_inserter(cells), std::back_inserter(internal));
+      *enc = -1;
+      double enc_area = -1;
+      for (const Facet& f : internal) {
+        const int t = surface_tri(f.first, f.second);
+        if (t < 0) continue;
+        const auto& v = tri_[static_cast<size_t>(t)];
+        const double area = (P_[v[1]] - P_[v[0]]).cross(P_[v[2]] - P_[v[0]]).squaredNorm();
+        if (area > enc_area) enc_area = area, *enc = t;
+      }
+      // Nor inside the diametral ball of a surface face on the zone's boundary (Shewchuk's
+      // encroachment): a point that close to the surface would make the faces around it
+      // non-Delaunay as soon as the surface is split nearby, and recovering them would split the
+      // surface down to that distance.
+      for (const Facet& f : boundary) {
+        const int t = surface_tri(f.first, f.second);
+        if (t < 0) continue;
+        const auto& v = tri_[static_cast<size_t>(t)];
+        const Vec3 &A = P_[v[0]], &B = P_[v[1]], &C = P_[v[2]];
+        const Vec3 ab = B - A, ac = C - A, n = ab.cross(ac);
+        const double n2 = n.squaredNorm();
+        if (!(n2 > 0)) continue;
+        const Vec3 centre = A + (ac.squaredNorm() * n.cross(ab) + ab.squaredNorm() * ac.cross(n)) / (2.0 * n2);
+        if ((p - centre).squaredNorm() < (A - centre).squaredNorm()) {
+          const double area = n2;
+          if (area > enc_area) enc_area = area, *enc = t;
+        }
+      }
+      if (*enc >= 0) return Try::encroaches;
+      for (const Ch& k : cells)
+        if (tr_.is_infinite(k) || k->subdomain_index() == 0) return Try::outside;
+      if (boundary.empty()) return Try::outside;
+      double near = INFINITY;
+      for (const Ch& k : cells)
+        for (int j = 0; j < 4; ++j) near = std::min(near, (P_[id(k->vertex(j))] - p).norm());
+      if (near < near_min) return Try::near;
+      const int i = static_cast<int>(P_.size());
+      P_.push_back(p);
+      on_surface_.push_back(0);
+      const Vh v = tr_.insert_in_hole(wp, cells.begin(), cells.end(), boundary.front().first, boundary.front().second);
+      vh_.push_back(v);
+      id_[&*v] = i;
+      std::vector<Ch> around;
+      tr_.incident_cells(v, std::back_inserter(around));
+      for (const Ch& k : around) k->set_subdomain_index(1);
+      ++steiner_;
+      return Try::inserted;
+    };
+    for (const Bad& b : bad) {
+      if (static_cast<int>(P_.size()) > opt_.max_tets / 3) break;
+      Ch c;
+      if (!tr_.is_cell(vh_[b.v[0]], vh_[b.v[1]], vh_[b.v[2]], vh_[b.v[3]], c)) { ++why_gone; continue; }
+      const double R = (P_[b.v[0]] - b.x).norm();
+      int enc;
+      Try got = try_insert(b.x, c, 0.2 * R, &enc);
+      if (got == Try::inserted) {
+        ++inserted;
+        if (!b.quality) ++size_driven_;
+        continue;
+      }
+      if (got == Try::encroaches) {
+        // Quality asks for a finer boundary there; size does not (the boundary spacing is set).
+        const uint64_t e = longest_edge(enc);
+        if (b.quality && edge_length(e) > min_split_) {
+          split.push_back(e);
+          continue;
+        }
+      }
+      if (b.quality) ++(got == Try::near ? why_near : got == Try::outside ? why_outside : why_short);
+    }
+    spdlog::debug("refine: {} bad, {} inserted, {} splits asked, gone {}, short {}, outside {}, near {}", bad.size(), inserted, split.size(), why_gone, why_short, why_outside, why_near);
+    std::sort(split.begin(), split.end());
+    split.erase(std::unique(split.begin(), split.end()), split.end());
+    int done = 0;
+    for (uint64_t k : split) done += split_edge(k) >= 0;
+    return inserted + done > 0;
+  }
+
+  // CGAL's exuder on the tetrahedra below sliver_bound: weights only, never a surface face.
+  // The complex CGAL's optimizers work on: the inside cells, the surface faces, vertex dimensions.
+  void setup_complex() {
+    for (auto c = tr_.finite_cells_begin(); c != tr_.finite_cells_end(); ++c) {
+      if (c->subdomain_index() == 0) continue;
+      for (int i = 0; i < 4; ++i) {
+        const Ch n = c->neighbor(i);
+        if (tr_.is_infinite(n) || n->subdomain_index() == 0) c3t3_.add_to_complex(c, i, C3t3::Surface_patch_index(0, 1));
+      }
+    }
+    for (size_t i = 0; i < vh_.size(); ++i) {
+      if (vh_[i] == Vh()) continue;
+      c3t3_.set_dimension(vh_[i], on_surface_[i] ? 2 : 3);
+      if (on_surface_[i]) c3t3_.set_index(vh_[i], C3t3::Surface_patch_index(0, 1));
+      else c3t3_.set_index(vh_[i], C3t3::Subdomain_index(1));
+    }
+    c3t3_.rescan_after_load_of_triangulation();
+  }
+
+  // CGAL's exuder on the tetrahedra below sliver_bound: weights only, never a surface face.
+  void exude() {
+    CGAL::exude_mesh_3(c3t3_, CGAL::parameters::sliver_bound = opt_.sliver_bound, CGAL::parameters::time_limit = 0);
+  }
+
+  TetMesh extract() {
+    // Vertices by their point (the exuder re-creates vertices, remeshing adds and moves interior
+    // ones; surface vertices keep their points exactly).
+    std::map<std::array<double, 3>, int> at;
+    for (size_t i = 0; i < P_.size(); ++i) at.emplace(std::array<double, 3>{P_[i](0), P_[i](1), P_[i](2)}, static_cast<int>(i));
+    std::unordered_map<const void*, int> vid;
+    auto index = [&](const Vh& v) {
+      auto it = vid.find(&*v);
+      if (it != vid.end()) return it->second;
+      const auto& p = tr_.point(v);
+      const std::array<double, 3> key{p.x(), p.y(), p.z()};
+      auto [jt, fresh] = at.try_emplace(key, static_cast<int>(P_.size()));
+      if (fresh) P_.emplace_back(key[0], key[1], key[2]);
+      vid.emplace(&*v, jt->second);
+      return jt->second;
+    };
+    TetMesh m;
+    std::vector<std::array<int, 4>> T;
+    for (auto c = tr_.finite_cells_begin(); c != tr_.finite_cells_end(); ++c) {
+      if (c->subdomain_index() == 0) continue;
+      std::array<int, 4> t;
+      for (int k = 0; k < 4; ++k) t[static_cast<size_t>(k)] = index(c->vertex(k));
+      T.push_back(t);
+    }
+    std::vector<int> map(P_.size(), -1);
+    // Vertices in order of first use by the tetrahedra sorted by their vertex ids: deterministic.
+    std::sort(T.begin(), T.end(), [](const std::array<int, 4>& a, const std::array<int, 4>& b) {
+      std::array<int, 4> x = a, y = b;
+      std::sort(x.begin(), x.end());
+      std::sort(y.begin(), y.end());
+      return x < y;
+    });
+    int n = 0;
+    for (auto& t : T)
+      for (int& v : t) {
+        if (map[static_cast<size_t>(v)] < 0) map[static_cast<size_t>(v)] = n++;
+        v = map[static_cast<size_t>(v)];
+      }
+    m.V.resize(n, 3);
+    for (size_t i = 0; i < P_.size(); ++i)
+      if (map[i] >= 0) m.V.row(map[i]) = P_[i].transpose();
+    m.T.resize(static_cast<Eigen::Index>(T.size()), 4);
+    for (size_t i = 0; i < T.size(); ++i)
+      for (int k = 0; k < 4; ++k) m.T(static_cast<Eigen::Index>(i), k) = T[i][static_cast<size_t>(k)];
+    orient_positively(m);
+    return m;
   }
 };
 
 }  // namespace
 
-TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const TetrahedralizeOptions& opt,
-                       TetrahedralizeStats* stats, Progress* progress, const Eigen::MatrixX3d* cover) {
-  if (shells.empty()) throw InputError("tetrahedralize: no convex shells");
+TetMesh tetrahedralize(const SurfaceMesh& boundary, const TetrahedralizeOptions& opt, TetrahedralizeStats* stats,
+                       Progress* progress) {
+  if (boundary.F.rows() == 0) throw InputError("tetrahedralize: the surface has no face");
   if (opt.target_tets < 1) throw InputError("--target-tets must be at least 1");
-  if (!(opt.facet_distance >= 0)) throw InputError("--facet-distance must be >= 0");
-  if (!(opt.facet_distance_per_size > 0)) throw InputError("facet_distance_per_size must be > 0");
-
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-  double volume = 0.0;
-  for (const auto& s : shells) {
-    lo = lo.cwiseMin(s.hull.V.colwise().minCoeff().transpose());
-    hi = hi.cwiseMax(s.hull.V.colwise().maxCoeff().transpose());
-    volume += s.hull.volume;
+  double volume = 0;
+  const Vec3 o = boundary.V.colwise().mean().transpose();
+  for (Eigen::Index f = 0; f < boundary.F.rows(); ++f) {
+    const Vec3 a = boundary.V.row(boundary.F(f, 0)).transpose() - o, b = boundary.V.row(boundary.F(f, 1)).transpose() - o,
+               c = boundary.V.row(boundary.F(f, 2)).transpose() - o;
+    volume += a.dot(b.cross(c)) / 6.0;
   }
-  const double diag = (hi - lo).norm();
-  UnionFunction f(shells);
-  const Eigen::Vector3d centre = 0.5 * (lo + hi);
-
-  double hull_area = 0.0;
-  for (const auto& s : shells)
-    for (Eigen::Index t = 0; t < s.hull.F.rows(); ++t)
-      hull_area += 0.5 * (s.hull.V.row(s.hull.F(t, 1)) - s.hull.V.row(s.hull.F(t, 0)))
-                             .cross(s.hull.V.row(s.hull.F(t, 2)) - s.hull.V.row(s.hull.F(t, 0)))
-                             .norm();
-  const double thickness = hull_area > 0 ? 3.0 * volume / hull_area : diag;  // 3 V / A
-  // Mesh_3's labeled domain only uses the sign: an inside test per shell that stops at the first
-  // separating plane is far cheaper than the signed value.
-  std::function<double(const Point&)> fn = [&f](const Point& p) { return f.inside(p.x(), p.y(), p.z()) ? -1.0 : 1.0; };
-
-  const Eigen::Vector3d dirs[14] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1},
-                                    {1, 1, 1}, {1, 1, -1}, {1, -1, 1}, {1, -1, -1}, {-1, 1, 1}, {-1, 1, -1},
-                                    {-1, -1, 1}, {-1, -1, -1}};
-
-  // One Mesh_3 run at the given cell size and facet distance, on the union dilated by f.offset.
-  auto run = [&](double size, double fd) {
-    // Half a cell, but at most a third of the thickness: the seeds on both sides of a thin (or
-    // flat, thickened) part must all stay, or Mesh_3 finds no boundary facet to start from.
-    const double seed_spacing = std::min(0.5 * size, thickness / 3.0);
-    const double radius = 0.5 * diag * 1.05 + 2 * f.offset + 1e-12;
-    Domain domain = Domain::create_implicit_mesh_domain(
-        fn, K::Sphere_3(Point(centre(0), centre(1), centre(2)), radius * radius),
-        params::relative_error_bound = 1e-7);
-    const auto surface_index = domain.index_from_surface_patch_index(Domain::Surface_patch_index(0, 1));
-    // Initial surface points: from each shell's centre, bisect along 14 directions to the union's
-    // boundary, so that every part of the union is seeded (random rays could miss a part). Seeds
-    // closer than seed_spacing × size to an earlier one are dropped: Delaunay refinement never
-    // removes a vertex, and two close seeds would leave an edge far shorter than the others.
-    std::vector<Eigen::Vector3d> seeds;
-    for (const auto& s : shells) {
-      const Eigen::Vector3d c = s.hull.V.colwise().mean().transpose();
-      if (!f.inside(c(0), c(1), c(2))) continue;
-      for (const auto& d0 : dirs) {
-        const Eigen::Vector3d d = d0.normalized();
-        double a = 0.0, b = 2.0 * diag;
-        for (int it = 0; it < 60; ++it) {
-          const double m = 0.5 * (a + b);
-          const Eigen::Vector3d p = c + m * d;
-          (f.inside(p(0), p(1), p(2)) ? a : b) = m;
-        }
-        const Eigen::Vector3d p = c + b * d;
-        bool near = false;
-        for (const auto& q : seeds) near = near || (q - p).norm() < seed_spacing;
-        if (!near) seeds.push_back(p);
-      }
-    }
-    CGAL::get_default_random() = CGAL::Random(opt.seed);
-    C3t3 c3t3;
-    Tr& tr = c3t3.triangulation();
-    for (const Eigen::Vector3d& p : seeds) {
-      auto v = tr.insert(Tr::Point(Point(p(0), p(1), p(2))));
-      if (v == Tr::Vertex_handle()) continue;
-      c3t3.set_dimension(v, 2);
-      c3t3.set_index(v, surface_index);
-    }
-    Criteria criteria(params::facet_angle = 25, params::facet_size = size, params::facet_distance = fd,
-                      params::cell_radius_edge_ratio = 3, params::cell_size = size);
-    // Perturbation and exudation run to completion (a time limit would make the result depend on
-    // the machine's load).
-    const auto limits = params::mesh_3_options(params::maximal_number_of_vertices =
-                                                   static_cast<std::size_t>(2 * opt.max_tets));
-    CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(),
-                        params::perturb(params::time_limit = opt.optimize_seconds,
-                                        params::sliver_bound = opt.sliver_bound),
-                        params::exude(params::time_limit = opt.optimize_seconds,
-                                      params::sliver_bound = opt.sliver_bound),
-                        // A safety net against runaway refinement (memory): far above max_tets.
-                        limits);
-    TetMesh mesh;
-    std::map<Tr::Vertex_handle, int> index;
-    std::vector<Eigen::Vector3d> pts;
-    std::vector<Eigen::Vector4i> tets;
-    for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
-      Eigen::Vector4i t;
-      for (int k = 0; k < 4; ++k) {
-        auto v = c->vertex(k);
-        auto [it, fresh] = index.emplace(v, static_cast<int>(pts.size()));
-        if (fresh) {
-          const auto& p = tr.point(v);
-          pts.emplace_back(p.x(), p.y(), p.z());
-        }
-        t(k) = it->second;
-      }
-      tets.push_back(t);
-    }
-    mesh.V.resize(static_cast<Eigen::Index>(pts.size()), 3);
-    for (size_t i = 0; i < pts.size(); ++i) mesh.V.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
-    mesh.T.resize(static_cast<Eigen::Index>(tets.size()), 4);
-    for (size_t i = 0; i < tets.size(); ++i) mesh.T.row(static_cast<Eigen::Index>(i)) = tets[i].transpose();
-    orient_positively(mesh);
-    return mesh;
-  };
-
-  // The points to cover: the caller's (the input's vertices), else the shells' vertices (the
-  // input's most extreme points). Returns the fraction held and the extra dilation that would hold
-  // 99.9% of them.
-  Eigen::MatrixX3d corners;
-  if (cover && cover->rows() > 0) {
-    corners = *cover;
-  } else {
-    Eigen::Index n = 0;
-    for (const auto& s : shells) n += s.hull.V.rows();
-    corners.resize(n, 3);
-    n = 0;
-    for (const auto& s : shells) corners.middleRows(n, s.hull.V.rows()) = s.hull.V, n += s.hull.V.rows();
-  }
-  const double required = 0.999;
-  auto coverage = [&](const TetMesh& mesh, double& needed) {
-    const TetLocator locator(mesh);
-    std::vector<double> out(static_cast<size_t>(corners.rows()), 0.0);
-    tbb::parallel_for(Eigen::Index(0), corners.rows(), [&](Eigen::Index i) {
-      if (locator.locate(corners.row(i)) < 0) locator.nearest(corners.row(i), &out[static_cast<size_t>(i)]);
-    });
-    std::vector<double> sorted = out;
-    std::sort(sorted.begin(), sorted.end());
-    const double tol = opt.coverage_tolerance * diag;
-    needed = std::max(0.0, sorted[std::min(sorted.size() - 1, static_cast<size_t>(required * static_cast<double>(sorted.size())))] - tol) +
-             0.1 * tol;
-    return static_cast<double>(std::count_if(out.begin(), out.end(), [&](double d) { return d <= tol; })) /
-           static_cast<double>(out.size());
-  };
-
-  // Shells of one connected part of the solid mesh into one component (at most as many as parts).
-  int parts = 0;
-  for (const auto& s : shells) parts = std::max(parts, s.part + 1);
+  volume = std::abs(volume);
   const double target = opt.target_tets;
-  // First guess: Delaunay refinement with cell_size s gives about volume / (0.07 s³) tetrahedra
-  // (measured on our corpus); then corrected from the count of each attempt.
-  double size = std::cbrt(volume / (0.07 * target));
-  double coarsen = 1.0;  // grows when the count exceeds max_tets with a fixed facet_distance bound
-  auto facet_distance = [&](double s) {
-    double d = opt.facet_distance_per_size * s;
-    if (opt.facet_distance > 0) d = std::min(d, coarsen * opt.facet_distance * diag);
-    return d;
-  };
-  // The dilation: `offset` (within 5% of the thickness for thin parts); boundary vertices are then
-  // moved out locally where points stick out (inflate_to_cover). Where that is not enough, the
-  // dilation grows, as a multiple of the facet distance (a chord of the dilated surface sinks
-  // about that deep below it).
-  double cover_factor = 0.0;
-  const double base_offset = std::min(opt.offset * diag, 0.05 * thickness);
-  TetMesh best;
-  double best_score = INFINITY;
+  // A regular tetrahedron of edge L has volume L³ / (6√2); Delaunay meshes average about half that.
+  double L = std::cbrt(6.0 * std::sqrt(2.0) * volume / (0.5 * target));
+  CGAL::get_default_random() = CGAL::Random(static_cast<int>(opt.seed));
+  const FastWindingNumber wn(boundary.V, boundary.F);
   TetrahedralizeStats st;
-  const int max_attempts = 8;
-  int offset_raises = 0;
-  double previous = INFINITY;
-  for (int attempt = 0; attempt < max_attempts; ++attempt) {
-    if (progress) progress->update(attempt);
+  RunResult best;
+  double best_score = INFINITY;
+  double previous_n = INFINITY, previous_L = 0;
+  for (int attempt = 0; attempt < 6; ++attempt) {
     const auto t0 = std::chrono::steady_clock::now();
-    const double fd = facet_distance(size);
-    f.offset = std::max(base_offset, cover_factor * fd);
-    TetMesh mesh = run(size, fd);
-    const double t_run = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    // Mesh_3 may leave a few tetrahedra apart (a sliver of the union at a dilated corner): keep
-    // the largest components, as many as the solid has parts (coverage is restored below).
-    if (mesh.T.rows() > 0) {
-      Eigen::VectorXi C;
-      const int nc = tet_components(mesh, C);
-      if (nc > parts) {
-        std::vector<int> count(static_cast<size_t>(nc), 0), order(static_cast<size_t>(nc));
-        for (Eigen::Index t = 0; t < C.size(); ++t) ++count[static_cast<size_t>(C(t))];
-        std::iota(order.begin(), order.end(), 0);
-        std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return count[a] > count[b]; });
-        std::vector<char> keep(static_cast<size_t>(nc), 0);
-        for (int k = 0; k < parts; ++k) keep[static_cast<size_t>(order[static_cast<size_t>(k)])] = 1;
-        Eigen::MatrixX4i T(mesh.T.rows(), 4);
-        Eigen::Index n = 0;
-        for (Eigen::Index t = 0; t < mesh.T.rows(); ++t)
-          if (keep[static_cast<size_t>(C(t))]) T.row(n++) = mesh.T.row(t);
-        mesh.T = T.topRows(n);
-        spdlog::debug("dropped {} of {} tet-mesh components", nc - parts, nc);
-      }
-    }
-    const int peeled = peel_boundary_slivers(mesh, opt.min_dihedral);
-    remove_unused_vertices(mesh);
-    const int moves =
-        mesh.T.rows() > 0 ? inflate_to_cover(mesh, corners, 0.5 * opt.coverage_tolerance * diag, opt.min_dihedral) : 0;
+    Mesher mesher(boundary, wn, opt, L);
+    RunResult r = mesher.run(progress);
+    const double n = static_cast<double>(r.mesh.T.rows());
+    spdlog::debug("tetrahedralize attempt {}: edge length {:.4g}: {} tetrahedra, {} boundary splits, {} Steiner points "
+                 "({} for size), {:.2f} s",
+                 attempt + 1, L, r.mesh.T.rows(), r.boundary_splits, r.steiner, r.size_driven,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     st.attempts = attempt + 1;
-    const double n = static_cast<double>(mesh.T.rows());
-    double needed = 0.0;
-    const double held = n > 0 ? coverage(mesh, needed) : 0.0;
-    Eigen::VectorXi C;
-    const int components = n > 0 ? tet_components(mesh, C) : 0;
-    spdlog::info("Mesh_3 attempt {}: cell_size {:.4g}, facet_distance {:.4g}, offset {:.4g}: {} tetrahedra "
-                 "({} peeled, {} vertex moves), {} component(s), {:.2f}% of points held, {:.2f} s ({:.2f} s Mesh_3)",
-                 attempt + 1, size, fd, f.offset, mesh.T.rows(), peeled, moves, components, 100 * held,
-                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), t_run);
-    const bool covered = held >= required;
-    const bool small_enough = n <= opt.max_tets;
-    const bool connected = components >= 1 && components <= parts;
-    // Score: invalid meshes rank after valid ones; among valid ones, the closest to the target.
-    const double score = (covered ? 0 : 100) + (connected ? 0 : 100) + (small_enough ? 0 : 10) +
-                         (n > 0 ? std::abs(std::log(n / target)) : 1e9);
+    const double score = (r.conforming ? 0 : 100) + (n > 0 ? std::abs(std::log(n / target)) : 1e9);
     if (score < best_score) {
       best_score = score;
-      best = mesh;
-      st.cell_size = size;
-      st.offset = f.offset;
-      st.facet_distance = fd;
-      st.covered = held;
-      st.peeled_slivers = peeled;
+      st.edge_length = L;
+      st.boundary_splits = r.boundary_splits;
+      st.steiner_points = r.steiner;
+      st.conforming = r.conforming;
+      st.peeled = r.peeled;
+      best = std::move(r);
     }
-    if (!covered && n > 0 && offset_raises < 4) {  // dilate by what the missing points need
-      cover_factor = (f.offset + needed) / fd;
-      ++offset_raises;
-      continue;
+    if (n > 0.87 * target && n < 1.15 * target) break;
+    // Coarser made no difference: the boundary (its faces and the quality it needs) sets the count.
+    if (n > target && L > previous_L && n >= 0.95 * previous_n) {
+      st.minimum_tets = static_cast<int>(std::min(n, previous_n));
+      break;
     }
-    if (!small_enough) {  // coarser cells and boundary
-      size *= 1.25;
-      coarsen *= 1.5;
-      continue;
-    }
-    if (!connected) {  // try a slightly different size
-      size *= 0.97;
-      continue;
-    }
-    if (n > 0.85 * target && n < 1.18 * target) break;
-    // A fixed facet_distance bound can make the boundary, not the cell size, decide the count:
-    // then a larger cell size gains nothing.
-    if (opt.facet_distance > 0 && (n > 2.0 * target || (n > target && n > 0.9 * previous))) break;
-    previous = n;
-    size *= n > 0 ? std::clamp(std::cbrt(n / target), 0.5, 2.0) : 0.7;
-  }
-
-  if (best.T.rows() > 0) {
-    // Label: the shell that holds the centroid (the most interior one).
-    best.label.resize(best.T.rows());
-    for (Eigen::Index t = 0; t < best.T.rows(); ++t) {
-      const Eigen::RowVector3d c = (best.V.row(best.T(t, 0)) + best.V.row(best.T(t, 1)) + best.V.row(best.T(t, 2)) +
-                                    best.V.row(best.T(t, 3))) / 4.0;
-      int arg = 0;
-      double v = INFINITY;
-      for (size_t s = 0; s < shells.size(); ++s) {
-        const double sv = shells[s].hull.signed_value(c);
-        if (sv < v) v = sv, arg = static_cast<int>(s);
-      }
-      best.label(t) = arg + 1;
-    }
+    previous_n = n;
+    previous_L = L;
+    L *= n > 0 ? std::clamp(std::cbrt(n / target), 0.5, 2.0) : 1.0;
   }
   if (stats) *stats = st;
-  return best;
+  return std::move(best.mesh);
 }
 
 }  // namespace squeeze::meshing

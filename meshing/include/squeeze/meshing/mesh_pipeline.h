@@ -1,16 +1,20 @@
 // squeeze::meshing — the whole `squeeze mesh` pipeline: load, analyse, decompose into convex
-// shells, tetrahedralize, measure. Paper: Rodriguez, Lien, Amato, ICRA 2006, Section VI-A, Fig. 3.
+// shells, build the simulation mesh's boundary, tetrahedralize, measure. Paper: Rodriguez, Lien,
+// Amato, ICRA 2006, Section VI-A, Fig. 3; docs/meshing.md says what version 4 does and why.
 #pragma once
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "squeeze/meshing/decompose.h"
+#include "squeeze/meshing/envelope.h"
 #include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/tet_mesh.h"
 #include "squeeze/meshing/tet_quality.h"
+#include "squeeze/meshing/shell_tetrahedralize.h"
 #include "squeeze/meshing/tetrahedralize.h"
 
 namespace squeeze {
@@ -21,16 +25,22 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 3;
+constexpr int kMeshingAlgorithmVersion = 5;
 
 struct MeshOptions {
-  DecompositionOptions decomposition;   // concavity threshold, hull budget, voxel grid
-  TetrahedralizeOptions tetrahedralize; // target tet count, facet distance, sliver bound
+  DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
+  TetrahedralizeOptions tetrahedralize; // target tet count, quality bounds
+  ShellTetrahedralizeOptions shells;    // the fallback (convex shells meshed with Mesh_3, version 3)
+                                        // where the input's boundary cannot be meshed as it is;
+                                        // its target_tets and seed are taken from tetrahedralize
   double tets_per_hull = 40;            // the hull budget is also at most target_tets / this (at
-                                        // least 1): a coarse mesh cannot express many shells' facets;
-                                        // 0: decomposition.max_hulls alone
+                                        // least 1); 0: decomposition.max_hulls alone
+  double max_deviation = 0.01;          // fraction of the bbox diagonal: how far the tet mesh's
+                                        // boundary may stray outside the input surface (the
+                                        // report's deviation_out)
+  double inner_deviation = 0.45;        // how far input surface points may lie outside the tet mesh
+                                        // (deviation_in), as a share of max_deviation
   double coverage_tolerance = 0.005;    // fraction of the bbox diagonal for the coverage figure
-  bool check_self_intersection = true;  // for the report (costs about a tenth of a second per 100k faces)
 };
 
 /// Everything `squeeze mesh` computes.
@@ -39,11 +49,29 @@ struct MeshResult {
   SurfaceInfo info;             // counts, closedness, self-intersection, volume
   Decomposition decomposition;  // convex shells
   int hull_budget = 0;          // max_hulls the decomposition ran with (see hull_budget())
-  TetMesh tets;                 // the coarse tetrahedral mesh
+  int parts = 0;                // parts meshed on their own: the input's components that are closed
+                                // oriented 2-manifolds without self-intersection, and the connected
+                                // components of the solid's surface of the other components
+  bool boundary_from_input = false;  // every part is a component of the input (no solid surface)
+  SurfaceMesh boundary;         // the simplified boundaries of all parts (one closed surface each)
+  int boundary_target_faces = 0;  // the face count the target asked of them, summed
+  EnvelopeStats envelope;
+  TetMesh tets;                 // the coarse tetrahedral mesh: one conforming mesh per part, in part order
   TetQuality quality;
   TetrahedralizeStats tet_stats;
-  double input_volume = 0;      // closed: enclosed volume; open: winding-number volume
+  std::string method = "boundary";  // "boundary": the parts' simplified boundaries tetrahedralized;
+                                    // "convex_shells": the fallback (see fallback_because)
+  std::string fallback_because;     // empty, or why the boundary route was not taken
+  ShellTetrahedralizeStats shell_stats;  // the fallback's
+  int target_tets = 0;
+  std::string target_exceeded_because;  // empty: the count is within ±35% of the target
+  double input_volume = 0;      // the parts' enclosed volumes, summed (overlapping parts count twice,
+                                // as their tet meshes do)
   bool input_volume_from_winding_number = false;
+  std::optional<double> volume_ratio;  // tet volume / the solid's volume, closed inputs only
+  double deviation_out = 0;     // largest distance of tet-boundary points from the input surface (units)
+  double deviation_in = 0;      // largest distance of input-surface points outside the tet mesh (units)
+  double deviation_sample_spacing = 0;  // spacing of the points measured (units)
   double inside_fraction = 0;   // input vertices inside the tet mesh
   double covered_fraction = 0;  // ... inside or within coverage_tolerance × diagonal of it
   double max_outside_distance = 0;  // worst distance of an input vertex outside the mesh (units)

@@ -34,6 +34,13 @@ Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
 /// True when every edge of F has exactly two incident faces.
 bool is_closed(const Eigen::MatrixX3i& F);
 
+/// True when F (consistently oriented) is a closed oriented 2-manifold: every edge has exactly two
+/// faces, which traverse it in opposite directions, and the faces around every vertex form a
+/// single fan (no two cones meeting at a vertex).
+///   F         #F by 3 vertex indices
+///   vertices  #V (vertices without faces are allowed)
+bool is_oriented_two_manifold(const Eigen::MatrixX3i& F, int vertices);
+
 /// Edge counts, components, closedness and (for closed meshes) volume of `mesh`. The
 /// self_intersecting flag is left false here; see does_self_intersect().
 SurfaceInfo analyse_surface(const SurfaceMesh& mesh);

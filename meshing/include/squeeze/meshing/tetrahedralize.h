@@ -1,9 +1,10 @@
-// squeeze::meshing — one conforming tetrahedral mesh of the union of convex shells.
+// squeeze::meshing — one conforming tetrahedral mesh of the solid bounded by a closed surface,
+// whose boundary is that surface exactly.
 #pragma once
 #include <Eigen/Core>
-#include <vector>
+#include <string>
 
-#include "squeeze/meshing/decompose.h"
+#include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/tet_mesh.h"
 
 namespace squeeze {
@@ -13,54 +14,48 @@ class Progress;
 namespace squeeze::meshing {
 
 struct TetrahedralizeOptions {
-  int target_tets = 1000;         // desired tetrahedron count, met within about ±35%: Mesh_3's cell
-                                  // size (and with it the facet size and facet distance) is
-                                  // re-estimated from each attempt's count
-  double facet_distance = 0.0;    // fraction of the shells' bounding-box diagonal: an upper bound on
-                                  // how far boundary facets may stray from the shells' surface; 0: no
-                                  // bound beyond facet_distance_per_size (a bound finer than the
-                                  // target allows makes the boundary, not the target, set the count)
-  double facet_distance_per_size = 0.2;  // the facet distance used is this fraction of the cell size
-                                  // (so a coarse target gets a coarse boundary)
-  double offset = 0.003;          // fraction of the diagonal: the shells are dilated by at least this
-                                  // much before meshing, so that boundary facets (chords of the
-                                  // shells' surface) still enclose the shells' corners
-  int max_tets = 5000;            // never more: the cell size grows until the count fits
-  double coverage_tolerance = 0.004;  // fraction of the diagonal: the points to cover (the input's
-                                  // vertices, or the shells' corners) must lie inside the mesh or this
-                                  // close to it, 99.9% of them; the dilation grows until they do
-  double min_dihedral = 10.0;     // degrees; boundary tetrahedra below it are peeled off afterwards
-  double sliver_bound = 10.0;     // degrees; Mesh_3's sliver perturber and exuder work on tetrahedra
-                                  // whose smallest dihedral angle is below this
-  double optimize_seconds = 0.0;  // time limit of each of Mesh_3's sliver perturber and exuder; 0: none
-                                  // (a limit makes results depend on machine load)
+  int target_tets = 1000;         // desired tetrahedron count, met within about ±35% when the
+                                  // boundary allows it: the interior edge length is re-estimated
+                                  // from each attempt's count (a boundary that needs more
+                                  // tetrahedra than this gets them; see TetrahedralizeStats)
+  double refine_dihedral = 6.0;   // degrees: tetrahedra with a smaller dihedral angle are refined
+                                  // (a Steiner point at their circumcentre, or a split of the boundary
+                                  // edge it would cut); where a part is thinner than the edge
+                                  // length this decides how finely its faces are split
+  double sliver_bound = 12.0;     // degrees: CGAL's sliver exuder then works on tetrahedra below this
+  double min_dihedral = 5.0;      // degrees: the floor the result is checked against (stats)
+  int max_tets = 100000;          // a safety net: refinement stops when the mesh reaches this
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
 };
 
 /// What tetrahedralize() reports beside the mesh.
 struct TetrahedralizeStats {
-  int attempts = 0;            // Mesh_3 runs needed to land near target_tets
-  double cell_size = 0.0;      // Mesh_3 cell_size used (model units)
-  double offset = 0.0;         // dilation of the shells used (model units)
-  int peeled_slivers = 0;      // boundary tetrahedra removed for a dihedral angle < min_dihedral
-  double facet_distance = 0.0; // Mesh_3 facet_distance used (model units)
-  double covered = 0.0;        // fraction of the points to cover held (within coverage_tolerance)
+  int attempts = 0;              // meshing runs (each at one interior edge length)
+  double edge_length = 0.0;      // interior target edge length of the mesh kept (model units)
+  int minimum_tets = 0;          // tetrahedra of the coarsest mesh the boundary allows (quality
+                                 // refinement only, no size bound); 0 when not measured
+  int boundary_splits = 0;       // boundary edges split (for conformity and quality) in the mesh kept
+  int steiner_points = 0;        // interior points inserted in the mesh kept
+  int peeled = 0;                // boundary tetrahedra under min_dihedral removed at the end
+  bool conforming = true;        // every boundary triangle (after splits) is a face of the mesh
 };
 
-/// Meshes the union of the shells as one domain with CGAL Mesh_3 (Delaunay refinement of a
-/// labeled implicit domain whose function is the union's plane-based signed value, followed by
-/// sliver perturbation and exudation; Jamin, Alliez, Yvinec, Boissonnat, "CGALmesh", ACM TOMS
-/// 41(4), 2015, doi:10.1145/2699463). Being a subcomplex of one Delaunay triangulation, the
-/// result is conforming: shells that meet share vertices and faces, every interior face has
-/// exactly two tetrahedra. Tetrahedra come out positively oriented; each is labelled with the
-/// (1-based) shell that holds its centroid; unused vertices are dropped.
-/// Boundary tetrahedra with a dihedral angle below min_dihedral are peeled off (tet_cleanup.h).
-///   cover  #C by 3 points the mesh must hold (within coverage_tolerance × diagonal, 99.9% of
-///          them; the pipeline passes the input's vertices), or nullptr: the shells' corners
-/// Throws InputError if shells is empty or target_tets < 1; returns an empty mesh if Mesh_3
-/// produced no tetrahedron (the caller reports it).
-TetMesh tetrahedralize(const std::vector<ConvexShell>& shells, const TetrahedralizeOptions& options = {},
-                       TetrahedralizeStats* stats = nullptr, Progress* progress = nullptr,
-                       const Eigen::MatrixX3d* cover = nullptr);
+/// Tetrahedralizes the solid bounded by `boundary`, a closed, consistently outward-oriented,
+/// non-self-intersecting triangle surface (one or several components; nested components bound
+/// cavities), so that the mesh's boundary is that surface: every boundary face of the result
+/// lies in a face of `boundary`, every vertex of `boundary` is a vertex of the result. Method: the
+/// Delaunay tetrahedralization (CGAL, exact predicates) of the surface's vertices, made conforming by
+/// splitting surface edges at their midpoints (points on the surface), then Delaunay refinement
+/// of the inside (Shewchuk, "Tetrahedral mesh generation by Delaunay refinement", SoCG 1998,
+/// doi:10.1145/276884.276889): a tetrahedron with a dihedral angle below refine_dihedral or too
+/// large for the target gets its circumcentre, unless that would destroy a surface face, which
+/// is split instead; finally CGAL's sliver exudation (Cheng, Dey, Edelsbrunner, Facello, Teng,
+/// J. ACM 47(5), 2000, doi:10.1145/355483.355487), which changes weights only and never a surface
+/// face. Tetrahedra come out positively oriented, vertices without tetrahedron dropped; label
+/// is empty. Deterministic (no threads, fixed seeds).
+/// Throws InputError if the surface has no face or target_tets < 1; returns an empty mesh when no
+/// tetrahedron is inside (the caller reports it).
+TetMesh tetrahedralize(const SurfaceMesh& boundary, const TetrahedralizeOptions& options = {},
+                       TetrahedralizeStats* stats = nullptr, Progress* progress = nullptr);
 
 }  // namespace squeeze::meshing

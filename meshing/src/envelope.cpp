@@ -1,0 +1,389 @@
+// CGAL translation unit: the envelope's edge collapses (Surface_mesh_simplification).
+#include "squeeze/meshing/envelope.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_simplification/Edge_collapse_visitor_base.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_cost.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_stop_predicate.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_cost.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_placement.h>
+#include <CGAL/Surface_mesh_simplification/edge_collapse.h>
+
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "squeeze/common/error.h"
+#include "squeeze/common/progress.h"
+#include "squeeze/meshing/point_triangle_distance.h"
+#include "squeeze/meshing/triangle_bvh.h"
+
+namespace squeeze::meshing {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = K::Point_3;
+using Mesh = CGAL::Surface_mesh<Point>;
+using VD = Mesh::Vertex_index;
+using FD = Mesh::Face_index;
+using HD = Mesh::Halfedge_index;
+namespace SMS = CGAL::Surface_mesh_simplification;
+using Vec3 = Eigen::Vector3d;
+
+Vec3 vec(const Point& p) { return Vec3(p.x(), p.y(), p.z()); }
+
+// What the filter and the visitor share.
+struct State {
+  const Mesh* mesh = nullptr;
+  const TriangleBvh* reference = nullptr;
+  double out = 0, in = 0;          // bounds (units)
+  double cos_fold = 0, cos_turn = 0;
+  double min_angle = 0;            // radians
+  std::vector<Vec3> samples;       // points of the reference surface
+  std::vector<std::vector<int>> assigned;  // samples answerable to each face (by face index)
+  std::vector<FD> sample_face;     // ... and the face each sample is answerable to
+  std::vector<double> sample_bound; // per sample: min(in, out, a third of the local gap)
+  std::vector<double> face_gap;    // per reference face: a third of the smallest gap at its corners
+  std::vector<int> pending;        // samples of the region of the collapse just accepted
+  std::vector<FD> region;          // its faces
+  int collapses = 0;
+  Progress* progress = nullptr;
+  size_t initial_faces = 0;
+};
+
+// The faces around v (not the null face).
+void faces_around(const Mesh& m, VD v, std::vector<FD>& out) {
+  for (HD h : CGAL::halfedges_around_target(m.halfedge(v), m)) {
+    const FD f = m.face(h);
+    if (f != Mesh::null_face() && std::find(out.begin(), out.end(), f) == out.end()) out.push_back(f);
+  }
+}
+
+// Whether a point at signed position `side` (> 0: outside the surface it is measured against) and
+// distance d keeps the bounds: outside by at most `outside`, inside by at most `inside`, and either
+// at most `cap` (where the surface is thin, or nearly touches itself).
+bool within(double d, double side, double outside, double inside, double cap) {
+  return d <= std::min(cap, side > 0 ? outside : inside);
+}
+
+// Smallest angle of the triangle (radians).
+double min_angle(const Vec3* q) {
+  double m = M_PI;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 u = q[(k + 1) % 3] - q[k], v = q[(k + 2) % 3] - q[k];
+    const double lu = u.norm(), lv = v.norm();
+    if (!(lu > 0 && lv > 0)) return 0;
+    m = std::min(m, std::acos(std::clamp(u.dot(v) / (lu * lv), -1.0, 1.0)));
+  }
+  return m;
+}
+
+struct Filter {
+  State* s;
+
+  template <typename Profile>
+  boost::optional<typename Profile::Point> operator()(const Profile& profile,
+                                                       boost::optional<typename Profile::Point> op) const {
+    if (!op) return op;
+    const Mesh& m = *s->mesh;
+    const Vec3 p = vec(*op);
+    const VD v0 = profile.v0(), v1 = profile.v1();
+    std::vector<FD> region;
+    faces_around(m, v0, region);
+    faces_around(m, v1, region);
+    // The new faces: the region's faces that do not hold both v0 and v1, with p for v0 or v1.
+    struct Tri {
+      Vec3 a, b, c, n;
+      FD f;
+      Vec3 centre;    // of a ball holding the triangle
+      double radius;
+    };
+    std::vector<Tri> tris;
+    for (FD f : region) {
+      Vec3 q[3], old[3];
+      int k = 0, hits = 0;
+      for (VD v : CGAL::vertices_around_face(m.halfedge(f), m)) {
+        old[k] = vec(m.point(v));
+        q[k] = (v == v0 || v == v1) ? (++hits, p) : old[k];
+        ++k;
+      }
+      if (hits == 2) continue;  // removed by the collapse
+      const Vec3 n_old = (old[1] - old[0]).cross(old[2] - old[0]);
+      const Vec3 n = (q[1] - q[0]).cross(q[2] - q[0]);
+      const double ln = n.norm(), lo = n_old.norm();
+      if (!(ln > 0)) return boost::none;
+      if (lo > 0 && n.dot(n_old) < s->cos_turn * ln * lo) return boost::none;
+      // No new sliver triangle (unless the old one was worse): the tetrahedralization needs
+      // splits around each.
+      const double angle = min_angle(q);
+      if (angle < s->min_angle && angle < min_angle(old)) return boost::none;
+      const Vec3 centre = (q[0] + q[1] + q[2]) / 3.0;
+      const double radius = std::max({(q[0] - centre).norm(), (q[1] - centre).norm(), (q[2] - centre).norm()});
+      tris.push_back({q[0], q[1], q[2], n / ln, f, centre, radius});
+    }
+    if (tris.empty()) return boost::none;
+    // Folds: new faces sharing an edge, and each new face with its neighbours outside the region.
+    for (size_t i = 0; i < tris.size(); ++i) {
+      const Tri& t = tris[i];
+      // Neighbours across each edge.
+      for (HD h : CGAL::halfedges_around_face(m.halfedge(t.f), m)) {
+        const FD g = m.face(m.opposite(h));
+        if (g == Mesh::null_face()) continue;
+        Vec3 gn;
+        auto it = std::find_if(tris.begin(), tris.end(), [&](const Tri& x) { return x.f == g; });
+        if (it != tris.end()) {
+          gn = it->n;
+        } else if (std::find(region.begin(), region.end(), g) != region.end()) {
+          continue;  // one of the removed faces
+        } else {
+          Vec3 q[3];
+          int k = 0;
+          for (VD v : CGAL::vertices_around_face(m.halfedge(g), m)) q[k++] = vec(m.point(v));
+          gn = (q[1] - q[0]).cross(q[2] - q[0]);
+          if (!(gn.norm() > 0)) continue;
+          gn.normalize();
+        }
+        if (t.n.dot(gn) < -s->cos_fold) return boost::none;
+      }
+      // New faces that will share an edge at p (across a removed face, the faces on its two
+      // other sides meet).
+      for (size_t j = i + 1; j < tris.size(); ++j) {
+        const Tri& u = tris[j];
+        int common = 0;
+        for (const Vec3* a : {&t.a, &t.b, &t.c})
+          for (const Vec3* b : {&u.a, &u.b, &u.c}) common += *a == *b;
+        if (common >= 2 && t.n.dot(u.n) < -s->cos_fold) return boost::none;
+      }
+    }
+    // The new surface against the reference: the new vertex, points along the new edges, the
+    // centroids of the new faces.
+    auto check_point = [&](const Vec3& x) {
+      int f;
+      Vec3 q;
+      const double d = s->reference->nearest(x, &f, &q, s->out * 1.0001 + 1e-300);
+      if (!(d <= s->out)) return false;
+      return within(d, (x - q).dot(s->reference->normal(f)), s->out, s->in, s->face_gap[static_cast<size_t>(f)]);
+    };
+    if (!check_point(p)) return boost::none;
+    // The reference's points answerable to the region, against the new faces.
+    s->region = region;
+    s->pending.clear();
+    for (FD f : region) {
+      const auto& list = s->assigned[static_cast<size_t>(f.idx())];
+      s->pending.insert(s->pending.end(), list.begin(), list.end());
+    }
+    // A sample passes as soon as some new face is within the smaller bound (its own face first,
+    // which usually is); else its nearest new face decides, by side.
+    for (int i : s->pending) {
+      const Vec3& x = s->samples[static_cast<size_t>(i)];
+      const double sure = s->sample_bound[static_cast<size_t>(i)];
+      const FD own = s->sample_face[static_cast<size_t>(i)];
+      bool pass = false;
+      for (const Tri& t : tris)
+        if (t.f == own) pass = (x - closest_point_on_triangle(x, t.a, t.b, t.c)).norm() <= sure;
+      if (pass) continue;
+      double best = INFINITY, side = 0;
+      for (const Tri& t : tris) {
+        if ((x - t.centre).norm() - t.radius >= best) continue;
+        const Vec3 q = closest_point_on_triangle(x, t.a, t.b, t.c);
+        const double d = (x - q).norm();
+        if (d < best) best = d, side = (x - q).dot(t.n);
+        if (best <= sure) break;
+      }
+      if (!within(best, side, s->in, s->out, sure)) return boost::none;
+    }
+    // Points along the new edges and in the new faces, as far apart as twice the inner bound (up
+    // to three per edge); where the new faces are small next to the inner bound, the reference's
+    // own points (above) already pin them.
+    for (VD w : profile.link()) {
+      const Vec3 q = vec(m.point(w));
+      const double len = (q - p).norm();
+      if (len <= s->in) continue;
+      const int k = std::min(3, static_cast<int>(std::ceil(len / (2.0 * s->in))));
+      for (int j = 1; j <= k; ++j)
+        if (!check_point(p + (static_cast<double>(j) / (k + 1)) * (q - p))) return boost::none;
+    }
+    for (const Tri& t : tris)
+      if (t.radius > s->in && !check_point(t.centre)) return boost::none;
+    return op;
+  }
+};
+
+struct Visitor : SMS::Edge_collapse_visitor_base<Mesh> {
+  State* s;
+  explicit Visitor(State* state) : s(state) {}
+
+  void OnCollapsed(const SMS::Edge_profile<Mesh>&, VD v) {
+    const Mesh& m = *s->mesh;
+    std::vector<FD> ring;
+    faces_around(m, v, ring);
+    // The faces that were around v0 and v1 now all have v, or were removed: clear them all and
+    // give each pending sample to its nearest face around v.
+    for (FD f : s->region) s->assigned[static_cast<size_t>(f.idx())].clear();
+    std::vector<std::array<Vec3, 3>> tri(ring.size());
+    for (size_t r = 0; r < ring.size(); ++r) {
+      int k = 0;
+      for (VD w : CGAL::vertices_around_face(m.halfedge(ring[r]), m)) tri[r][static_cast<size_t>(k++)] = vec(m.point(w));
+      s->assigned[static_cast<size_t>(ring[r].idx())].clear();
+    }
+    for (int i : s->pending) {
+      const Vec3& x = s->samples[static_cast<size_t>(i)];
+      double best = INFINITY;
+      size_t arg = 0;
+      for (size_t r = 0; r < ring.size(); ++r) {
+        const double d = point_triangle_distance(x, tri[r][0], tri[r][1], tri[r][2]);
+        if (d < best) best = d, arg = r;
+      }
+      if (!ring.empty()) {
+        s->assigned[static_cast<size_t>(ring[arg].idx())].push_back(i);
+        s->sample_face[static_cast<size_t>(i)] = ring[arg];
+      }
+    }
+    s->pending.clear();
+    ++s->collapses;
+    if (s->progress && (s->collapses & 1023) == 0) s->progress->update(static_cast<double>(s->collapses));
+  }
+};
+
+struct Stop {
+  size_t edges;  // stop when at most this many edges remain
+  template <typename F, typename Profile>
+  bool operator()(const F&, const Profile&, std::size_t, std::size_t current_edges) const {
+    return current_edges <= edges;
+  }
+};
+
+}  // namespace
+
+SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions& opt, EnvelopeStats* stats,
+                              Progress* progress) {
+  Mesh m;
+  std::vector<VD> vd;
+  vd.reserve(static_cast<size_t>(surface.V.rows()));
+  for (Eigen::Index i = 0; i < surface.V.rows(); ++i)
+    vd.push_back(m.add_vertex(Point(surface.V(i, 0), surface.V(i, 1), surface.V(i, 2))));
+  for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
+    if (m.add_face(vd[surface.F(f, 0)], vd[surface.F(f, 1)], vd[surface.F(f, 2)]) == Mesh::null_face())
+      throw InputError("simplify_envelope: the surface is not a 2-manifold (face " + std::to_string(f) + ")");
+  for (HD h : m.halfedges())
+    if (m.is_border(h)) throw InputError("simplify_envelope: the surface is not closed");
+
+  const TriangleBvh reference(surface.V, surface.F);
+  State s;
+  s.mesh = &m;
+  s.reference = &reference;
+  s.out = opt.max_outside;
+  s.in = opt.max_inside;
+  s.cos_fold = std::cos(opt.min_fold_angle * M_PI / 180.0);
+  s.cos_turn = std::cos(opt.max_normal_turn * M_PI / 180.0);
+  s.min_angle = opt.min_triangle_angle * M_PI / 180.0;
+  s.progress = progress;
+  s.assigned.resize(m.number_of_faces());
+  // Local gaps: from each vertex along its normal, inwards (the thickness) and outwards (to another
+  // part of the surface), up to three times the sum of the bounds. Within a third of the gap each
+  // side of a thin part stays apart from the other.
+  const double reach = 3.0 * (opt.max_inside + opt.max_outside);
+  std::vector<double> gap(static_cast<size_t>(surface.V.rows()), INFINITY);
+  {
+    std::vector<Vec3> normal(static_cast<size_t>(surface.V.rows()), Vec3::Zero());
+    for (Eigen::Index f = 0; f < surface.F.rows(); ++f) {
+      const Vec3 a = surface.V.row(surface.F(f, 0)).transpose(), b = surface.V.row(surface.F(f, 1)).transpose(),
+                 c = surface.V.row(surface.F(f, 2)).transpose();
+      const Vec3 n = (b - a).cross(c - a);
+      for (int k = 0; k < 3; ++k) normal[static_cast<size_t>(surface.F(f, k))] += n;
+    }
+    tbb::parallel_for(size_t(0), normal.size(), [&](size_t v) {
+      const double len = normal[v].norm();
+      if (!(len > 0) || !(reach > 0)) return;
+      const Vec3 n = normal[v] / len, x = surface.V.row(static_cast<Eigen::Index>(v)).transpose();
+      for (double dir : {-1.0, 1.0}) {
+        double t;
+        if (reference.first_crossing(x, x + dir * reach * n, 1e-3, &t)) gap[v] = std::min(gap[v], t * reach);
+      }
+    });
+  }
+  s.face_gap.resize(static_cast<size_t>(surface.F.rows()));
+  for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
+    s.face_gap[static_cast<size_t>(f)] =
+        std::min({gap[static_cast<size_t>(surface.F(f, 0))], gap[static_cast<size_t>(surface.F(f, 1))],
+                  gap[static_cast<size_t>(surface.F(f, 2))]}) / 3.0;
+  // Samples: every vertex (to one face around it) and points of faces larger than the inner bound,
+  // spaced by about it.
+  for (VD v : m.vertices()) {
+    FD f = Mesh::null_face();
+    for (HD h : CGAL::halfedges_around_target(m.halfedge(v), m))
+      if (m.face(h) != Mesh::null_face() && (f == Mesh::null_face() || m.face(h) < f)) f = m.face(h);
+    s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
+    s.sample_face.push_back(f);
+    s.sample_bound.push_back(std::min({opt.max_inside, opt.max_outside, gap[static_cast<size_t>(v.idx())] / 3.0}));
+    s.samples.push_back(vec(m.point(v)));
+  }
+  const double spacing = std::max(opt.max_inside, 1e-12);
+  for (FD f : m.faces()) {
+    Vec3 q[3];
+    int k = 0;
+    for (VD v : CGAL::vertices_around_face(m.halfedge(f), m)) q[k++] = vec(m.point(v));
+    const double longest = std::max({(q[1] - q[0]).norm(), (q[2] - q[1]).norm(), (q[0] - q[2]).norm()});
+    const int n = std::min(64, static_cast<int>(std::ceil(longest / spacing)));
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; j <= n - i; ++j) {
+        if ((i == 0 && j == 0) || (i == n && j == 0) || (i == 0 && j == n)) continue;  // corners: vertices
+        const Vec3 x = q[0] + (static_cast<double>(i) / n) * (q[1] - q[0]) + (static_cast<double>(j) / n) * (q[2] - q[0]);
+        s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
+        s.sample_face.push_back(f);
+        s.sample_bound.push_back(std::min({opt.max_inside, opt.max_outside, s.face_gap[static_cast<size_t>(f.idx())]}));
+        s.samples.push_back(x);
+      }
+  }
+  s.initial_faces = m.number_of_faces();
+  if (progress) progress->stage("simplifying the boundary", static_cast<double>(m.number_of_faces() / 2));
+  const size_t target_edges = static_cast<size_t>(std::max(4, opt.target_faces)) * 3 / 2;
+  Filter filter{&s};
+  Visitor visitor(&s);
+  const SMS::LindstromTurk_cost<Mesh>::LindstromTurk_params lt(0.5, 0.5, opt.shape_weight);
+  SMS::edge_collapse(m, Stop{target_edges},
+                     CGAL::parameters::get_cost(SMS::LindstromTurk_cost<Mesh>(lt))
+                         .get_placement(SMS::LindstromTurk_placement<Mesh>(lt))
+                         .filter(filter)
+                         .visitor(visitor));
+  // Then the short edges the volume-driven order left (tetrahedra across a short edge next to long
+  // ones are flat): shortest first, while shorter than a quarter of the median edge, within the
+  // same bounds.
+  {
+    std::vector<double> len;
+    for (auto e : m.edges()) len.push_back(std::sqrt(CGAL::squared_distance(m.point(m.vertex(e, 0)), m.point(m.vertex(e, 1)))));
+    std::nth_element(len.begin(), len.begin() + static_cast<long>(len.size() / 2), len.end());
+    const double threshold = opt.short_edge * (len.empty() ? 0.0 : len[len.size() / 2]);
+    if (threshold > 0)
+      SMS::edge_collapse(m, SMS::Edge_length_stop_predicate<double>(threshold),
+                         CGAL::parameters::get_cost(SMS::Edge_length_cost<Mesh>())
+                             .get_placement(SMS::LindstromTurk_placement<Mesh>(lt))
+                             .filter(filter)
+                             .visitor(visitor));
+  }
+  if (progress) progress->finish();
+  m.collect_garbage();
+  SurfaceMesh out;
+  out.V.resize(static_cast<Eigen::Index>(m.number_of_vertices()), 3);
+  for (VD v : m.vertices()) out.V.row(static_cast<Eigen::Index>(v.idx())) = vec(m.point(v)).transpose();
+  out.F.resize(static_cast<Eigen::Index>(m.number_of_faces()), 3);
+  Eigen::Index r = 0;
+  for (FD f : m.faces()) {
+    int k = 0;
+    for (VD v : CGAL::vertices_around_face(m.halfedge(f), m)) out.F(r, k++) = static_cast<int>(v.idx());
+    ++r;
+  }
+  if (stats) {
+    stats->faces = static_cast<int>(out.F.rows());
+    stats->collapses = s.collapses;
+    stats->bounded = out.F.rows() > std::max(4, opt.target_faces) + 2;
+  }
+  return out;
+}
+
+}  // namespace squeeze::meshing

@@ -1,0 +1,342 @@
+// CGAL translation unit: Mesh_3. Keep other code out of it, it is the slowest file to compile.
+#include "squeeze/meshing/shell_tetrahedralize.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Labeled_mesh_domain_3.h>
+#include <CGAL/Mesh_complex_3_in_triangulation_3.h>
+#include <CGAL/Mesh_criteria_3.h>
+#include <CGAL/Mesh_triangulation_3.h>
+#include <CGAL/Random.h>
+#include <CGAL/make_mesh_3.h>
+#include <CGAL/refine_mesh_3.h>
+
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <map>
+#include <numeric>
+#include <vector>
+
+#include "squeeze/common/error.h"
+#include "squeeze/common/progress.h"
+#include "squeeze/meshing/tet_cleanup.h"
+#include "squeeze/meshing/tet_faces.h"
+#include "squeeze/meshing/tet_geometry.h"
+#include "squeeze/meshing/tet_locator.h"
+
+namespace squeeze::meshing {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = K::Point_3;
+using Domain = CGAL::Labeled_mesh_domain_3<K>;
+using Tr = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
+using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr>;
+using Criteria = CGAL::Mesh_criteria_3<Tr>;
+namespace params = CGAL::parameters;
+
+// Union of the shells, dilated by `offset`, as an inside test. Shells whose (dilated) box does not
+// hold p are skipped.
+struct UnionFunction {
+  struct Shell {
+    Eigen::MatrixX4d planes;
+    Eigen::Vector3d lo, hi;
+  };
+  std::vector<Shell> shells;
+  double offset = 0.0;  // dilation
+
+  explicit UnionFunction(const std::vector<ConvexShell>& in) {
+    for (const auto& s : in) {
+      Shell sh;
+      sh.planes = s.hull.planes;
+      sh.lo = s.hull.V.colwise().minCoeff().transpose();
+      sh.hi = s.hull.V.colwise().maxCoeff().transpose();
+      shells.push_back(std::move(sh));
+    }
+  }
+  bool inside(double x, double y, double z) const {
+    for (const Shell& s : shells) {
+      if (x < s.lo(0) - offset || y < s.lo(1) - offset || z < s.lo(2) - offset || x > s.hi(0) + offset ||
+          y > s.hi(1) + offset || z > s.hi(2) + offset)
+        continue;
+      bool in = true;
+      for (Eigen::Index i = 0; i < s.planes.rows() && in; ++i)
+        in = s.planes(i, 0) * x + s.planes(i, 1) * y + s.planes(i, 2) * z - s.planes(i, 3) < offset;
+      if (in) return true;
+    }
+    return false;
+  }
+};
+
+}  // namespace
+
+TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const ShellTetrahedralizeOptions& opt,
+                              ShellTetrahedralizeStats* stats, Progress* progress, const Eigen::MatrixX3d* cover) {
+  if (shells.empty()) throw InputError("tetrahedralize_shells: no convex shells");
+  if (opt.target_tets < 1) throw InputError("--target-tets must be at least 1");
+  if (!(opt.facet_distance >= 0)) throw InputError("--facet-distance must be >= 0");
+  if (!(opt.facet_distance_per_size > 0)) throw InputError("facet_distance_per_size must be > 0");
+
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  double volume = 0.0;
+  for (const auto& s : shells) {
+    lo = lo.cwiseMin(s.hull.V.colwise().minCoeff().transpose());
+    hi = hi.cwiseMax(s.hull.V.colwise().maxCoeff().transpose());
+    volume += s.hull.volume;
+  }
+  const double diag = (hi - lo).norm();
+  UnionFunction f(shells);
+  const Eigen::Vector3d centre = 0.5 * (lo + hi);
+
+  double hull_area = 0.0;
+  for (const auto& s : shells)
+    for (Eigen::Index t = 0; t < s.hull.F.rows(); ++t)
+      hull_area += 0.5 * (s.hull.V.row(s.hull.F(t, 1)) - s.hull.V.row(s.hull.F(t, 0)))
+                             .cross(s.hull.V.row(s.hull.F(t, 2)) - s.hull.V.row(s.hull.F(t, 0)))
+                             .norm();
+  const double thickness = hull_area > 0 ? 3.0 * volume / hull_area : diag;  // 3 V / A
+  // Mesh_3's labeled domain only uses the sign: an inside test per shell that stops at the first
+  // separating plane is far cheaper than the signed value.
+  std::function<double(const Point&)> fn = [&f](const Point& p) { return f.inside(p.x(), p.y(), p.z()) ? -1.0 : 1.0; };
+
+  const Eigen::Vector3d dirs[14] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1},
+                                    {1, 1, 1}, {1, 1, -1}, {1, -1, 1}, {1, -1, -1}, {-1, 1, 1}, {-1, 1, -1},
+                                    {-1, -1, 1}, {-1, -1, -1}};
+
+  // One Mesh_3 run at the given cell size and facet distance, on the union dilated by f.offset.
+  auto run = [&](double size, double fd) {
+    // Half a cell, but at most a third of the thickness: the seeds on both sides of a thin (or
+    // flat, thickened) part must all stay, or Mesh_3 finds no boundary facet to start from.
+    const double seed_spacing = std::min(0.5 * size, thickness / 3.0);
+    const double radius = 0.5 * diag * 1.05 + 2 * f.offset + 1e-12;
+    Domain domain = Domain::create_implicit_mesh_domain(
+        fn, K::Sphere_3(Point(centre(0), centre(1), centre(2)), radius * radius),
+        params::relative_error_bound = 1e-7);
+    const auto surface_index = domain.index_from_surface_patch_index(Domain::Surface_patch_index(0, 1));
+    // Initial surface points: from each shell's centre, bisect along 14 directions to the union's
+    // boundary, so that every part of the union is seeded (random rays could miss a part). Seeds
+    // closer than seed_spacing × size to an earlier one are dropped: Delaunay refinement never
+    // removes a vertex, and two close seeds would leave an edge far shorter than the others.
+    std::vector<Eigen::Vector3d> seeds;
+    for (const auto& s : shells) {
+      const Eigen::Vector3d c = s.hull.V.colwise().mean().transpose();
+      if (!f.inside(c(0), c(1), c(2))) continue;
+      for (const auto& d0 : dirs) {
+        const Eigen::Vector3d d = d0.normalized();
+        double a = 0.0, b = 2.0 * diag;
+        for (int it = 0; it < 60; ++it) {
+          const double m = 0.5 * (a + b);
+          const Eigen::Vector3d p = c + m * d;
+          (f.inside(p(0), p(1), p(2)) ? a : b) = m;
+        }
+        const Eigen::Vector3d p = c + b * d;
+        bool near = false;
+        for (const auto& q : seeds) near = near || (q - p).norm() < seed_spacing;
+        if (!near) seeds.push_back(p);
+      }
+    }
+    CGAL::get_default_random() = CGAL::Random(opt.seed);
+    C3t3 c3t3;
+    Tr& tr = c3t3.triangulation();
+    for (const Eigen::Vector3d& p : seeds) {
+      auto v = tr.insert(Tr::Point(Point(p(0), p(1), p(2))));
+      if (v == Tr::Vertex_handle()) continue;
+      c3t3.set_dimension(v, 2);
+      c3t3.set_index(v, surface_index);
+    }
+    Criteria criteria(params::facet_angle = 25, params::facet_size = size, params::facet_distance = fd,
+                      params::cell_radius_edge_ratio = 3, params::cell_size = size);
+    // Perturbation and exudation run to completion (a time limit would make the result depend on
+    // the machine's load).
+    const auto limits = params::mesh_3_options(params::maximal_number_of_vertices =
+                                                   static_cast<std::size_t>(2 * opt.max_tets));
+    CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(),
+                        params::perturb(params::time_limit = opt.optimize_seconds,
+                                        params::sliver_bound = opt.sliver_bound),
+                        params::exude(params::time_limit = opt.optimize_seconds,
+                                      params::sliver_bound = opt.sliver_bound),
+                        // A safety net against runaway refinement (memory): far above max_tets.
+                        limits);
+    TetMesh mesh;
+    std::map<Tr::Vertex_handle, int> index;
+    std::vector<Eigen::Vector3d> pts;
+    std::vector<Eigen::Vector4i> tets;
+    for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
+      Eigen::Vector4i t;
+      for (int k = 0; k < 4; ++k) {
+        auto v = c->vertex(k);
+        auto [it, fresh] = index.emplace(v, static_cast<int>(pts.size()));
+        if (fresh) {
+          const auto& p = tr.point(v);
+          pts.emplace_back(p.x(), p.y(), p.z());
+        }
+        t(k) = it->second;
+      }
+      tets.push_back(t);
+    }
+    mesh.V.resize(static_cast<Eigen::Index>(pts.size()), 3);
+    for (size_t i = 0; i < pts.size(); ++i) mesh.V.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+    mesh.T.resize(static_cast<Eigen::Index>(tets.size()), 4);
+    for (size_t i = 0; i < tets.size(); ++i) mesh.T.row(static_cast<Eigen::Index>(i)) = tets[i].transpose();
+    orient_positively(mesh);
+    return mesh;
+  };
+
+  // The points to cover: the caller's (the input's vertices), else the shells' vertices (the
+  // input's most extreme points). Returns the fraction held and the extra dilation that would hold
+  // 99.9% of them.
+  Eigen::MatrixX3d corners;
+  if (cover && cover->rows() > 0) {
+    corners = *cover;
+  } else {
+    Eigen::Index n = 0;
+    for (const auto& s : shells) n += s.hull.V.rows();
+    corners.resize(n, 3);
+    n = 0;
+    for (const auto& s : shells) corners.middleRows(n, s.hull.V.rows()) = s.hull.V, n += s.hull.V.rows();
+  }
+  const double required = 0.999;
+  auto coverage = [&](const TetMesh& mesh, double& needed) {
+    const TetLocator locator(mesh);
+    std::vector<double> out(static_cast<size_t>(corners.rows()), 0.0);
+    tbb::parallel_for(Eigen::Index(0), corners.rows(), [&](Eigen::Index i) {
+      if (locator.locate(corners.row(i)) < 0) locator.nearest(corners.row(i), &out[static_cast<size_t>(i)]);
+    });
+    std::vector<double> sorted = out;
+    std::sort(sorted.begin(), sorted.end());
+    const double tol = opt.coverage_tolerance * diag;
+    needed = std::max(0.0, sorted[std::min(sorted.size() - 1, static_cast<size_t>(required * static_cast<double>(sorted.size())))] - tol) +
+             0.1 * tol;
+    return static_cast<double>(std::count_if(out.begin(), out.end(), [&](double d) { return d <= tol; })) /
+           static_cast<double>(out.size());
+  };
+
+  // Shells of one connected part of the solid mesh into one component (at most as many as parts).
+  int parts = 0;
+  for (const auto& s : shells) parts = std::max(parts, s.part + 1);
+  const double target = opt.target_tets;
+  // First guess: Delaunay refinement with cell_size s gives about volume / (0.07 s³) tetrahedra
+  // (measured on our corpus); then corrected from the count of each attempt.
+  double size = std::cbrt(volume / (0.07 * target));
+  double coarsen = 1.0;  // grows when the count exceeds max_tets with a fixed facet_distance bound
+  auto facet_distance = [&](double s) {
+    double d = opt.facet_distance_per_size * s;
+    if (opt.facet_distance > 0) d = std::min(d, coarsen * opt.facet_distance * diag);
+    return d;
+  };
+  // The dilation: `offset` (within 5% of the thickness for thin parts); boundary vertices are then
+  // moved out locally where points stick out (inflate_to_cover). Where that is not enough, the
+  // dilation grows, as a multiple of the facet distance (a chord of the dilated surface sinks
+  // about that deep below it).
+  double cover_factor = 0.0;
+  const double base_offset = std::min(opt.offset * diag, 0.05 * thickness);
+  TetMesh best;
+  double best_score = INFINITY;
+  ShellTetrahedralizeStats st;
+  const int max_attempts = 8;
+  int offset_raises = 0;
+  double previous = INFINITY;
+  for (int attempt = 0; attempt < max_attempts; ++attempt) {
+    if (progress) progress->update(attempt);
+    const auto t0 = std::chrono::steady_clock::now();
+    const double fd = facet_distance(size);
+    f.offset = std::max(base_offset, cover_factor * fd);
+    TetMesh mesh = run(size, fd);
+    const double t_run = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // Mesh_3 may leave a few tetrahedra apart (a sliver of the union at a dilated corner): keep
+    // the largest components, as many as the solid has parts (coverage is restored below).
+    if (mesh.T.rows() > 0) {
+      Eigen::VectorXi C;
+      const int nc = tet_components(mesh, C);
+      if (nc > parts) {
+        std::vector<int> count(static_cast<size_t>(nc), 0), order(static_cast<size_t>(nc));
+        for (Eigen::Index t = 0; t < C.size(); ++t) ++count[static_cast<size_t>(C(t))];
+        std::iota(order.begin(), order.end(), 0);
+        std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return count[a] > count[b]; });
+        std::vector<char> keep(static_cast<size_t>(nc), 0);
+        for (int k = 0; k < parts; ++k) keep[static_cast<size_t>(order[static_cast<size_t>(k)])] = 1;
+        Eigen::MatrixX4i T(mesh.T.rows(), 4);
+        Eigen::Index n = 0;
+        for (Eigen::Index t = 0; t < mesh.T.rows(); ++t)
+          if (keep[static_cast<size_t>(C(t))]) T.row(n++) = mesh.T.row(t);
+        mesh.T = T.topRows(n);
+        spdlog::debug("dropped {} of {} tet-mesh components", nc - parts, nc);
+      }
+    }
+    const int peeled = peel_boundary_slivers(mesh, opt.min_dihedral);
+    remove_unused_vertices(mesh);
+    const int moves =
+        mesh.T.rows() > 0 ? inflate_to_cover(mesh, corners, 0.5 * opt.coverage_tolerance * diag, opt.min_dihedral) : 0;
+    st.attempts = attempt + 1;
+    const double n = static_cast<double>(mesh.T.rows());
+    double needed = 0.0;
+    const double held = n > 0 ? coverage(mesh, needed) : 0.0;
+    Eigen::VectorXi C;
+    const int components = n > 0 ? tet_components(mesh, C) : 0;
+    spdlog::info("Mesh_3 attempt {}: cell_size {:.4g}, facet_distance {:.4g}, offset {:.4g}: {} tetrahedra "
+                 "({} peeled, {} vertex moves), {} component(s), {:.2f}% of points held, {:.2f} s ({:.2f} s Mesh_3)",
+                 attempt + 1, size, fd, f.offset, mesh.T.rows(), peeled, moves, components, 100 * held,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), t_run);
+    const bool covered = held >= required;
+    const bool small_enough = n <= opt.max_tets;
+    const bool connected = components >= 1 && components <= parts;
+    // Score: invalid meshes rank after valid ones; among valid ones, the closest to the target.
+    const double score = (covered ? 0 : 100) + (connected ? 0 : 100) + (small_enough ? 0 : 10) +
+                         (n > 0 ? std::abs(std::log(n / target)) : 1e9);
+    if (score < best_score) {
+      best_score = score;
+      best = mesh;
+      st.cell_size = size;
+      st.offset = f.offset;
+      st.facet_distance = fd;
+      st.covered = held;
+      st.peeled_slivers = peeled;
+    }
+    if (!covered && n > 0 && offset_raises < 4) {  // dilate by what the missing points need
+      cover_factor = (f.offset + needed) / fd;
+      ++offset_raises;
+      continue;
+    }
+    if (!small_enough) {  // coarser cells and boundary
+      size *= 1.25;
+      coarsen *= 1.5;
+      continue;
+    }
+    if (!connected) {  // try a slightly different size
+      size *= 0.97;
+      continue;
+    }
+    if (n > 0.85 * target && n < 1.18 * target) break;
+    // A fixed facet_distance bound can make the boundary, not the cell size, decide the count:
+    // then a larger cell size gains nothing.
+    if (opt.facet_distance > 0 && (n > 2.0 * target || (n > target && n > 0.9 * previous))) break;
+    previous = n;
+    size *= n > 0 ? std::clamp(std::cbrt(n / target), 0.5, 2.0) : 0.7;
+  }
+
+  if (best.T.rows() > 0) {
+    // Label: the shell that holds the centroid (the most interior one).
+    best.label.resize(best.T.rows());
+    for (Eigen::Index t = 0; t < best.T.rows(); ++t) {
+      const Eigen::RowVector3d c = (best.V.row(best.T(t, 0)) + best.V.row(best.T(t, 1)) + best.V.row(best.T(t, 2)) +
+                                    best.V.row(best.T(t, 3))) / 4.0;
+      int arg = 0;
+      double v = INFINITY;
+      for (size_t s = 0; s < shells.size(); ++s) {
+        const double sv = shells[s].hull.signed_value(c);
+        if (sv < v) v = sv, arg = static_cast<int>(s);
+      }
+      best.label(t) = arg + 1;
+    }
+  }
+  if (stats) *stats = st;
+  return best;
+}
+
+}  // namespace squeeze::meshing

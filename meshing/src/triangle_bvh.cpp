@@ -1,0 +1,189 @@
+#include "squeeze/meshing/triangle_bvh.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "squeeze/meshing/point_triangle_distance.h"
+
+namespace squeeze::meshing {
+
+using Vec3 = Eigen::Vector3d;
+
+namespace {
+
+double box_distance2(const Vec3& lo, const Vec3& hi, const Vec3& p) {
+  double d = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double e = std::max({lo(k) - p(k), 0.0, p(k) - hi(k)});
+    d += e * e;
+  }
+  return d;
+}
+
+// Whether the segment a + t (b - a), t in [0, 1], meets the box (slab test).
+bool segment_meets_box(const Vec3& a, const Vec3& b, const Vec3& lo, const Vec3& hi) {
+  double t0 = 0, t1 = 1;
+  for (int k = 0; k < 3; ++k) {
+    const double d = b(k) - a(k);
+    if (std::abs(d) < 1e-300) {
+      if (a(k) < lo(k) || a(k) > hi(k)) return false;
+      continue;
+    }
+    double u = (lo(k) - a(k)) / d, v = (hi(k) - a(k)) / d;
+    if (u > v) std::swap(u, v);
+    t0 = std::max(t0, u);
+    t1 = std::min(t1, v);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TriangleBvh::TriangleBvh(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) : V_(V), F_(F) {
+  const int n = static_cast<int>(F_.rows());
+  order_.resize(static_cast<size_t>(n));
+  std::iota(order_.begin(), order_.end(), 0);
+  std::vector<Vec3> centroid(static_cast<size_t>(n));
+  for (int f = 0; f < n; ++f)
+    centroid[static_cast<size_t>(f)] = (V_.row(F_(f, 0)) + V_.row(F_(f, 1)) + V_.row(F_(f, 2))).transpose() / 3.0;
+  nodes_.reserve(static_cast<size_t>(2 * n / 4 + 2));
+  if (n > 0) build(0, n, centroid);
+}
+
+int TriangleBvh::build(int begin, int end, std::vector<Vec3>& centroid) {
+  const int id = static_cast<int>(nodes_.size());
+  nodes_.emplace_back();
+  Vec3 lo = Vec3::Constant(INFINITY), hi = -lo, clo = lo, chi = hi;
+  for (int i = begin; i < end; ++i) {
+    const int f = order_[static_cast<size_t>(i)];
+    for (int k = 0; k < 3; ++k) {
+      lo = lo.cwiseMin(V_.row(F_(f, k)).transpose());
+      hi = hi.cwiseMax(V_.row(F_(f, k)).transpose());
+    }
+    clo = clo.cwiseMin(centroid[static_cast<size_t>(f)]);
+    chi = chi.cwiseMax(centroid[static_cast<size_t>(f)]);
+  }
+  nodes_[static_cast<size_t>(id)].lo = lo;
+  nodes_[static_cast<size_t>(id)].hi = hi;
+  if (end - begin <= 4) {
+    nodes_[static_cast<size_t>(id)].begin = begin;
+    nodes_[static_cast<size_t>(id)].end = end;
+    return id;
+  }
+  int axis;
+  (chi - clo).maxCoeff(&axis);
+  const int mid = (begin + end) / 2;
+  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end, [&](int a, int b) {
+    const double x = centroid[static_cast<size_t>(a)](axis), y = centroid[static_cast<size_t>(b)](axis);
+    return x != y ? x < y : a < b;
+  });
+  const int left = build(begin, mid, centroid);
+  const int right = build(mid, end, centroid);
+  nodes_[static_cast<size_t>(id)].left = left;
+  nodes_[static_cast<size_t>(id)].right = right;
+  return id;
+}
+
+Vec3 TriangleBvh::normal(int f) const {
+  const Vec3 a = V_.row(F_(f, 0)).transpose(), b = V_.row(F_(f, 1)).transpose(), c = V_.row(F_(f, 2)).transpose();
+  const Vec3 n = (b - a).cross(c - a);
+  const double len = n.norm();
+  return len > 0 ? Vec3(n / len) : Vec3::Zero();
+}
+
+double TriangleBvh::nearest(const Vec3& p, int* face, Vec3* closest, double bound) const {
+  double best2 = bound * bound;
+  int best_face = -1;
+  Vec3 best_point = p;
+  if (nodes_.empty()) {
+    if (face) *face = -1;
+    return INFINITY;
+  }
+  int stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[static_cast<size_t>(stack[--top])];
+    if (box_distance2(node.lo, node.hi, p) > best2) continue;
+    if (node.left < 0) {
+      for (int i = node.begin; i < node.end; ++i) {
+        const int f = order_[static_cast<size_t>(i)];
+        const Vec3 q = closest_point_on_triangle(p, V_.row(F_(f, 0)).transpose(), V_.row(F_(f, 1)).transpose(),
+                                                 V_.row(F_(f, 2)).transpose());
+        const double d2 = (q - p).squaredNorm();
+        if (d2 < best2 || (d2 == best2 && best_face >= 0 && f < best_face)) {
+          best2 = d2;
+          best_face = f;
+          best_point = q;
+        }
+      }
+      continue;
+    }
+    const Node& l = nodes_[static_cast<size_t>(node.left)];
+    const Node& r = nodes_[static_cast<size_t>(node.right)];
+    const double dl = box_distance2(l.lo, l.hi, p), dr = box_distance2(r.lo, r.hi, p);
+    // Nearer child on top of the stack.
+    if (dl <= dr) {
+      stack[top++] = node.right;
+      stack[top++] = node.left;
+    } else {
+      stack[top++] = node.left;
+      stack[top++] = node.right;
+    }
+  }
+  if (face) *face = best_face;
+  if (closest) *closest = best_point;
+  return best_face >= 0 ? std::sqrt(best2) : INFINITY;
+}
+
+bool TriangleBvh::first_crossing(const Vec3& a, const Vec3& b, double t_min, double* t_out) const {
+  return crossing(a, b, t_min, true, t_out);
+}
+
+bool TriangleBvh::crossing_nearest(const Vec3& a, const Vec3& b, double hint, double* t_out) const {
+  return crossing(a, b, hint, false, t_out);
+}
+
+bool TriangleBvh::crossing(const Vec3& a, const Vec3& b, double hint, bool after, double* t_out) const {
+  if (nodes_.empty()) return false;
+  const Vec3 d = b - a;
+  bool found = false;
+  double best = INFINITY, best_t = 0;
+  int stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[static_cast<size_t>(stack[--top])];
+    if (!segment_meets_box(a, b, node.lo, node.hi)) continue;
+    if (node.left >= 0) {
+      stack[top++] = node.left;
+      stack[top++] = node.right;
+      continue;
+    }
+    for (int i = node.begin; i < node.end; ++i) {
+      const int f = order_[static_cast<size_t>(i)];
+      const Vec3 p0 = V_.row(F_(f, 0)).transpose(), p1 = V_.row(F_(f, 1)).transpose(), p2 = V_.row(F_(f, 2)).transpose();
+      // Möller–Trumbore.
+      const Vec3 e1 = p1 - p0, e2 = p2 - p0, h = d.cross(e2);
+      const double det = e1.dot(h);
+      if (std::abs(det) < 1e-300) continue;
+      const double inv = 1.0 / det;
+      const Vec3 s = a - p0;
+      const double u = inv * s.dot(h);
+      if (u < 0 || u > 1) continue;
+      const Vec3 q = s.cross(e1);
+      const double v = inv * d.dot(q);
+      if (v < 0 || u + v > 1) continue;
+      const double t = inv * e2.dot(q);
+      if (t < 0 || t > 1 || (after && t < hint)) continue;
+      if (std::abs(t - hint) < best) best = std::abs(t - hint), best_t = t, found = true;
+    }
+  }
+  if (found && t_out) *t_out = best_t;
+  return found;
+}
+
+}  // namespace squeeze::meshing
