@@ -173,10 +173,10 @@ Runner add_plan_command(CLI::App& app, const Global& global) {
       }
       if (r.timed_out) spdlog::info("{}: planning stopped at --time-limit {:.3g} s", a.scene, a.time_limit);
       std::fprintf(stderr,
-                   "squeeze: %s: %s after %d iterations (%d nodes, %d discarded: %d diverged, %d volume, %d bounds) "
+                   "squeeze: %s: %s after %d iterations (%d nodes, %d cut short; %d discarded: %d diverged, %d volume, %d bounds) "
                    "in %.1f s, %.1f it/s; distance to goal %.3g m (tolerance %.3g m); path of %zu segments, %.2f s; "
                    "%.0f bytes per node, peak memory %.0f MiB; wrote %s\n",
-                   a.scene.c_str(), plan::to_string(r.status), s.iterations, s.nodes,
+                   a.scene.c_str(), plan::to_string(r.status), s.iterations, s.nodes, s.truncated,
                    s.discarded_diverged + s.discarded_volume + s.discarded_bounds, s.discarded_diverged,
                    s.discarded_volume, s.discarded_bounds, s.seconds, s.seconds > 0 ? s.iterations / s.seconds : 0.0,
                    s.final_distance, scene.goal->tolerance, r.path.size(),

@@ -593,3 +593,32 @@ TEST(Planner, PropagatorRefusesCheckEveryBelowOne) {
   EXPECT_EQ(p.propagate(w.initial_state(), c, 7, s), Validity::valid);
   EXPECT_EQ(p.steps_done(), 7);
 }
+
+// An expansion that leaves the bounds keeps its valid beginning (propagate_while_valid): the kept
+// state is inside the bounds, it is the state propagate() reaches in the kept number of steps (bit
+// for bit, so a replay of the cut edge meets the tree's node), and propagate() of the whole
+// expansion reports the bounds.
+TEST(Planner, ExpansionLeavingTheBoundsKeepsItsValidPrefix) {
+  const sqt::TempDir tmp("plan-prefix");
+  const fem::SceneWorld w = fem::build_scene(fem::load_scene(write_scene(tmp.path(), mini_scene({{"gravity", {0, 0, 0}}}))));
+  SimulationPropagator p(w, {});
+  Control c;
+  c.kind = &control_kind("body");
+  c.target = Eigen::Vector3d(-5, 0.16, 0);  // far out of the bounds' x = -1.2 side
+  c.force = 400;
+  const int steps = 60;
+  fem::State whole;
+  ASSERT_EQ(p.propagate(w.initial_state(), c, steps, whole), Validity::bounds);
+  fem::State kept_state;
+  int kept = -1;
+  ASSERT_EQ(p.propagate_while_valid(w.initial_state(), c, steps, kept_state, &kept), Validity::valid);
+  ASSERT_GT(kept, 0);
+  ASSERT_LT(kept, steps);
+  const auto X = kept_state.x.middleRows(p.robot().first_row, p.robot().vertices);
+  EXPECT_GE(X.col(0).minCoeff(), w.bounds.min()(0));
+  fem::State again;
+  EXPECT_EQ(p.propagate(w.initial_state(), c, kept, again), Validity::valid);
+  EXPECT_TRUE(same_state(again, kept_state));
+  // One more step leaves the bounds (the prefix is the longest valid one, checks every step).
+  EXPECT_EQ(p.propagate(w.initial_state(), c, kept + 1, again), Validity::bounds);
+}

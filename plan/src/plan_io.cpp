@@ -82,11 +82,13 @@ void save_plan(const std::filesystem::path& file, const PlanFile& p) {
                   {"settle", o.settle},
                   {"settle_start", o.settle_start},
                   {"batch", o.batch},
+                  {"keep_valid_prefix", o.keep_valid_prefix},
                   {"algorithm", o.algorithm}};
   for (const ControlKind* k : control_kinds()) j["planner"]["weights"][k->name()] = o.weights[k->name()];
   const PlanStatistics& s = p.stats;
   j["statistics"] = {{"iterations", s.iterations},
                      {"nodes", s.nodes},
+                     {"truncated", s.truncated},
                      {"discarded", {{"diverged", s.discarded_diverged},
                                     {"volume", s.discarded_volume},
                                     {"bounds", s.discarded_bounds},

@@ -68,7 +68,7 @@ PlannerOptions planner_options(const fem::SceneWorld& w) {
   if (!j.is_null()) {
     c.keys(j, "planner", {"algorithm", "iterations", "seed", "goal_bias", "t_min", "t_max", "max_force",
                           "control_radius", "max_volume_change", "weights", "interpolation_omega", "settle", "batch",
-                          "settle_start"});
+                          "settle_start", "keep_valid_prefix"});
     if (j.contains("settle_start") && !(j["settle_start"].is_string() && j["settle_start"] == "auto"))
       o.settle_start = c.non_negative(j["settle_start"], "planner.settle_start");
     if (j.contains("algorithm")) {
@@ -92,6 +92,7 @@ PlannerOptions planner_options(const fem::SceneWorld& w) {
     if (j.contains("max_volume_change")) o.max_volume_change = c.positive(j["max_volume_change"], "planner.max_volume_change");
     if (j.contains("interpolation_omega")) o.interpolation_omega = c.positive(j["interpolation_omega"], "planner.interpolation_omega");
     if (j.contains("settle")) o.settle = c.non_negative(j["settle"], "planner.settle");
+    if (j.contains("keep_valid_prefix")) o.keep_valid_prefix = c.boolean(j["keep_valid_prefix"], "planner.keep_valid_prefix");
     if (j.contains("batch")) o.batch = static_cast<int>(c.integer(j["batch"], "planner.batch", 1, 1024));
     if (j.contains("weights")) {
       const json& k = j["weights"];

@@ -175,6 +175,24 @@ Validity SimulationPropagator::check(const fem::State& s) {
 
 Validity SimulationPropagator::propagate(const fem::State& start, const Control& control, int steps,
                                          fem::State& result) {
+  return run(start, control, steps, result, nullptr, nullptr);
+}
+
+Validity SimulationPropagator::propagate_while_valid(const fem::State& start, const Control& control, int steps,
+                                                     fem::State& result, int* kept) {
+  fem::State last;
+  *kept = 0;
+  const Validity v = run(start, control, steps, result, &last, kept);
+  if ((v == Validity::bounds || v == Validity::volume) && *kept > 0) {
+    result = std::move(last);
+    return Validity::valid;
+  }
+  if (v != Validity::valid) *kept = 0;
+  return v;
+}
+
+Validity SimulationPropagator::run(const fem::State& start, const Control& control, int steps, fem::State& result,
+                                   fem::State* last_valid, int* kept) {
   if (steps < 0) throw InputError("propagate: negative number of steps");
   // An expansion depends on its start state alone, whatever this propagator ran before: the tree
   // and its replay must agree bit for bit.
@@ -198,8 +216,13 @@ Validity SimulationPropagator::propagate(const fem::State& start, const Control&
     if (k % options_.check_every == 0 || k == steps) {
       v = check(result);
       if (v != Validity::valid && options_.stop_when_invalid) return v;
+      if (v == Validity::valid && last_valid && k < steps) {
+        *last_valid = result;
+        *kept = k;
+      }
     }
   }
+  if (v == Validity::valid && kept) *kept = steps;
   return v;
 }
 

@@ -123,6 +123,7 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
     fem::State result;
     Validity validity = Validity::valid;
     int object = -1;  // the object that made it invalid
+    bool truncated = false;  // valid up to fewer steps than drawn (keep_valid_prefix)
   };
   result.stats.discarded_volume_by_object.assign(static_cast<size_t>(w.world.bodies()), 0);
   std::vector<Job> jobs(options.batch);
@@ -169,7 +170,14 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
       Job& job = jobs[k];
       fem::State start = s0;
       store.restore(nodes[job.from].blocks, nodes[job.from].time, start);
-      job.validity = workers[k]->propagate(start, job.edge.control, job.edge.steps, job.result);
+      if (options.keep_valid_prefix) {
+        int kept = 0;
+        job.validity = workers[k]->propagate_while_valid(start, job.edge.control, job.edge.steps, job.result, &kept);
+        job.truncated = job.validity == Validity::valid && kept < job.edge.steps;
+        if (job.validity == Validity::valid) job.edge.steps = kept;
+      } else {
+        job.validity = workers[k]->propagate(start, job.edge.control, job.edge.steps, job.result);
+      }
       job.object = workers[k]->invalid_object();
     });
     bool timed_out = false;
@@ -192,6 +200,7 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
         case Validity::timeout: continue;  // not reached (the batch is dropped above)
         case Validity::valid: break;
       }
+      if (job.truncated) ++result.stats.truncated;
       Node node;
       node.parent = job.from;
       node.edge = job.edge;

@@ -59,6 +59,9 @@ struct PlannerOptions {
                                    // until the scene is at rest (settle_start_state), at most kSettleStartMax
   ForceWeights weights;
   int batch = 4;                   // expansions drawn and run together (not a thread count)
+  bool keep_valid_prefix = true;   // an expansion that leaves the bounds or breaks the volume limit keeps
+                                   // its valid beginning as the new node (OMPL's propagateWhileValid);
+                                   // false: it is discarded whole (the paper's Algorithm 1)
   double time_limit = 0;           // s of wall time, 0: none (CLI --time-limit)
 };
 
@@ -82,6 +85,7 @@ struct PlanStatistics {
   int nodes = 0;               // tree nodes (root included)
   int discarded_diverged = 0;  // NaN or blow-up
   int discarded_volume = 0;    // volume change beyond max_volume_change
+  int truncated = 0;           // expansions kept up to their last valid state (keep_valid_prefix)
   std::vector<int> discarded_volume_by_object;  // per object: the expansions it broke the volume limit in
   int discarded_bounds = 0;    // robot left the bounds
   double seconds = 0;          // wall time of planning

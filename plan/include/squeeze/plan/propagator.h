@@ -32,6 +32,17 @@ class Propagator {
   /// Simulates `steps` time steps from `start` with `control` applied to the robot; `result`
   /// receives the final state (or the state where the expansion became invalid).
   virtual Validity propagate(const fem::State& start, const Control& control, int steps, fem::State& result) = 0;
+  /// Like propagate, but an expansion that leaves the bounds or changes a volume beyond the limit
+  /// keeps its valid beginning: `result` is the last state that passed a check, *kept the steps to
+  /// it, and the return value valid (OMPL's SpaceInformation::propagateWhileValid). Returns the
+  /// invalid Validity, with *kept = 0, when no checked state before it was valid, and diverged or
+  /// timeout as propagate does. This default runs propagate and keeps all steps or none.
+  virtual Validity propagate_while_valid(const fem::State& start, const Control& control, int steps,
+                                         fem::State& result, int* kept) {
+    const Validity v = propagate(start, control, steps, result);
+    *kept = v == Validity::valid ? steps : 0;
+    return v;
+  }
   /// Time steps simulated by this propagator so far (statistics).
   virtual long long steps_done() const = 0;
   /// The object that made the last propagation invalid (volume: the one beyond the limit), or −1.
@@ -59,6 +70,8 @@ class SimulationPropagator : public Propagator {
   SimulationPropagator(const fem::SceneWorld& world, const PropagatorOptions& options);
 
   Validity propagate(const fem::State& start, const Control& control, int steps, fem::State& result) override;
+  Validity propagate_while_valid(const fem::State& start, const Control& control, int steps, fem::State& result,
+                                 int* kept) override;
   long long steps_done() const override { return steps_done_; }
   int invalid_object() const override { return invalid_object_; }
 
@@ -79,6 +92,10 @@ class SimulationPropagator : public Propagator {
 
  private:
   Validity check(const fem::State& s);  // sets invalid_object_
+  // propagate() and propagate_while_valid(): with `last_valid`, the last state that passed a
+  // check is kept there and its step in *kept.
+  Validity run(const fem::State& start, const Control& control, int steps, fem::State& result,
+               fem::State* last_valid, int* kept);
   fem::SceneWorld world_;
   PropagatorOptions options_;
   Robot robot_;
