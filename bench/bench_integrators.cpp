@@ -76,6 +76,8 @@ void BM_Integrator(benchmark::State& st, Case c, std::string integrator) {
     st.counters["newton_per_step"] = double(is.iterations) / steps;
     st.counters["factor_per_step"] = double(is.factorizations) / steps;
     st.counters["cg_per_step"] = double(is.cg_iterations) / steps;
+    st.counters["contact_rounds_per_step"] = double(is.contact_rounds) / steps;
+    st.counters["not_converged_per_step"] = double(is.not_converged) / steps;
     st.counters["volume_change_end_pct"] = 100 * worst;
     st.counters["finite"] = s.x.allFinite();
     const std::string stem = std::filesystem::path(c.file).stem().string();
