@@ -55,6 +55,8 @@ struct MeshResult {
   bool boundary_from_input = false;  // every part is a component of the input (no solid surface)
   SurfaceMesh boundary;         // the simplified boundaries of all parts (one closed surface each)
   int boundary_target_faces = 0;  // the face count the target asked of them, summed
+  int boundary_retries = 0;     // parts' boundaries tried again (half the bounds, then the part's own
+                                // surface) after a non-conforming or sliver tetrahedralization
   EnvelopeStats envelope;
   TetMesh tets;                 // the coarse tetrahedral mesh: one conforming mesh per part, in part order
   TetQuality quality;
