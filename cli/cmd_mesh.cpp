@@ -33,7 +33,10 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
   auto args = std::make_shared<MeshArgs>();
   CLI::App* cmd = app.add_subcommand(
       "mesh",
-      "Decompose a surface into convex shells and tetrahedralize them into one coarse tetrahedral mesh.\n"
+      "Tetrahedralize a surface into a coarse mesh of its own shape: each closed part's boundary,\n"
+      "simplified within --max-deviation, is tetrahedralized; inputs whose components are not closed\n"
+      "parts (open scans, welded segments) fall back to their convex shells meshed with CGAL Mesh_3\n"
+      "(the report's method and fallback_because say which and why).\n"
       "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
       "non-manifold scans are fine. OUT: " + meshing::tet_format_list(true) + ".\n"
       "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");
@@ -52,7 +55,7 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       ->capture_default_str();
   cmd->add_option("--max-deviation", args->options.max_deviation,
                   "Largest distance of the tetrahedral mesh's boundary from the input surface, as a fraction of the "
-                  "bounding-box diagonal; input points may lie outside the mesh by at most a third of it")
+                  "bounding-box diagonal; input surface points may lie outside the mesh by at most 0.45 of it")
       ->capture_default_str();
   cmd->add_option("--tets-per-hull", args->options.tets_per_hull,
                   "The hull budget is at most target-tets / this (0: --max-hulls alone)")
