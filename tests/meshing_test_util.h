@@ -113,6 +113,22 @@ inline std::vector<std::string> lines(const std::string& s) {
 }
 
 /// Reads an OFF file (no library code): vertices and polygons (fan-triangulated).
+/// The surfaces ms as one (vertices stacked, faces shifted): a multi-part input.
+inline SurfaceMesh join(const std::vector<SurfaceMesh>& ms) {
+  SurfaceMesh out;
+  Eigen::Index nv = 0, nf = 0;
+  for (const auto& m : ms) nv += m.V.rows(), nf += m.F.rows();
+  out.V.resize(nv, 3);
+  out.F.resize(nf, 3);
+  nv = nf = 0;
+  for (const auto& m : ms) {
+    out.V.middleRows(nv, m.V.rows()) = m.V;
+    out.F.middleRows(nf, m.F.rows()) = m.F.array() + static_cast<int>(nv);
+    nv += m.V.rows(), nf += m.F.rows();
+  }
+  return out;
+}
+
 inline SurfaceMesh read_off(const fs::path& p) {
   std::ifstream in(p);
   std::string head;

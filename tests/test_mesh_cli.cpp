@@ -128,21 +128,6 @@ SurfaceMesh translated(SurfaceMesh m, const Eigen::RowVector3d& t) {
   return m;
 }
 
-SurfaceMesh concat(const std::vector<SurfaceMesh>& parts) {
-  SurfaceMesh m;
-  Eigen::Index nv = 0, nf = 0;
-  for (const auto& p : parts) nv += p.V.rows(), nf += p.F.rows();
-  m.V.resize(nv, 3);
-  m.F.resize(nf, 3);
-  nv = nf = 0;
-  for (const auto& p : parts) {
-    m.V.middleRows(nv, p.V.rows()) = p.V;
-    m.F.middleRows(nf, p.F.rows()) = p.F.array() + static_cast<int>(nv);
-    nv += p.V.rows(), nf += p.F.rows();
-  }
-  return m;
-}
-
 /// Drops vertices no face uses.
 SurfaceMesh compact(const SurfaceMesh& m) {
   std::vector<int> map(static_cast<size_t>(m.V.rows()), -1);
@@ -238,7 +223,7 @@ std::vector<Variant> variants() {
                                         translated(elephant(), {0, 0, 1.5 * w}),
                                         translated(sphere(), {1.5 * w, 0, 1.5 * w})};
          write_obj_mtl(d / "herd.obj", parts);
-         t = truth_of(concat(parts), true);
+         t = truth_of(join(parts), true);
          EXPECT_EQ(t.components, 4);
          return "herd.obj";
        }},

@@ -18,6 +18,7 @@ namespace {
 using squeeze::meshing::MeshOptions;
 using squeeze::meshing::MeshResult;
 using squeeze::meshing::SurfaceMesh;
+using sqt::join;
 using Vec3 = Eigen::Vector3d;
 
 /// The surface of the box [lo, hi] with each side divided into n pieces along each axis (n(k) >= 1):
@@ -92,21 +93,6 @@ SurfaceMesh sphere(const Vec3& c, double r, int levels) {
   s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
   for (size_t i = 0; i < F.size(); ++i) s.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
   return s;
-}
-
-SurfaceMesh join(const std::vector<SurfaceMesh>& ms) {
-  SurfaceMesh out;
-  Eigen::Index nv = 0, nf = 0;
-  for (const auto& m : ms) nv += m.V.rows(), nf += m.F.rows();
-  out.V.resize(nv, 3);
-  out.F.resize(nf, 3);
-  nv = nf = 0;
-  for (const auto& m : ms) {
-    out.V.middleRows(nv, m.V.rows()) = m.V;
-    out.F.middleRows(nf, m.F.rows()) = m.F.array() + static_cast<int>(nv);
-    nv += m.V.rows(), nf += m.F.rows();
-  }
-  return out;
 }
 
 double box_volume(const Vec3& lo, const Vec3& hi) { return (hi - lo).prod(); }

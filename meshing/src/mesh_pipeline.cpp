@@ -120,32 +120,20 @@ SurfaceMesh sub_mesh(const SurfaceMesh& m, const std::vector<int>& faces) {
   return out;
 }
 
-SurfaceMesh concatenate(const std::vector<SurfaceMesh>& ms) {
-  Eigen::Index nv = 0, nf = 0;
-  for (const auto& m : ms) nv += m.V.rows(), nf += m.F.rows();
-  SurfaceMesh out;
+// The meshes ms as one: vertices stacked in order, the elements (member `elements`: F or T) of
+// each shifted by the vertices before it.
+template <class Mesh, class Elements>
+Mesh concatenate(const std::vector<Mesh>& ms, Elements Mesh::*elements) {
+  Eigen::Index nv = 0, ne = 0;
+  for (const Mesh& m : ms) nv += m.V.rows(), ne += (m.*elements).rows();
+  Mesh out;
   out.V.resize(nv, 3);
-  out.F.resize(nf, 3);
-  Eigen::Index v = 0, f = 0;
-  for (const auto& m : ms) {
+  (out.*elements).resize(ne, Elements::ColsAtCompileTime);
+  Eigen::Index v = 0, e = 0;
+  for (const Mesh& m : ms) {
     out.V.middleRows(v, m.V.rows()) = m.V;
-    out.F.middleRows(f, m.F.rows()) = m.F.array() + static_cast<int>(v);
-    v += m.V.rows(), f += m.F.rows();
-  }
-  return out;
-}
-
-TetMesh concatenate(const std::vector<TetMesh>& ms) {
-  Eigen::Index nv = 0, nt = 0;
-  for (const auto& m : ms) nv += m.V.rows(), nt += m.T.rows();
-  TetMesh out;
-  out.V.resize(nv, 3);
-  out.T.resize(nt, 4);
-  Eigen::Index v = 0, t = 0;
-  for (const auto& m : ms) {
-    out.V.middleRows(v, m.V.rows()) = m.V;
-    out.T.middleRows(t, m.T.rows()) = m.T.array() + static_cast<int>(v);
-    v += m.V.rows(), t += m.T.rows();
+    (out.*elements).middleRows(e, (m.*elements).rows()) = (m.*elements).array() + static_cast<int>(v);
+    v += m.V.rows(), e += (m.*elements).rows();
   }
   return out;
 }
@@ -485,8 +473,8 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       s.peeled += p.tet_stats.peeled;
       s.conforming = s.conforming && p.tet_stats.conforming;
     }
-    r.boundary = concatenate(b);
-    r.tets = concatenate(t);
+    r.boundary = concatenate(b, &SurfaceMesh::F);
+    r.tets = concatenate(t, &TetMesh::T);
   }
   // Label: the convex shell that holds the centroid (the most interior one).
   r.tets.label.resize(r.tets.T.rows());
