@@ -8,6 +8,7 @@
 #include <cstring>
 #include <random>
 
+#include "fem_test_worlds.h"
 #include "squeeze/common/error.h"
 #include "squeeze/fem/collision.h"
 #include "squeeze/fem/constraints.h"
@@ -993,22 +994,7 @@ TEST(FemWorld, GravityIsPerBody) {
 
 namespace {
 
-// A 10 cm cube (2 cells per axis, 27 vertices) under gravity, no floor, every vertex attached to its
-// rest position with stiffness k and damping c: at equilibrium the attachments carry the weight,
-// Σ_i k (y0_i − y_i) = M g (internal forces sum to zero), so the mean sag is M g / (N k) exactly.
-World attached_cube(const std::string& integrator, double k, double c, bool carry_weight = false) {
-  WorldOptions o;
-  o.integrator = integrator;
-  o.collisions = false;
-  World w(o);
-  Material m;
-  m.k_distance = m.k_volume = 20;
-  m.damping_distance = m.damping_volume = 0.01;
-  m.deformation_damping = 20;
-  w.add_body(Body(box_tet_mesh(Vector3d::Zero(), Vector3d::Constant(0.1), Eigen::Vector3i::Constant(2)), m));
-  for (int i = 0; i < w.state_rows(); ++i) w.attach(i, k, c, carry_weight);
-  return w;
-}
+using sqt::attached_cube;
 
 double mean_sag(const World& w, const State& s) {
   double sag = 0;

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <random>
 
+#include "fem_test_worlds.h"
 #include "meshing_test_util.h"
 #include "squeeze/common/error.h"
 #include "squeeze/fem/constraints.h"
@@ -426,18 +427,9 @@ TEST(FemWorld, RestOverlapRelaxesAsObjectsSeparate) {
 // zero-length spring k settles with the mean sag M g / (N k) (the attachments carry the weight),
 // at the frame interval 1/30 s as with Verlet at its small step.
 TEST(FemImplicit, SoftAttachmentsSettleAtWeightOverStiffness) {
-  WorldOptions o;
-  o.integrator = "implicit";
-  o.h = 1.0 / 30;
-  o.collisions = false;
-  World w(o);
-  Material m;
-  m.k_distance = m.k_volume = 20;
-  m.damping_distance = m.damping_volume = 0.01;
-  m.deformation_damping = 20;
-  w.add_body(Body(box_tet_mesh(Vector3d::Zero(), Vector3d::Constant(0.1), Eigen::Vector3i::Constant(2)), m));
   const double k = 200, c = 1.0;
-  for (int i = 0; i < w.state_rows(); ++i) w.attach(i, k, c);
+  World w = sqt::attached_cube("implicit", k, c);
+  w.set_time_step(1.0 / 30);
   w.set_integrator(implicit_with(1e-6));
   State s = w.initial_state();
   for (int n = 0; n < 90; ++n) w.step(s);  // 3 s
