@@ -172,9 +172,7 @@ Eigen::MatrixX3i without_duplicate_and_flat_faces(const Eigen::MatrixX3d& V, con
 
 // One part of the input and what becomes of it.
 struct Part {
-  SurfaceMesh surface;        // closed, outward, 2-manifold, no self-intersection
-  bool from_input = false;    // a component of the input (else of the solid's surface)
-  std::vector<int> input_faces;  // a component: its faces in the input
+  SurfaceMesh surface;        // a component of the input: closed, outward, 2-manifold
   bool check = false;         // it intersects itself: check its simplified boundary
   bool failed = false;        // ... which still did
   double volume = 0;
@@ -316,15 +314,13 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     tbb::parallel_for(0, nc, [&](int c) {
       tbb::this_task_arena::isolate([&] {
         Part& p = component[static_cast<size_t>(c)];
-        p.input_faces = faces[static_cast<size_t>(c)];
-        p.surface = sub_mesh(r.input, p.input_faces);
+        p.surface = sub_mesh(r.input, faces[static_cast<size_t>(c)]);
         const SurfaceMesh& m = p.surface;
         const bool closed = is_closed(m.F), manifold = is_oriented_two_manifold(m.F, static_cast<int>(m.V.rows()));
         p.volume = signed_volume(m);
         // Enclosing volume: a mean thickness (3 volume / area) above a millionth of the diagonal
         // (a face and its twin, say, enclose none).
         usable[static_cast<size_t>(c)] = closed && manifold && 3.0 * p.volume > 1e-6 * diag * area(m);
-        p.from_input = true;
         p.check = usable[static_cast<size_t>(c)] && does_self_intersect(m);
         spdlog::debug("component {}: {} faces, closed {}, oriented 2-manifold {}, volume {:.4g}, self-intersecting {}", c,
                       m.F.rows(), closed, manifold, p.volume, p.check);
@@ -447,7 +443,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
                    "are not faces of the mesh: its tetrahedra are classified by the winding number)", which, p.retries);
   }
   r.parts = static_cast<int>(parts.size());
-  r.boundary_from_input = std::all_of(parts.begin(), parts.end(), [](const Part& p) { return p.from_input; });
+  r.boundary_from_input = true;
   r.input_volume_from_winding_number = !r.info.closed;
   r.input_volume = 0;
   for (const Part& p : parts) r.input_volume += p.volume;

@@ -50,9 +50,10 @@ struct MeshResult {
   Decomposition decomposition;  // convex shells
   int hull_budget = 0;          // max_hulls the decomposition ran with (see hull_budget())
   int parts = 0;                // parts meshed on their own: the input's components that are closed
-                                // oriented 2-manifolds without self-intersection, and the connected
-                                // components of the solid's surface of the other components
-  bool boundary_from_input = false;  // every part is a component of the input (no solid surface)
+                                // oriented 2-manifolds enclosing volume (the fallback: the
+                                // input's face-connected components)
+  bool boundary_from_input = false;  // the tet mesh is made from the input's own boundary (method
+                                     // "boundary"); false on the fallback
   SurfaceMesh boundary;         // the simplified boundaries of all parts (one closed surface each)
   int boundary_target_faces = 0;  // the face count the target asked of them, summed
   int boundary_retries = 0;     // parts' boundaries tried again (half the bounds, then the part's own
