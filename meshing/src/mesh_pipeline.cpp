@@ -261,14 +261,17 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   r.hull_budget = dopt.max_hulls;
   r.decomposition = decompose(r.input, dopt, progress);
 
+  // The input's face-connected components: the candidate parts, and the fallback's part count.
+  Eigen::VectorXi component_of;
+  const int components = face_components(r.input.F, component_of);
+
   // The fallback (meshing version 3): the union of the convex shells tetrahedralized with Mesh_3,
   // for the whole input, with the reason in the report.
   auto shells_route = [&](const std::string& why) {
     spdlog::info("meshing the convex shells instead of the input's boundary: {}", why);
     r.method = "convex_shells";
     r.fallback_because = why;
-    Eigen::VectorXi C;
-    r.parts = face_components(r.input.F, C);
+    r.parts = components;
     r.boundary_from_input = false;
     r.boundary = SurfaceMesh{};
     r.envelope = EnvelopeStats{};
@@ -298,20 +301,18 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   // enclosing volume bounds its own solid and is its own boundary (when it intersects itself, only
   // if its simplified boundary no longer does: slivers of zero area, say, collapse away). Parts are
   // meshed one by one, so touching or overlapping parts stay as the input has them. Where a
-  // component is not such a part (open, non-manifold, welded to another) or a part's mesh is not
-  // conforming or has a dihedral angle below the floor, the whole input takes the fallback: its
-  // convex shells meshed with Mesh_3 (shells_route above).
+  // component is not such a part (open, non-manifold, welded to another), the whole input takes the
+  // fallback: its convex shells meshed with Mesh_3 (shells_route above).
   timer.start("boundary");
   std::vector<Part> parts;
-  std::vector<int> rest;  // faces of components that are not parts (then: the fallback)
+  int unusable = 0;  // components that are not parts (then: the fallback)
   {
-    Eigen::VectorXi C;
-    const int nc = face_components(r.input.F, C);
-    std::vector<std::vector<int>> faces(static_cast<size_t>(nc));
-    for (Eigen::Index f = 0; f < r.input.F.rows(); ++f) faces[static_cast<size_t>(C(f))].push_back(static_cast<int>(f));
-    std::vector<Part> component(static_cast<size_t>(nc));
-    std::vector<char> usable(static_cast<size_t>(nc), 0);
-    tbb::parallel_for(0, nc, [&](int c) {
+    std::vector<std::vector<int>> faces(static_cast<size_t>(components));
+    for (Eigen::Index f = 0; f < r.input.F.rows(); ++f)
+      faces[static_cast<size_t>(component_of(f))].push_back(static_cast<int>(f));
+    std::vector<Part> component(static_cast<size_t>(components));
+    std::vector<char> usable(static_cast<size_t>(components), 0);
+    tbb::parallel_for(0, components, [&](int c) {
       tbb::this_task_arena::isolate([&] {
         Part& p = component[static_cast<size_t>(c)];
         p.surface = sub_mesh(r.input, faces[static_cast<size_t>(c)]);
@@ -326,22 +327,13 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
                       m.F.rows(), closed, manifold, p.volume, p.check);
       });
     });
-    for (int c = 0; c < nc; ++c) {
+    for (int c = 0; c < components; ++c) {
       if (usable[static_cast<size_t>(c)]) parts.push_back(std::move(component[static_cast<size_t>(c)]));
-      else rest.insert(rest.end(), faces[static_cast<size_t>(c)].begin(), faces[static_cast<size_t>(c)].end());
+      else ++unusable;
     }
   }
-  if (!rest.empty()) {
-    Eigen::VectorXi C;
-    const int nc = face_components(r.input.F, C);
-    std::vector<char> seen(static_cast<size_t>(nc), 0);
-    int unusable = 0;
-    for (int f : rest) {
-      char& c = seen[static_cast<size_t>(C(f))];
-      unusable += !c;
-      c = 1;
-    }
-    return shells_route(std::to_string(unusable) + " of the input's " + std::to_string(nc) +
+  if (unusable > 0) {
+    return shells_route(std::to_string(unusable) + " of the input's " + std::to_string(components) +
                         " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, "
                         "or welded to other components)");
   }

@@ -136,7 +136,7 @@ bool is_oriented_two_manifold(const Eigen::MatrixX3i& F, int vertices) {
   if (!ok) return false;
   // Every vertex's faces form one fan: walk around it through the edges from each face's
   // outgoing edge at the vertex to the face that has that edge incoming.
-  std::vector<std::vector<std::pair<int, int>>> out(static_cast<size_t>(vertices));  // (next vertex, face)
+  std::vector<std::vector<std::pair<int, int>>> out(static_cast<size_t>(vertices));  // (next vertex, the one after it)
   for (int f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) out[static_cast<size_t>(F(f, k))].emplace_back(F(f, (k + 1) % 3), F(f, (k + 2) % 3));
   for (int v = 0; v < vertices; ++v) {
