@@ -94,6 +94,15 @@ bool circumcentre(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, Ve
   return x.allFinite();
 }
 
+// Centre x of the circle through the triangle (a, b, c). Returns |(b − a) × (c − a)|², four times
+// the squared area: not above 0 (or NaN) for a degenerate triangle, x then untouched.
+double circumcircle_centre(const Vec3& a, const Vec3& b, const Vec3& c, Vec3& x) {
+  const Vec3 ab = b - a, ac = c - a, n = ab.cross(ac);
+  const double n2 = n.squaredNorm();
+  if (n2 > 0) x = a + (ac.squaredNorm() * n.cross(ab) + ab.squaredNorm() * ac.cross(n)) / (2.0 * n2);
+  return n2;
+}
+
 // The centre of the circle through the largest of the four faces of tetrahedron abcd (flat ones
 // included); false if every face is degenerate.
 bool circumcircle_centre_of_largest_face(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, Vec3& x) {
@@ -103,11 +112,11 @@ bool circumcircle_centre_of_largest_face(const Vec3& a, const Vec3& b, const Vec
     const Vec3* f[3];
     for (int k = 0, j = 0; k < 4; ++k)
       if (k != skip) f[j++] = p[k];
-    const Vec3 ab = *f[1] - *f[0], ac = *f[2] - *f[0], n = ab.cross(ac);
-    const double n2 = n.squaredNorm();
+    Vec3 centre;
+    const double n2 = circumcircle_centre(*f[0], *f[1], *f[2], centre);
     if (!(n2 > best)) continue;
     best = n2;
-    x = *f[0] + (ac.squaredNorm() * n.cross(ab) + ab.squaredNorm() * ac.cross(n)) / (2.0 * n2);
+    x = centre;
   }
   return best > 0 && x.allFinite();
 }
@@ -691,11 +700,9 @@ class Mesher {
   // triangle t, among the vertices of the cells around its corners; appended to `out`.
   void steiner_in_diametral_ball(int t, std::vector<int>& out) const {
     const auto& v = tri_[static_cast<size_t>(t)];
-    const Vec3 &A = P_[v[0]], &B = P_[v[1]], &C = P_[v[2]];
-    const Vec3 ab = B - A, ac = C - A, n = ab.cross(ac);
-    const double n2 = n.squaredNorm();
-    if (!(n2 > 0)) return;
-    const Vec3 centre = A + (ac.squaredNorm() * n.cross(ab) + ab.squaredNorm() * ac.cross(n)) / (2.0 * n2);
+    const Vec3& A = P_[v[0]];
+    Vec3 centre;
+    if (!(circumcircle_centre(A, P_[v[1]], P_[v[2]], centre) > 0)) return;
     const double r2 = (A - centre).squaredNorm();
     std::vector<Ch> around;
     for (int k = 0; k < 3; ++k) tr_.incident_cells(vh_[v[k]], std::back_inserter(around));
@@ -812,11 +819,10 @@ class Mesher {
         const int t = surface_tri(f.first, f.second);
         if (t < 0) continue;
         const auto& v = tri_[static_cast<size_t>(t)];
-        const Vec3 &A = P_[v[0]], &B = P_[v[1]], &C = P_[v[2]];
-        const Vec3 ab = B - A, ac = C - A, n = ab.cross(ac);
-        const double n2 = n.squaredNorm();
+        const Vec3& A = P_[v[0]];
+        Vec3 centre;
+        const double n2 = circumcircle_centre(A, P_[v[1]], P_[v[2]], centre);
         if (!(n2 > 0)) continue;
-        const Vec3 centre = A + (ac.squaredNorm() * n.cross(ab) + ab.squaredNorm() * ac.cross(n)) / (2.0 * n2);
         if ((p - centre).squaredNorm() < (A - centre).squaredNorm()) {
           const double area = n2;
           if (area > enc_area) enc_area = area, *enc = t;
