@@ -91,7 +91,8 @@ Runner add_check_command(CLI::App& app, const Global& global) {
       "Build a scene (meshing through the cache) and tell what it will do before simulating or planning:\n"
       "per object its tets, vertices, mass, pins (hard / soft), the time step it alone would need and\n"
       "which term sets it; the scene's time step; the rest overlaps of every pair of objects (vertices\n"
-      "inside the other's coarse mesh, deepest penetration) or the gap between them; the volume change\n"
+      "inside the other's coarse mesh, deepest penetration) or the gap between them, and how much of\n"
+      "each lies inside the other in the coarse meshes against in the surfaces; the volume change\n"
       "of a short settle without control; and warnings (objects below the floor, a robot inside or\n"
       "touching an obstacle, a goal outside the bounds, a settle that breaks planner.max_volume_change, ...).\n"
       "simulate, plan and run print the same warnings before they start. Exit 0 with or without\n"
@@ -146,12 +147,19 @@ Runner add_check_command(CLI::App& app, const Global& global) {
     }
     s += table(rows, {false, false, false, false, true, true, true, true, true, true, false, true});
     s += "\n  rest overlaps (vertices of A inside B's tetrahedra and of B inside A's, deepest penetration) and gaps:\n";
-    std::vector<std::vector<std::string>> pairs = {{"A", "B", "A in B", "B in A", "deepest m", "gap m"}};
+    s += "  and, in percent of each object's vertices, how much of A lies inside B (and B inside A) in the\n"
+         "  coarse meshes against in the surfaces (winding number); the difference is the meshes' doing:\n";
+    std::vector<std::vector<std::string>> pairs = {
+        {"A", "B", "A in B", "B in A", "deepest m", "gap m", "A in B coarse/surface %", "B in A coarse/surface %"}};
+    auto pct = [](double coarse, double surface) {
+      return coarse < 0 ? std::string("-") : fixed2(100 * coarse) + " / " + fixed2(100 * surface);
+    };
     for (const plan::OverlapCheck& p : c.overlaps)
       pairs.push_back({scene.objects[p.a].name, p.a == p.b ? "(itself)" : scene.objects[p.b].name, std::to_string(p.a_in_b),
-                       std::to_string(p.b_in_a), p.overlapping() ? format_g3(p.depth) : "-", p.gap >= 0 ? format_g3(p.gap) : "-"});
+                       std::to_string(p.b_in_a), p.overlapping() ? format_g3(p.depth) : "-", p.gap >= 0 ? format_g3(p.gap) : "-",
+                       pct(p.coarse_a_in_b, p.surface_a_in_b), pct(p.coarse_b_in_a, p.surface_b_in_a)});
     if (pairs.size() == 1) s += "  (one object)\n";
-    else s += table(pairs, {false, false, true, true, true, true});
+    else s += table(pairs, {false, false, true, true, true, true, true, true});
     if (c.settle > 0) {
       s += "\n  settle: " + format_g3(c.settle) + " s from the start without control" + (c.settle_diverged ? " (diverged)" : "");
       s += c.max_volume_change ? "; planner.max_volume_change " + format_g3(100 * *c.max_volume_change) + " %\n" : "\n";
@@ -203,7 +211,11 @@ Runner add_check_command(CLI::App& app, const Global& global) {
                                  {"a_in_b", p.a_in_b},
                                  {"b_in_a", p.b_in_a},
                                  {"depth", p.depth},
-                                 {"gap", p.gap >= 0 ? json(p.gap) : json(nullptr)}});
+                                 {"gap", p.gap >= 0 ? json(p.gap) : json(nullptr)},
+                                 {"coarse_a_in_b", p.surfaces_measured() ? json(p.coarse_a_in_b) : json(nullptr)},
+                                 {"surface_a_in_b", p.surfaces_measured() ? json(p.surface_a_in_b) : json(nullptr)},
+                                 {"coarse_b_in_a", p.surfaces_measured() ? json(p.coarse_b_in_a) : json(nullptr)},
+                                 {"surface_b_in_a", p.surfaces_measured() ? json(p.surface_b_in_a) : json(nullptr)}});
       j["settle"] = {{"seconds", c.settle},
                      {"diverged", c.settle_diverged},
                      {"max_volume_change", c.max_volume_change ? json(*c.max_volume_change) : json(nullptr)}};

@@ -15,6 +15,7 @@
 #include "squeeze/fem/scene.h"
 #include "squeeze/plan/planner.h"
 #include "squeeze/plan/propagator.h"
+#include "squeeze/plan/scene_check.h"
 
 namespace fs = std::filesystem;
 using namespace squeeze;
@@ -252,6 +253,48 @@ TEST(CheckCli, EveryBundledSceneChecksAndPrintsEveryObject) {
     }
   }
   EXPECT_GE(scenes, 7);
+}
+
+// check's coarse-against-surface overlaps (issue 16's organ measure): a small sphere inside a big one
+// lies wholly inside it in both its coarse mesh and its surface; a sphere far away in neither; the big
+// one's surface is nowhere inside the small one; and a pair is warned about exactly when the coarse
+// and surface fractions differ by more than 2 points in either direction.
+TEST(SceneCheck, CoarseAgainstSurfaceOverlapsOfNestedAndDistantSpheres) {
+  nlohmann::json j = {{"floor", nullptr}, {"gravity", {0, 0, 0}}};
+  const std::string sphere = kScenes + "assets/sphere.off";  // radius 0.5
+  j["objects"] = {
+      {{"name", "big"}, {"mesh", sphere}, {"tets", 150}, {"transform", {{"scale", 0.8}}}},
+      {{"name", "small"}, {"mesh", sphere}, {"tets", 150}, {"transform", {{"scale", 0.2}, {"translate", {0.05, 0, 0}}}}},
+      {{"name", "far"}, {"mesh", sphere}, {"tets", 150}, {"transform", {{"scale", 0.2}, {"translate", {2, 0, 0}}}}}};
+  const fem::SceneWorld w = fem::build_scene(fem::parse_scene(j.dump(), "nested.json"));
+  plan::SceneCheckOptions o;
+  o.settle = 0;
+  const plan::SceneCheck c = plan::check_scene(w, o);
+  auto pair = [&](int a, int b) -> const plan::OverlapCheck& {
+    for (const plan::OverlapCheck& p : c.overlaps)
+      if (p.a == a && p.b == b) return p;
+    ADD_FAILURE() << "no pair " << a << " " << b;
+    return c.overlaps.front();
+  };
+  const plan::OverlapCheck& bs = pair(0, 1);
+  ASSERT_TRUE(bs.surfaces_measured());
+  EXPECT_EQ(bs.coarse_b_in_a, 1.0);   // every coarse vertex of the small sphere in the big one's tets
+  EXPECT_EQ(bs.surface_b_in_a, 1.0);  // every surface vertex inside the big surface
+  EXPECT_EQ(bs.surface_a_in_b, 0.0);  // the big surface is 0.4 m out, the small one 0.1 m
+  EXPECT_LT(bs.coarse_a_in_b, 0.1);   // at most a few interior vertices of the big mesh
+  for (int a : {0, 1}) {
+    const plan::OverlapCheck& f = pair(a, 2);
+    ASSERT_TRUE(f.surfaces_measured());
+    EXPECT_EQ(f.coarse_a_in_b + f.coarse_b_in_a + f.surface_a_in_b + f.surface_b_in_a, 0.0);
+  }
+  for (const plan::OverlapCheck& p : c.overlaps) {
+    const bool differs = std::max(std::abs(p.coarse_a_in_b - p.surface_a_in_b), std::abs(p.coarse_b_in_a - p.surface_b_in_a)) > 0.02;
+    int warned = 0;
+    for (const std::string& s : c.warnings) warned += s.find("than the geometry") != std::string::npos &&
+                                                      s.find("'" + w.scene.objects[p.a].name + "'") != std::string::npos &&
+                                                      s.find("'" + w.scene.objects[p.b].name + "'") != std::string::npos;
+    EXPECT_EQ(warned, differs ? 1 : 0) << p.a << " " << p.b;
+  }
 }
 
 // A robot starting inside an obstacle and an object below the floor are warnings of check (exit 0)

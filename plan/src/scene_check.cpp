@@ -5,10 +5,15 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <memory>
 
 #include "squeeze/common/format.h"
 #include "squeeze/fem/forces.h"
 #include "squeeze/meshing/point_triangle_distance.h"
+#include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/tet_io.h"
+#include "squeeze/meshing/tet_locator.h"
+#include "squeeze/meshing/winding_number.h"
 #include "squeeze/plan/propagator.h"
 
 namespace squeeze::plan {
@@ -47,6 +52,51 @@ double boundary_distance(const fem::Body& a, const fem::Body& b) {
     }
   }
   return best;
+}
+
+// An object's surface at rest in world coordinates (m): the file it was meshed from, transformed,
+// or the boundary of its coarse mesh when the file is a tet mesh.
+struct RestSurface {
+  Eigen::MatrixX3d V;
+  Eigen::MatrixX3i F;
+  Eigen::AlignedBox3d box;
+};
+
+RestSurface rest_surface(const fem::SceneWorld& w, int b) {
+  const fem::SceneObject& so = w.scene.objects[static_cast<size_t>(b)];
+  RestSurface s;
+  if (meshing::is_tet_format(so.mesh)) {
+    const fem::Body& body = w.world.body(b);
+    s.V = body.rest;
+    s.F = body.F;
+  } else {
+    const meshing::SurfaceMesh m = meshing::load_surface(so.mesh);
+    const Eigen::Affine3d A = so.transform.affine();
+    s.V.resize(m.V.rows(), 3);
+    for (Eigen::Index i = 0; i < m.V.rows(); ++i) s.V.row(i) = (A * Eigen::Vector3d(m.V.row(i).transpose())).transpose();
+    s.F = m.F;
+  }
+  s.box.setEmpty();
+  for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.box.extend(Eigen::Vector3d(s.V.row(i).transpose()));
+  return s;
+}
+
+// Fraction of the rows of P inside the winding-number solid of `inside` (0 when their boxes are apart).
+double fraction_inside(const Eigen::MatrixX3d& P, const Eigen::AlignedBox3d& box,
+                       const meshing::FastWindingNumber& inside) {
+  if (P.rows() == 0) return 0;
+  long long n = 0;
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    if (box.contains(Eigen::Vector3d(P.row(i).transpose())) && inside(P.row(i)) >= 0.5) ++n;
+  return static_cast<double>(n) / static_cast<double>(P.rows());
+}
+
+// Fraction of the rows of P inside a tetrahedron of `mesh`.
+double fraction_inside(const Eigen::MatrixX3d& P, const meshing::TetLocator& mesh) {
+  if (P.rows() == 0) return 0;
+  long long n = 0;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) n += mesh.locate(P.row(i)) >= 0;
+  return static_cast<double>(n) / static_cast<double>(P.rows());
 }
 
 }  // namespace
@@ -129,6 +179,39 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
       if (!c.overlapping())
         c.gap = std::min(boundary_distance(world.body(a), world.body(b)), boundary_distance(world.body(b), world.body(a)));
     }
+  // --- coarse against surface overlaps: every pair whose surfaces' or coarse meshes' boxes meet ---
+  if (options.details && options.surfaces && nb > 1) {
+    std::vector<RestSurface> surf;
+    std::vector<Eigen::AlignedBox3d> coarse_box(static_cast<size_t>(nb));
+    for (int b = 0; b < nb; ++b) {
+      surf.push_back(rest_surface(w, b));
+      coarse_box[b].setEmpty();
+      for (Eigen::Index i = 0; i < w.meshes[b].V.rows(); ++i) coarse_box[b].extend(Eigen::Vector3d(w.meshes[b].V.row(i).transpose()));
+    }
+    std::vector<std::unique_ptr<meshing::FastWindingNumber>> winding(static_cast<size_t>(nb));
+    std::vector<std::unique_ptr<meshing::TetLocator>> locator(static_cast<size_t>(nb));
+    auto wn = [&](int b) -> const meshing::FastWindingNumber& {
+      if (!winding[b]) winding[b] = std::make_unique<meshing::FastWindingNumber>(surf[b].V, surf[b].F);
+      return *winding[b];
+    };
+    auto loc = [&](int b) -> const meshing::TetLocator& {
+      if (!locator[b]) locator[b] = std::make_unique<meshing::TetLocator>(w.meshes[b]);
+      return *locator[b];
+    };
+    for (int a = 0; a < nb; ++a)
+      for (int b = a + 1; b < nb; ++b) {
+        const bool listed = pairs.count({a, b}) > 0;
+        if (!listed && !surf[a].box.intersects(surf[b].box) && !coarse_box[a].intersects(coarse_box[b])) continue;
+        OverlapCheck c = listed ? pairs[{a, b}] : OverlapCheck{};
+        c.a = a;
+        c.b = b;
+        c.coarse_a_in_b = fraction_inside(w.meshes[a].V, loc(b));
+        c.coarse_b_in_a = fraction_inside(w.meshes[b].V, loc(a));
+        c.surface_a_in_b = fraction_inside(surf[a].V, surf[b].box, wn(b));
+        c.surface_b_in_a = fraction_inside(surf[b].V, surf[a].box, wn(a));
+        if (listed || c.coarse_a_in_b + c.coarse_b_in_a + c.surface_a_in_b + c.surface_b_in_a > 0) pairs[{a, b}] = c;
+      }
+  }
   for (auto& [key, c] : pairs) out.overlaps.push_back(c);
 
   // --- settle: a copy of the world, no control ---
@@ -205,6 +288,19 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
         warn.push_back(who(scene, r) + ": the robot starts touching '" + scene.objects[other].name + "' (gap " + format_g3(c.gap) +
                        " m, below 1 % of its mean edge length " + format_g3(edge) + " m)");
     }
+  }
+  for (const OverlapCheck& c : out.overlaps) {
+    if (!c.surfaces_measured()) continue;
+    const double ab = c.coarse_a_in_b - c.surface_a_in_b, ba = c.coarse_b_in_a - c.surface_b_in_a;
+    if (std::max(std::abs(ab), std::abs(ba)) <= 0.02) continue;
+    const bool first = std::abs(ab) >= std::abs(ba);
+    const int x = first ? c.a : c.b, y = first ? c.b : c.a;
+    warn.push_back(who(scene, x) + ": " + percent(first ? c.coarse_a_in_b : c.coarse_b_in_a) +
+                   " of its coarse vertices are inside the coarse mesh of '" + scene.objects[y].name + "', " +
+                   percent(first ? c.surface_a_in_b : c.surface_b_in_a) +
+                   " of its surface vertices inside its surface: the coarse meshes " +
+                   ((first ? ab : ba) > 0 ? "overlap more" : "overlap less") +
+                   " than the geometry (more than 2 points; docs/meshing.md)");
   }
   if (robots.size() > 1) {
     std::string names;
