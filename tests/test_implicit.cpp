@@ -14,6 +14,8 @@
 #include "fem_test_worlds.h"
 #include "meshing_test_util.h"
 #include "squeeze/common/error.h"
+#include "squeeze/fem/block_ldlt.h"
+#include "squeeze/fem/body.h"
 #include "squeeze/fem/constraints.h"
 #include "squeeze/fem/implicit.h"
 #include "squeeze/fem/integrator.h"
@@ -111,7 +113,81 @@ TEST(FemKernels, VolumeHessianMatchesFiniteDifferences) {
     using Mat12 = Eigen::Matrix<double, 12, 12>;
     const double lowest = Eigen::SelfAdjointEigenSolver<Mat12>(GN).eigenvalues().minCoeff();
     EXPECT_GE(lowest, -1e-9 * GN.norm());
+    // The solver's lower blocks: those of the exact Hessian, and without curvature those of GN.
+    for (bool curvature : {true, false}) {
+      Eigen::Matrix3d Hd[4], Hl[6];
+      Vec3 gl[4];
+      volume_hessian_lower(p, V0, k, curvature, Hd, Hl, gl);
+      const Mat12& R = curvature ? H : GN;
+      int q = 0;
+      for (int a = 0; a < 4; ++a) {
+        EXPECT_LT((Hd[a] - R.block<3, 3>(3 * a, 3 * a)).norm(), 1e-12 * (1 + R.norm()));
+        for (int b = a + 1; b < 4; ++b, ++q) EXPECT_LT((Hl[q] - R.block<3, 3>(3 * b, 3 * a)).norm(), 1e-12 * (1 + R.norm()));
+      }
+    }
   }
+}
+
+// BlockLDLT solves symmetric block systems exactly (residual at rounding level against the dense
+// matrix) on the vertex graph of a tetrahedral mesh and on random graphs, positive definite or
+// indefinite, refactorises a second matrix of the same pattern, and refuses a singular pivot.
+TEST(FemBlockLDLT, SolvesSymmetricBlockSystemsOnMeshAndRandomPatterns) {
+  std::mt19937 g(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto random_block = [&] {
+    Eigen::Matrix3d B;
+    for (int i = 0; i < 9; ++i) B(i / 3, i % 3) = u(g);
+    return B;
+  };
+  std::vector<std::pair<int, std::vector<std::pair<int, int>>>> patterns;
+  {
+    const meshing::TetMesh box = box_tet_mesh(Vec3(0, 0, 0), Vec3(1, 0.5, 0.3), Eigen::Vector3i(6, 3, 2));
+    std::vector<std::pair<int, int>> pairs;
+    for (Eigen::Index t = 0; t < box.T.rows(); ++t)
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b)
+          pairs.emplace_back(std::max(box.T(t, a), box.T(t, b)), std::min(box.T(t, a), box.T(t, b)));
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    patterns.emplace_back(static_cast<int>(box.V.rows()), pairs);
+  }
+  for (int n : {1, 2, 7, 60}) {
+    std::vector<std::pair<int, int>> pairs;
+    for (int i = 1; i < n; ++i)
+      for (int j = 0; j < i; ++j)
+        if (g() % 5 == 0) pairs.emplace_back(i, j);
+    patterns.emplace_back(n, pairs);
+  }
+  for (const auto& [n, pairs] : patterns) {
+    SCOPED_TRACE(n);
+    BlockLDLT f;
+    f.analyze(n, pairs);
+    for (int variant = 0; variant < 3; ++variant) {  // SPD, another SPD, indefinite
+      std::vector<Eigen::Matrix3d> off(pairs.size()), diag(static_cast<size_t>(n));
+      Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+      for (size_t q = 0; q < pairs.size(); ++q) {
+        off[q] = random_block();
+        A.block<3, 3>(3 * pairs[q].first, 3 * pairs[q].second) = off[q];
+        A.block<3, 3>(3 * pairs[q].second, 3 * pairs[q].first) = off[q].transpose();
+      }
+      for (int i = 0; i < n; ++i) {  // diagonally dominant: SPD; minus on half of them: indefinite
+        const double row = A.block(3 * i, 0, 3, 3 * n).cwiseAbs().sum();
+        const Eigen::Matrix3d S = random_block();
+        diag[i] = 0.1 * (S + S.transpose()) + (row + 1.0) * Eigen::Matrix3d::Identity();
+        if (variant == 2 && i % 2) diag[i] = -diag[i];
+        A.block<3, 3>(3 * i, 3 * i) = diag[i];
+      }
+      ASSERT_TRUE(f.factorize(diag, off));
+      Eigen::VectorXd b(3 * n), x;
+      for (int i = 0; i < 3 * n; ++i) b[i] = u(g);
+      f.solve(b, x);
+      EXPECT_LT((A * x - b).norm(), 1e-12 * A.norm() * (1 + x.norm())) << "variant " << variant;
+    }
+  }
+  // A zero diagonal block with no coupling is a singular pivot.
+  BlockLDLT f;
+  f.analyze(2, {{1, 0}});
+  EXPECT_FALSE(f.factorize({Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Zero()}, {Eigen::Matrix3d::Zero()}));
 }
 
 // At rest, without gravity, the residual is zero: a step takes no Newton iteration and leaves the

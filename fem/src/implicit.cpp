@@ -1,8 +1,6 @@
 // The implicit integrator: backward Euler by minimising the incremental potential (implicit.h).
 #include "squeeze/fem/implicit.h"
 
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +11,7 @@
 #include <vector>
 
 #include "squeeze/common/error.h"
+#include "squeeze/fem/block_ldlt.h"
 #include "squeeze/fem/constraints.h"
 #include "squeeze/fem/world.h"
 #include "world_data.h"
@@ -21,11 +20,10 @@ namespace squeeze::fem {
 namespace {
 
 using Mat3 = Eigen::Matrix3d;
-using SpMat = Eigen::SparseMatrix<double>;
 
-// A symmetric matrix of 3×3 blocks over the free vertices, stored as its lower triangle in Eigen's
-// compressed column format (for SimplicialLDLT<..., Lower>). The pattern is built once from the
-// block pairs; blocks are then added in place.
+// A symmetric matrix of 3×3 blocks over the free vertices: its diagonal blocks and the blocks
+// (I, J), I > J, of its lower triangle. The pattern is built once from the block pairs; blocks are
+// then added in place. BlockLDLT factorises it; multiply is the conjugate gradients' product.
 class BlockMatrix {
  public:
   // n blocks per side; pairs (I, J) with I > J (duplicates allowed). Returns true if the pattern
@@ -38,33 +36,11 @@ class BlockMatrix {
     if (n == n_ && pairs == pairs_) return false;
     n_ = n;
     pairs_ = std::move(pairs);
-    // Columns: block column J has its diagonal block, then its off-diagonal blocks by row.
     col_start_.assign(static_cast<size_t>(n) + 1, 0);
     for (const auto& p : pairs_) ++col_start_[p.second + 1];
     for (int J = 0; J < n; ++J) col_start_[J + 1] += col_start_[J];
-    const int N = 3 * n;
-    A_.resize(N, N);
-    std::vector<int> outer(static_cast<size_t>(N) + 1, 0);
-    std::vector<int> inner;
-    inner.reserve(static_cast<size_t>(6 * n + 9 * pairs_.size()));
-    diag_base_.assign(static_cast<size_t>(3 * n), 0);
-    off_base_.assign(3 * pairs_.size(), 0);
-    for (int J = 0; J < n; ++J)
-      for (int b = 0; b < 3; ++b) {
-        const int c = 3 * J + b;
-        outer[c] = static_cast<int>(inner.size());
-        diag_base_[static_cast<size_t>(c)] = static_cast<int>(inner.size());
-        for (int a = b; a < 3; ++a) inner.push_back(3 * J + a);
-        for (int q = col_start_[J]; q < col_start_[J + 1]; ++q) {
-          off_base_[3 * static_cast<size_t>(q) + b] = static_cast<int>(inner.size());
-          for (int a = 0; a < 3; ++a) inner.push_back(3 * pairs_[q].first + a);
-        }
-      }
-    outer[N] = static_cast<int>(inner.size());
-    A_.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
-    std::copy(outer.begin(), outer.end(), A_.outerIndexPtr());
-    std::copy(inner.begin(), inner.end(), A_.innerIndexPtr());
-    std::fill(A_.valuePtr(), A_.valuePtr() + inner.size(), 0.0);
+    diag_.assign(static_cast<size_t>(n), Mat3::Zero());
+    off_.assign(pairs_.size(), Mat3::Zero());
     return true;
   }
   // Index of the off-diagonal block (I, J), I > J, or -1.
@@ -74,36 +50,35 @@ class BlockMatrix {
                                      [](const auto& a, const auto& b) { return a.first < b.first; });
     return it != last && it->first == I ? static_cast<int>(it - pairs_.begin()) : -1;
   }
-  void zero() { std::fill(A_.valuePtr(), A_.valuePtr() + A_.nonZeros(), 0.0); }
-  // Adds the lower part of the symmetric block H to the diagonal block of vertex I.
-  void add_diag(int I, const Mat3& H) {
-    double* v = A_.valuePtr();
-    for (int b = 0; b < 3; ++b) {
-      double* col = v + diag_base_[3 * static_cast<size_t>(I) + b];
-      for (int a = b; a < 3; ++a) col[a - b] += H(a, b);
+  void zero() {
+    std::fill(diag_.begin(), diag_.end(), Mat3::Zero());
+    std::fill(off_.begin(), off_.end(), Mat3::Zero());
+  }
+  // Adds the symmetric block H (every element's diagonal block is symmetric by construction) to
+  // the diagonal block of vertex I.
+  void add_diag(int I, const Mat3& H) { diag_[static_cast<size_t>(I)] += H; }
+  void add_off(int id, const Mat3& H) { off_[static_cast<size_t>(id)] += H; }
+  // out = A p (3 per block).
+  void multiply(const Eigen::VectorXd& p, Eigen::VectorXd& out) const {
+    out.resize(p.size());
+    for (int I = 0; I < n_; ++I) out.segment<3>(3 * I).noalias() = diag_[static_cast<size_t>(I)] * p.segment<3>(3 * I);
+    for (size_t q = 0; q < pairs_.size(); ++q) {
+      const int I = pairs_[q].first, J = pairs_[q].second;
+      out.segment<3>(3 * I).noalias() += off_[q] * p.segment<3>(3 * J);
+      out.segment<3>(3 * J).noalias() += off_[q].transpose() * p.segment<3>(3 * I);
     }
   }
-  // Adds H as block (I, J) of the full matrix (and implicitly Hᵀ as (J, I)); I != J.
-  void add(int I, int J, const Mat3& H) {
-    if (I < J) return add_off(find(J, I), H.transpose());
-    add_off(find(I, J), H);
-  }
-  void add_off(int id, const Mat3& H) {
-    double* v = A_.valuePtr();
-    for (int b = 0; b < 3; ++b) {
-      double* col = v + off_base_[3 * static_cast<size_t>(id) + b];
-      for (int a = 0; a < 3; ++a) col[a] += H(a, b);
-    }
-  }
-  const SpMat& matrix() const { return A_; }
+  int blocks() const { return n_; }
+  const std::vector<std::pair<int, int>>& pairs() const { return pairs_; }
+  const std::vector<Mat3>& diag() const { return diag_; }
+  const std::vector<Mat3>& off() const { return off_; }
 
  private:
   int n_ = -1;
   std::vector<std::pair<int, int>> pairs_;  // (I, J), I > J, sorted by column then row
   std::vector<int> col_start_;             // per block column J: its pairs [col_start_[J], col_start_[J+1])
-  std::vector<int> diag_base_;             // per scalar column of a diagonal block: offset of its first entry
-  std::vector<int> off_base_;              // per off-diagonal block and column b: offset of its first entry
-  SpMat A_;
+  std::vector<Mat3> diag_;                 // per block row: its diagonal block
+  std::vector<Mat3> off_;                  // per pair (I, J): block (I, J)
 };
 
 // A contact of the step, linearised where it was detected: over its stencil (the penetrating
@@ -158,7 +133,7 @@ class ImplicitIntegrator : public TimeIntegrator {
   std::vector<int> edge_block_;
   std::vector<std::array<int, 6>> tet_block_;
   std::vector<std::array<int, 10>> contact_block_;
-  Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
+  BlockLDLT ldlt_;
   bool analysed_ = false;     // ldlt_ analysed the current pattern
   double factor_h_ = 0;       // the substep length of ldlt_'s factorisation (0: none): a preconditioner while h is the same
   Eigen::VectorXd r_, z_, p_, Hp_;  // PCG scratch
@@ -520,19 +495,28 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
     const auto& T = d.tet_elems[t];
     Vec3 p[4], gk[4];
     for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
-    Mat3 B[4][4];
-    if (exact) {
-      volume_hessian_blocks(p, T.V0, T.k, B, gk);
-    } else {
-      volume_constraint(p[0], p[1], p[2], p[3], T.V0, gk);
-      for (int a = 0; a < 4; ++a)
-        for (int b = 0; b < 4; ++b) B[a][b] = T.k * gk[a] * gk[b].transpose();
-    }
+    Mat3 Hd[4], Hl[6];  // the diagonal blocks and the blocks (b, a), a < b, in pair order
+    volume_hessian_lower(p, T.V0, T.k, exact, Hd, Hl, gk);
     const double damp = T.kd / h;
-    if (damp > 0)
-      for (int a = 0; a < 4; ++a)
-        for (int b = 0; b < 4; ++b) B[a][b] += damp * tet_g_[t][a] * tet_g_[t][b].transpose();
-    scatter(4, T.v, tet_block_[t].data(), [&](int a, int b) -> const Mat3& { return B[a][b]; });
+    if (damp > 0) {
+      const auto& tg = tet_g_[t];
+      int q = 0;
+      for (int a = 0; a < 4; ++a) {
+        Hd[a] += damp * tg[a] * tg[a].transpose();
+        for (int b = a + 1; b < 4; ++b) Hl[q++] += damp * tg[b] * tg[a].transpose();
+      }
+    }
+    const int* codes = tet_block_[t].data();
+    for (int a = 0; a < 4; ++a)
+      if (free_[T.v[a]] >= 0) H_.add_diag(free_[T.v[a]], Hd[a]);
+    for (int q = 0; q < 6; ++q) {
+      const int c = codes[q];
+      if (c < 0) continue;
+      if (c & 1)
+        H_.add_off(c >> 1, Hl[q].transpose());
+      else
+        H_.add_off(c >> 1, Hl[q]);
+    }
   }
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const LinearContact& c = contacts_[k];
@@ -546,12 +530,12 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
 
 bool ImplicitIntegrator::factorize(double h) {
   if (!analysed_) {
-    ldlt_.analyzePattern(H_.matrix());
+    ldlt_.analyze(H_.blocks(), H_.pairs());
     analysed_ = true;
   }
-  ldlt_.factorize(H_.matrix());
+  const bool ok = ldlt_.factorize(H_.diag(), H_.off());
   ++stats_.factorizations;
-  factor_h_ = ldlt_.info() == Eigen::Success ? h : 0.0;
+  factor_h_ = ok ? h : 0.0;
   return factor_h_ > 0;
 }
 
@@ -566,20 +550,19 @@ bool ImplicitIntegrator::newton_direction(const World& w, const RowMatrixX3d& x,
   const double kCgTolerance = o_.cg_tolerance;
   for (int exact = 1; exact >= 0; --exact) {
     assemble(w, x, h, exact == 1);
-    const auto A = H_.matrix().selfadjointView<Eigen::Lower>();
     if (factor_h_ == h) {
       // PCG from dx = 0.
       const int n = static_cast<int>(g.size());
       dx.setZero(n);
       r_ = -g;
-      z_ = ldlt_.solve(r_);
+      ldlt_.solve(r_, z_);
       p_ = z_;
       double rz = r_.dot(z_);
       const double stop = kCgTolerance * g.norm();
       bool negative = false, done = false;
       for (int it = 0; it < kMaxCg && !done; ++it) {
         ++stats_.cg_iterations;
-        Hp_.noalias() = A * p_;
+        H_.multiply(p_, Hp_);
         const double pHp = p_.dot(Hp_);
         if (!(pHp > 0)) {
           negative = true;
@@ -592,7 +575,7 @@ bool ImplicitIntegrator::newton_direction(const World& w, const RowMatrixX3d& x,
           done = true;
           break;
         }
-        z_ = ldlt_.solve(r_);
+        ldlt_.solve(r_, z_);
         const double rz1 = r_.dot(z_);
         p_ = z_ + (rz1 / rz) * p_;
         rz = rz1;
@@ -601,7 +584,8 @@ bool ImplicitIntegrator::newton_direction(const World& w, const RowMatrixX3d& x,
       if (done && dx.allFinite() && g.dot(dx) < 0) return true;
     }
     if (!factorize(h)) continue;
-    dx = ldlt_.solve(-g);
+    r_ = -g;
+    ldlt_.solve(r_, dx);
     if (dx.allFinite() && g.dot(dx) < 0) return true;
     factor_h_ = 0;  // an indefinite factorisation is no preconditioner
   }
@@ -627,6 +611,8 @@ void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
     return m;
   };
   bool converged = false;
+  double Gx = 0;         // G(x)
+  bool have_Gx = false;  // Gx is known
   for (int it = 0; it < o_.max_newton_iterations; ++it) {
     gradient(w, x, h, g);
     // Converged when the residual force would move no vertex by tolerance × its edge scale.
@@ -640,17 +626,20 @@ void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
     const bool ok = newton_direction(w, x, h, g, dx);
     if (!ok) break;
     const double step = largest(dx, false);
-    // Backtracking line search on G (Armijo).
-    const double G0 = potential(w, x, h), slope = g.dot(dx);
+    // Backtracking line search on G (Armijo). G at x is the last accepted trial's.
+    if (!have_Gx) Gx = potential(w, x, h);
+    const double G0 = Gx, slope = g.dot(dx);
     double alpha = 1;
     for (int ls = 0; ls < 30; ++ls) {
       trial = x;
       for (size_t f = 0; f < free_rows_.size(); ++f)
         trial.row(free_rows_[f]) += alpha * dx.segment<3>(3 * static_cast<Eigen::Index>(f)).transpose();
-      if (potential(w, trial, h) <= G0 + 1e-4 * alpha * slope) break;
+      Gx = potential(w, trial, h);
+      if (Gx <= G0 + 1e-4 * alpha * slope) break;
       alpha *= 0.5;
     }
-    x = trial;
+    have_Gx = true;
+    x.swap(trial);
     if (alpha * step < tol) {
       converged = true;
       break;

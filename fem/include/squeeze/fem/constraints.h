@@ -237,22 +237,39 @@ inline Eigen::Matrix3d skew(const Vec3& u) {
 /// ∂²V/∂p2∂p3 = −skew(e1)/6, ∂²V/∂p0∂p1 = skew(e2 − e3)/6, ∂²V/∂p0∂p2 = skew(e3 − e1)/6,
 /// ∂²V/∂p0∂p3 = skew(e1 − e2)/6, and ∂²V/∂p_b∂p_a = (∂²V/∂p_a∂p_b)ᵀ = −∂²V/∂p_a∂p_b.
 /// Indefinite where C ≠ 0. grad: receives the four ∂C/∂p_k (1/m). Returns C.
-inline double volume_hessian_blocks(const Vec3 p[4], double V0, double k, Eigen::Matrix3d H[4][4], Vec3 grad[4]) {
+/// The same blocks as the solver stores them (the others are their transposes): the diagonal ones
+/// Hd[a] = H_aa and the lower ones Hl[q] = H_ba, a < b, q over the pairs (0,1), (0,2), (0,3), (1,2),
+/// (1,3), (2,3). With curvature false, the Gauss–Newton blocks k ∇_a C ∇_b Cᵀ only (positive
+/// semi-definite, volume_hessian_gn). grad: receives the four ∂C/∂p_k (1/m). Returns C.
+inline double volume_hessian_lower(const Vec3 p[4], double V0, double k, bool curvature, Eigen::Matrix3d Hd[4],
+                                   Eigen::Matrix3d Hl[6], Vec3 grad[4]) {
   const double C = volume_constraint(p[0], p[1], p[2], p[3], V0, grad);
-  const Vec3 e1 = p[1] - p[0], e2 = p[2] - p[0], e3 = p[3] - p[0];
-  Eigen::Matrix3d S[4][4];
-  S[0][1] = skew(e2 - e3);
-  S[0][2] = skew(e3 - e1);
-  S[0][3] = skew(e1 - e2);
-  S[1][2] = -skew(e3);
-  S[1][3] = skew(e2);
-  S[2][3] = -skew(e1);
-  const double w = k * C / (6.0 * V0);
+  for (int a = 0; a < 4; ++a) Hd[a] = k * grad[a] * grad[a].transpose();
+  int q = 0;
+  for (int a = 0; a < 4; ++a)
+    for (int b = a + 1; b < 4; ++b) Hl[q++] = k * grad[b] * grad[a].transpose();
+  if (curvature) {  // H_ba += w (∂²V/∂p_a∂p_b)ᵀ = −w ∂²V/∂p_a∂p_b, w = k C / V0, the skew blocks above
+    const Vec3 e1 = p[1] - p[0], e2 = p[2] - p[0], e3 = p[3] - p[0];
+    const double w = k * C / (6.0 * V0);
+    Hl[0] -= w * skew(e2 - e3);
+    Hl[1] -= w * skew(e3 - e1);
+    Hl[2] -= w * skew(e1 - e2);
+    Hl[3] += w * skew(e3);
+    Hl[4] -= w * skew(e2);
+    Hl[5] += w * skew(e1);
+  }
+  return C;
+}
+
+inline double volume_hessian_blocks(const Vec3 p[4], double V0, double k, Eigen::Matrix3d H[4][4], Vec3 grad[4]) {
+  Eigen::Matrix3d Hd[4], Hl[6];
+  const double C = volume_hessian_lower(p, V0, k, true, Hd, Hl, grad);
+  int q = 0;
   for (int a = 0; a < 4; ++a) {
-    H[a][a] = k * grad[a] * grad[a].transpose();
-    for (int b = a + 1; b < 4; ++b) {
-      H[a][b] = k * grad[a] * grad[b].transpose() + w * S[a][b];
-      H[b][a] = H[a][b].transpose();
+    H[a][a] = Hd[a];
+    for (int b = a + 1; b < 4; ++b, ++q) {
+      H[b][a] = Hl[q];
+      H[a][b] = Hl[q].transpose();
     }
   }
   return C;

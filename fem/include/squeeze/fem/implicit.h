@@ -18,8 +18,8 @@
 //
 // Solver: Newton's method with a backtracking line search on G. Each Newton step solves H Δ = −∇G
 // with the exact Hessian (constraints.h: distance_hessian, volume_hessian_blocks) by conjugate
-// gradients preconditioned by the last sparse LDLᵀ factorisation of a Hessian of the same h (Eigen's
-// SimplicialLDLT, AMD ordering); when CG needs more than max_cg_iterations, the current Hessian is
+// gradients preconditioned by the last sparse LDLᵀ factorisation of a Hessian of the same h (BlockLDLT,
+// block_ldlt.h: 3×3 blocks, AMD ordering of the vertex graph); when CG needs more than max_cg_iterations, the current Hessian is
 // factorised (and becomes the preconditioner). Where the exact Hessian is not positive definite
 // (CG meets negative curvature, or the step is no descent), the positive semi-definite one is used
 // (compressed-edge and volume curvature terms dropped: distance_hessian with psd, volume_hessian_gn).
