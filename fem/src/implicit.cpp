@@ -611,6 +611,7 @@ void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
     return m;
   };
   bool converged = false;
+  double previous_full_step = 0;  // the last Newton step (edge lengths) if the line search took it whole, else 0
   double Gx = 0;         // G(x)
   bool have_Gx = false;  // Gx is known
   for (int it = 0; it < o_.max_newton_iterations; ++it) {
@@ -644,6 +645,15 @@ void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
       converged = true;
       break;
     }
+    // Quadratic convergence: two full Newton steps in a row, the second at most a quarter of the
+    // first, predict the next one as step³ / previous² (e_{k+1} ≈ C e_k², C ≈ e_k / e_{k−1}²); below
+    // the tolerance, the next iteration (gradient, Hessian, linear solve) would only confirm it.
+    if (alpha == 1 && previous_full_step > 0 && step <= 0.25 * previous_full_step &&
+        step * step * step < tol * previous_full_step * previous_full_step) {
+      converged = true;
+      break;
+    }
+    previous_full_step = alpha == 1 ? step : 0.0;
   }
   if (!converged) ++stats_.not_converged;
 }
