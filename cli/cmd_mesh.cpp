@@ -35,8 +35,9 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       "mesh",
       "Tetrahedralize a surface into a coarse mesh of its own shape: each closed part's boundary,\n"
       "simplified within --max-deviation, is tetrahedralized; inputs whose components are not closed\n"
-      "parts (open scans, welded segments) fall back to their convex shells meshed with CGAL Mesh_3\n"
-      "(the report's method and fallback_because say which and why).\n"
+      "parts (open scans, welded or self-intersecting segments) fall back to their convex shells\n"
+      "meshed with CGAL Mesh_3, or with --wrap to their alpha wrap (CGAL, a closed surface just outside\n"
+      "them) meshed like a boundary (the report's method and fallback_because say which and why).\n"
       "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
       "non-manifold scans are fine. OUT: " + meshing::tet_format_list(true) + ".\n"
       "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");
@@ -56,6 +57,18 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
   cmd->add_option("--max-deviation", args->options.max_deviation,
                   "Largest distance of the tetrahedral mesh's boundary from the input surface, as a fraction of the "
                   "bounding-box diagonal; input surface points may lie outside the mesh by at most 0.45 of it")
+      ->capture_default_str();
+  cmd->add_flag("--wrap", args->options.wrap,
+                "Inputs that are not closed parts: mesh their alpha wrap (closed, just outside them) instead of "
+                "their convex shells; tighter (volume, deviation) but more tetrahedra and seconds");
+  cmd->add_option("--wrap-alpha", args->options.wrap_alpha,
+                  "With --wrap: the alpha wrap's alpha (gaps, holes and cavities narrower than this are filled), "
+                  "as a multiple of --max-deviation")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--wrap-offset", args->options.wrap_offset,
+                  "With --wrap: how far outside the input the alpha wrap lies, as a multiple of --max-deviation")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--tets-per-hull", args->options.tets_per_hull,
                   "The hull budget is at most target-tets / this (0: --max-hulls alone)")

@@ -12,12 +12,14 @@
 #include <array>
 #include <set>
 #include <cmath>
+#include <functional>
 
 #include <spdlog/spdlog.h>
 
 #include "squeeze/common/error.h"
 #include "squeeze/common/format.h"
 #include "squeeze/common/progress.h"
+#include "squeeze/meshing/alpha_wrap.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/shell_tetrahedralize.h"
 #include "squeeze/meshing/tet_faces.h"
@@ -190,6 +192,32 @@ std::string percent(double x) {
   return buf;
 }
 
+// The volume of the solid {x : winding number of `surface` at x > ½}, the union of overlapping
+// or welded segments with each point counted once: the divergence theorem over the faces where the
+// solid's indicator jumps, each face's cone volume weighted by the jump across it (+1 where it is
+// inside behind the face and outside in front, -1 the other way, 0 for walls inside the solid or
+// outside it), the indicator taken at the face's centroid a ten-thousandth of the diagonal to each
+// side (Jacobson et al., "Robust inside-outside segmentation using generalized winding numbers",
+// SIGGRAPH 2013). Exact where every face is wholly on the solid's boundary or wholly not; a face
+// that crosses another counts by its centroid's side.
+double winding_volume(const SurfaceMesh& surface) {
+  const FastWindingNumber w(surface.V, surface.F);
+  const double eps = 1e-4 * bounding_box_diagonal(surface.V);
+  std::vector<double> vol(static_cast<size_t>(surface.F.rows()), 0.0);
+  tbb::parallel_for(Eigen::Index(0), surface.F.rows(), [&](Eigen::Index f) {
+    const Eigen::RowVector3d a = surface.V.row(surface.F(f, 0)), b = surface.V.row(surface.F(f, 1)),
+                             c = surface.V.row(surface.F(f, 2));
+    const Eigen::RowVector3d n = (b - a).cross(c - a);
+    if (!(n.norm() > 0)) return;
+    const Eigen::RowVector3d m = (a + b + c) / 3.0, u = n.normalized() * eps;
+    const int jump = (w(m - u) > 0.5 ? 1 : 0) - (w(m + u) > 0.5 ? 1 : 0);
+    vol[static_cast<size_t>(f)] = jump * a.dot(b.cross(c)) / 6.0;
+  });
+  double sum = 0;
+  for (double x : vol) sum += x;
+  return sum;
+}
+
 // The report's measures of r.tets against r.input: quality, volume ratio (closed inputs),
 // deviation_out / deviation_in, coverage of the input's vertices.
 void measure(MeshResult& r, const MeshOptions& opt) {
@@ -244,6 +272,10 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   if (opt.tetrahedralize.target_tets < 1) throw InputError("--target-tets must be at least 1");
   if (!(opt.max_deviation > 0 && opt.max_deviation < 1)) throw InputError("--max-deviation must be between 0 and 1");
   if (!(opt.inner_deviation > 0 && opt.inner_deviation <= 1)) throw InputError("inner_deviation must be in (0, 1]");
+  if (!(opt.wrap_alpha > 0 && opt.wrap_alpha * opt.max_deviation < 1))
+    throw InputError("--wrap-alpha must be positive and, times --max-deviation, below 1");
+  if (!(opt.wrap_offset > 0 && opt.wrap_offset * opt.max_deviation < 1))
+    throw InputError("--wrap-offset must be positive and, times --max-deviation, below 1");
   MeshResult r;
   r.target_tets = opt.tetrahedralize.target_tets;
   StageTimer timer(r, progress);
@@ -297,6 +329,247 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     return std::move(r);
   };
 
+  // The boundary route: each part's boundary simplified within the bounds `eopt`, then
+  // tetrahedralized; the parts concatenated, labelled and measured against the input. `fail` is
+  // taken, with the reason, where a part cannot be meshed. `wrapped`: the parts are components of
+  // the input's alpha wrap (then r.input_volume is the caller's).
+  auto boundary_route = [&](std::vector<Part>& parts, const EnvelopeOptions& eopt, bool wrapped,
+                            const std::function<MeshResult(const std::string&)>& fail) -> MeshResult {
+    // Each part gets the share of target_tets its volume has; its boundary as many faces as a mesh
+    // of that many tetrahedra has (edge length from the volume: a regular tetrahedron of edge L has
+    // volume L³/(6√2), Delaunay meshes average about half), fewer where the deviation bounds allow
+    // nothing coarser. The bounds are fractions of the whole input's diagonal.
+    double total_volume = 0;
+    for (const Part& p : parts) total_volume += p.volume;
+    const double target = opt.tetrahedralize.target_tets;
+    const double L = std::cbrt(6.0 * std::sqrt(2.0) * total_volume / (0.5 * target));
+    timer.start("tetrahedralizing");  // (simplifying each part's boundary, then tetrahedralizing it)
+    auto mesh_parts = [&](std::vector<Part>& ps, size_t first) {
+      const bool progress_here = ps.size() == 1;
+      tbb::parallel_for(first, ps.size(), size_t(1), [&](size_t i) {
+        // Isolated: a thread waiting inside one part's work (CGAL, TBB loops) takes no other part's
+        // work, so each part runs start to end on one thread with its own CGAL random state.
+        tbb::this_task_arena::isolate([&] {
+          Part& p = ps[i];
+          EnvelopeOptions e = eopt;
+          e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
+          p.target_faces = e.target_faces;
+          p.boundary = simplify_envelope(p.surface, e, &p.envelope, progress_here ? progress : nullptr);
+          if (spdlog::should_log(spdlog::level::debug))
+            spdlog::debug("part {}: simplified boundary of {} faces intersects itself: {}", i, p.boundary.F.rows(),
+                          does_self_intersect(p.boundary));
+          if (p.check && does_self_intersect(p.boundary)) {
+            p.failed = true;
+            return;
+          }
+          TetrahedralizeOptions t = opt.tetrahedralize;
+          t.target_tets = std::max(1, static_cast<int>(std::lround(target * p.volume / total_volume)));
+          t.max_tets = std::max(1000, static_cast<int>(std::lround(opt.tetrahedralize.max_tets * p.volume / total_volume)));
+          Progress* pr = progress_here ? progress : nullptr;
+          p.tets = tetrahedralize(p.boundary, t, &p.tet_stats, pr);
+          // A boundary whose tetrahedralization is not conforming or keeps a dihedral angle below the
+          // floor (the simplification brought two sheets of a thin part close) is tried again,
+          // simplified within half the bounds, then as the part's own surface (the input's
+          // triangles, when not too many); the first that holds is kept, else the best of them.
+          auto holds = [&](const TetMesh& m, const TetrahedralizeStats& st) {
+            return m.T.rows() > 0 && st.conforming && tet_quality(m).min_dihedral >= opt.tetrahedralize.min_dihedral;
+          };
+          auto better = [&](const TetMesh& m, const TetrahedralizeStats& st, const TetMesh& than,
+                            const TetrahedralizeStats& than_st) {
+            if ((m.T.rows() > 0) != (than.T.rows() > 0)) return m.T.rows() > 0;
+            if (st.conforming != than_st.conforming) return st.conforming;
+            return tet_quality(m).min_dihedral > tet_quality(than).min_dihedral;
+          };
+          for (int retry = 1; retry <= 2 && !holds(p.tets, p.tet_stats); ++retry) {
+            SurfaceMesh b;
+            EnvelopeStats es;
+            if (retry == 1) {
+              EnvelopeOptions e2 = e;
+              e2.max_outside *= 0.5;
+              e2.max_inside *= 0.5;
+              b = simplify_envelope(p.surface, e2, &es, nullptr);
+              if (p.check && does_self_intersect(b)) continue;
+            } else {
+              if (p.check || p.surface.F.rows() > std::max(4000, 8 * e.target_faces)) continue;
+              b = p.surface;
+            }
+            TetrahedralizeStats st;
+            TetMesh m = tetrahedralize(b, t, &st, pr);
+            spdlog::debug("part {}: retry {} ({}): {} faces, {} tetrahedra, conforming {}", i, retry,
+                          retry == 1 ? "half the bounds" : "its own surface", b.F.rows(), m.T.rows(), st.conforming);
+            ++p.retries;
+            if (better(m, st, p.tets, p.tet_stats)) {
+              p.tets = std::move(m);
+              p.tet_stats = st;
+              p.boundary = std::move(b);
+              p.envelope = es;
+            }
+          }
+          spdlog::debug("part {}: {} faces, volume {:.4g}, boundary {} faces, target {}, {} tetrahedra, conforming {}", i,
+                        p.surface.F.rows(), p.volume, p.boundary.F.rows(), t.target_tets, p.tets.T.rows(),
+                        p.tet_stats.conforming);
+        });
+      });
+    };
+    mesh_parts(parts, 0);
+    // The boundary route holds where every part has tetrahedra. A part whose best attempt is still
+    // not conforming (boundary faces not recovered: tetrahedra classified by the winding number) or
+    // keeps a dihedral angle below the floor is kept and reported (tets.conforming, min_dihedral_deg,
+    // a warning): it is still the part's shape, where the convex shells would inflate it (the
+    // spinal cord at 150 tetrahedra: 21,976 times its volume).
+    for (size_t i = 0; i < parts.size(); ++i) {
+      const Part& p = parts[i];
+      const std::string which = parts.size() > 1 ? "part " + std::to_string(i + 1) + " of " + std::to_string(parts.size()) : "the input";
+      if (p.failed)
+        return fail(which + " intersects itself, and so does its simplified boundary");
+      if (p.tets.T.rows() == 0) return fail("the tetrahedralization of " + which + "'s boundary produced no tetrahedra");
+      if (!p.tet_stats.conforming)
+        spdlog::warn("the tetrahedralization of {}'s boundary is not conforming after {} retries (some boundary faces "
+                     "are not faces of the mesh: its tetrahedra are classified by the winding number)", which, p.retries);
+    }
+    r.parts = static_cast<int>(parts.size());
+    r.boundary_from_input = !wrapped;
+    if (!wrapped) {
+      r.input_volume_from_winding_number = !r.info.closed;
+      r.input_volume = 0;
+      for (const Part& p : parts) r.input_volume += p.volume;
+      r.info.volume = r.input_volume;
+    }
+    // Concatenated in part order.
+    {
+      std::vector<SurfaceMesh> b;
+      std::vector<TetMesh> t;
+      for (Part& p : parts) {
+        b.push_back(std::move(p.boundary));
+        t.push_back(std::move(p.tets));
+        r.boundary_retries += p.retries;
+        r.envelope.faces += p.envelope.faces;
+        r.envelope.collapses += p.envelope.collapses;
+        r.envelope.bounded = r.envelope.bounded || p.envelope.bounded;
+        r.boundary_target_faces += p.target_faces;
+        TetrahedralizeStats& s = r.tet_stats;
+        s.attempts = std::max(s.attempts, p.tet_stats.attempts);
+        s.edge_length = std::max(s.edge_length, p.tet_stats.edge_length);
+        s.minimum_tets += p.tet_stats.minimum_tets;
+        s.boundary_splits += p.tet_stats.boundary_splits;
+        s.steiner_points += p.tet_stats.steiner_points;
+        s.peeled += p.tet_stats.peeled;
+        s.conforming = s.conforming && p.tet_stats.conforming;
+      }
+      r.boundary = concatenate(b, &SurfaceMesh::F);
+      r.tets = concatenate(t, &TetMesh::T);
+    }
+    if (wrapped) {
+      // The input's own volume: where its winding number is above ½ (the union of overlapping or
+      // welded segments, each counted once).
+      r.input_volume_from_winding_number = true;
+      r.input_volume = winding_volume(r.input);
+      r.info.volume = r.input_volume;
+    }
+    // Label: the convex shell that holds the centroid (the most interior one).
+    r.tets.label.resize(r.tets.T.rows());
+    for (Eigen::Index t = 0; t < r.tets.T.rows(); ++t) {
+      const Eigen::RowVector3d c = (r.tets.V.row(r.tets.T(t, 0)) + r.tets.V.row(r.tets.T(t, 1)) +
+                                    r.tets.V.row(r.tets.T(t, 2)) + r.tets.V.row(r.tets.T(t, 3))) / 4.0;
+      int arg = 0;
+      double v = INFINITY;
+      for (size_t s = 0; s < r.decomposition.shells.size(); ++s) {
+        const double sv = r.decomposition.shells[s].hull.signed_value(c);
+        if (sv < v) v = sv, arg = static_cast<int>(s);
+      }
+      r.tets.label(t) = arg + 1;
+    }
+
+    timer.start("measuring");
+    measure(r, opt);
+
+    // Why the count is off the target, when it is by more than 35%.
+    const double tets = r.quality.tets;
+    const std::string dihedral = std::to_string(static_cast<int>(opt.tetrahedralize.refine_dihedral));
+    const std::string in_parts =
+        r.parts > 1 ? " over the input's " + std::to_string(r.parts) + " parts (each meshed on its own)" : "";
+    if (tets > 1.35 * target) {
+      if (r.envelope.bounded)
+        r.target_exceeded_because =
+            "keeping the boundary within " + percent(opt.max_deviation) + " of the bounding-box diagonal outside and " +
+            percent(opt.inner_deviation * opt.max_deviation) + " inside the input surface takes " +
+            std::to_string(r.boundary.F.rows()) + " boundary triangles" + in_parts + " (a mesh of " +
+            std::to_string(r.target_tets) + " tetrahedra has about " + std::to_string(r.boundary_target_faces) +
+            "), and tetrahedra with dihedral angles of at least " + dihedral + " degrees between them need " +
+            std::to_string(r.quality.tets);
+      else
+        r.target_exceeded_because = "the boundary's " + std::to_string(r.boundary.F.rows()) + " triangles" + in_parts +
+                                    " and tetrahedra with dihedral angles of at least " + dihedral +
+                                    " degrees (flatter where the solid is thinner than the edge length) need " +
+                                    std::to_string(r.quality.tets) + " tetrahedra";
+    } else if (tets < 0.65 * target) {
+      r.target_exceeded_because = "the solid's boundary holds only " + std::to_string(r.boundary.F.rows()) +
+                                  " triangles" + in_parts + " and refining the inside stopped at " +
+                                  std::to_string(r.quality.tets) + " tetrahedra";
+    }
+    timer.stop();
+    return std::move(r);
+  };
+
+  // The route for inputs that are not closed parts (open scans; non-manifold, welded or
+  // self-intersecting segments): the input's alpha wrap (a closed 2-manifold without
+  // self-intersections, `offset` outside the input, filling what is narrower than `alpha`), whose
+  // components are the parts of the boundary route. The bounds are what the wrap leaves of the
+  // input's: its own distance from the input is measured and taken off max_outside (at least a
+  // quarter of it is kept). Every deviation in the report is still measured against the input.
+  // Where the wrap cannot be meshed: the convex shells.
+  auto wrap_route = [&](const std::string& why) -> MeshResult {
+    spdlog::info("meshing the input's alpha wrap instead of its own boundary: {}", why);
+    timer.start("wrapping");
+    AlphaWrapOptions wo;
+    wo.alpha = opt.wrap_alpha * opt.max_deviation;
+    wo.offset = opt.wrap_offset * opt.max_deviation;
+    SurfaceMesh wrap;
+    try {
+      wrap = alpha_wrap(r.input, wo);
+    } catch (const std::exception& e) {
+      return shells_route(why + "; its alpha wrap failed (" + e.what() + ")");
+    }
+    if (wrap.F.rows() == 0) return shells_route(why + "; its alpha wrap is empty");
+    wrap.F = orient_outward(wrap.V, wrap.F);
+    {
+      const TriangleBvh input_surface(r.input.V, r.input.F);
+      const double spacing = std::max(2e-3 * diag, std::sqrt(area(wrap) / 2e5));
+      const auto pts = surface_samples(wrap.V, wrap.F, spacing);
+      std::vector<double> d(pts.size(), 0.0);
+      tbb::parallel_for(size_t(0), pts.size(), [&](size_t i) { d[i] = input_surface.nearest(pts[i]); });
+      r.wrap.deviation = 0;
+      for (double x : d) r.wrap.deviation = std::max(r.wrap.deviation, x);
+    }
+    r.wrap.used = true;
+    r.wrap.alpha = wo.alpha;
+    r.wrap.offset = wo.offset;
+    r.wrap.faces = static_cast<int>(wrap.F.rows());
+    Eigen::VectorXi comp;
+    const int n = face_components(wrap.F, comp);
+    std::vector<std::vector<int>> faces(static_cast<size_t>(n));
+    for (Eigen::Index f = 0; f < wrap.F.rows(); ++f) faces[static_cast<size_t>(comp(f))].push_back(static_cast<int>(f));
+    std::vector<Part> parts(static_cast<size_t>(n));
+    for (int c = 0; c < n; ++c) {
+      Part& p = parts[static_cast<size_t>(c)];
+      p.surface = sub_mesh(wrap, faces[static_cast<size_t>(c)]);
+      p.volume = signed_volume(p.surface);
+      if (!is_closed(p.surface.F) || !is_oriented_two_manifold(p.surface.F, static_cast<int>(p.surface.V.rows())) ||
+          !(p.volume > 0))
+        return shells_route(why + "; component " + std::to_string(c + 1) + " of its alpha wrap is not a closed "
+                            "oriented 2-manifold enclosing volume");
+    }
+    spdlog::debug("alpha wrap: alpha {:.3g}, offset {:.3g}: {} faces, {} components, {:.3g} from the input", wo.alpha * diag,
+                  wo.offset * diag, wrap.F.rows(), n, r.wrap.deviation);
+    EnvelopeOptions e;
+    const double eopt_inside = opt.inner_deviation * opt.max_deviation * diag;
+    e.max_outside = std::max(0.25 * opt.max_deviation * diag, opt.max_deviation * diag - r.wrap.deviation);
+    e.max_inside = eopt_inside;  // not widened by the offset: the wrap's faces cut chords through
+                                 // the offset band, down to the input itself at convex bulges
+    r.method = "alpha_wrap";
+    r.fallback_because = why;
+    return boundary_route(parts, e, true, [&](const std::string& w) { return shells_route(why + "; on its alpha wrap, " + w); });
+  };
   // The parts: each face-connected component of the input that is a closed oriented 2-manifold
   // enclosing volume bounds its own solid and is its own boundary (when it intersects itself, only
   // if its simplified boundary no longer does: slivers of zero area, say, collapse away). Parts are
@@ -333,180 +606,19 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     }
   }
   if (unusable > 0) {
-    return shells_route(std::to_string(unusable) + " of the input's " + std::to_string(components) +
+    const std::string why = std::to_string(unusable) + " of the input's " + std::to_string(components) +
                         " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, "
-                        "or welded to other components)");
+                        "or welded to other components)";
+    return opt.wrap ? wrap_route(why) : shells_route(why);
   }
   if (parts.empty()) throw InputError("the surface encloses no volume (winding number above 1/2 nowhere)");
-  double total_volume = 0;
-  for (const Part& p : parts) total_volume += p.volume;
-
-  // Each part gets the share of target_tets its volume has; its boundary as many faces as a mesh
-  // of that many tetrahedra has (edge length from the volume: a regular tetrahedron of edge L has
-  // volume L³/(6√2), Delaunay meshes average about half), fewer where the deviation bounds allow
-  // nothing coarser. The bounds are fractions of the whole input's diagonal.
-  const double target = opt.tetrahedralize.target_tets;
-  const double L = std::cbrt(6.0 * std::sqrt(2.0) * total_volume / (0.5 * target));
   EnvelopeOptions eopt;
   eopt.max_outside = opt.max_deviation * diag;
   eopt.max_inside = opt.inner_deviation * opt.max_deviation * diag;
-  timer.start("tetrahedralizing");  // (simplifying each part's boundary, then tetrahedralizing it)
-  auto mesh_parts = [&](std::vector<Part>& ps, size_t first) {
-    const bool progress_here = ps.size() == 1;
-    tbb::parallel_for(first, ps.size(), size_t(1), [&](size_t i) {
-      // Isolated: a thread waiting inside one part's work (CGAL, TBB loops) takes no other part's
-      // work, so each part runs start to end on one thread with its own CGAL random state.
-      tbb::this_task_arena::isolate([&] {
-        Part& p = ps[i];
-        EnvelopeOptions e = eopt;
-        e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
-        p.target_faces = e.target_faces;
-        p.boundary = simplify_envelope(p.surface, e, &p.envelope, progress_here ? progress : nullptr);
-        if (spdlog::should_log(spdlog::level::debug))
-          spdlog::debug("part {}: simplified boundary of {} faces intersects itself: {}", i, p.boundary.F.rows(),
-                        does_self_intersect(p.boundary));
-        if (p.check && does_self_intersect(p.boundary)) {
-          p.failed = true;
-          return;
-        }
-        TetrahedralizeOptions t = opt.tetrahedralize;
-        t.target_tets = std::max(1, static_cast<int>(std::lround(target * p.volume / total_volume)));
-        t.max_tets = std::max(1000, static_cast<int>(std::lround(opt.tetrahedralize.max_tets * p.volume / total_volume)));
-        Progress* pr = progress_here ? progress : nullptr;
-        p.tets = tetrahedralize(p.boundary, t, &p.tet_stats, pr);
-        // A boundary whose tetrahedralization is not conforming or keeps a dihedral angle below the
-        // floor (the simplification brought two sheets of a thin part close) is tried again,
-        // simplified within half the bounds, then as the part's own surface (the input's
-        // triangles, when not too many); the first that holds is kept, else the best of them.
-        auto holds = [&](const TetMesh& m, const TetrahedralizeStats& st) {
-          return m.T.rows() > 0 && st.conforming && tet_quality(m).min_dihedral >= opt.tetrahedralize.min_dihedral;
-        };
-        auto better = [&](const TetMesh& m, const TetrahedralizeStats& st, const TetMesh& than,
-                          const TetrahedralizeStats& than_st) {
-          if ((m.T.rows() > 0) != (than.T.rows() > 0)) return m.T.rows() > 0;
-          if (st.conforming != than_st.conforming) return st.conforming;
-          return tet_quality(m).min_dihedral > tet_quality(than).min_dihedral;
-        };
-        for (int retry = 1; retry <= 2 && !holds(p.tets, p.tet_stats); ++retry) {
-          SurfaceMesh b;
-          EnvelopeStats es;
-          if (retry == 1) {
-            EnvelopeOptions e2 = e;
-            e2.max_outside *= 0.5;
-            e2.max_inside *= 0.5;
-            b = simplify_envelope(p.surface, e2, &es, nullptr);
-            if (p.check && does_self_intersect(b)) continue;
-          } else {
-            if (p.check || p.surface.F.rows() > std::max(4000, 8 * e.target_faces)) continue;
-            b = p.surface;
-          }
-          TetrahedralizeStats st;
-          TetMesh m = tetrahedralize(b, t, &st, pr);
-          spdlog::debug("part {}: retry {} ({}): {} faces, {} tetrahedra, conforming {}", i, retry,
-                        retry == 1 ? "half the bounds" : "its own surface", b.F.rows(), m.T.rows(), st.conforming);
-          ++p.retries;
-          if (better(m, st, p.tets, p.tet_stats)) {
-            p.tets = std::move(m);
-            p.tet_stats = st;
-            p.boundary = std::move(b);
-            p.envelope = es;
-          }
-        }
-        spdlog::debug("part {}: {} faces, volume {:.4g}, boundary {} faces, target {}, {} tetrahedra, conforming {}", i,
-                      p.surface.F.rows(), p.volume, p.boundary.F.rows(), t.target_tets, p.tets.T.rows(),
-                      p.tet_stats.conforming);
-      });
-    });
-  };
-  mesh_parts(parts, 0);
-  // The boundary route holds where every part has tetrahedra. A part whose best attempt is still
-  // not conforming (boundary faces not recovered: tetrahedra classified by the winding number) or
-  // keeps a dihedral angle below the floor is kept and reported (tets.conforming, min_dihedral_deg,
-  // a warning): it is still the part's shape, where the convex shells would inflate it (the
-  // spinal cord at 150 tetrahedra: 21,976 times its volume).
-  for (size_t i = 0; i < parts.size(); ++i) {
-    const Part& p = parts[i];
-    const std::string which = parts.size() > 1 ? "part " + std::to_string(i + 1) + " of " + std::to_string(parts.size()) : "the input";
-    if (p.failed)
-      return shells_route(which + " intersects itself, and so does its simplified boundary");
-    if (p.tets.T.rows() == 0) return shells_route("the tetrahedralization of " + which + "'s boundary produced no tetrahedra");
-    if (!p.tet_stats.conforming)
-      spdlog::warn("the tetrahedralization of {}'s boundary is not conforming after {} retries (some boundary faces "
-                   "are not faces of the mesh: its tetrahedra are classified by the winding number)", which, p.retries);
-  }
-  r.parts = static_cast<int>(parts.size());
-  r.boundary_from_input = true;
-  r.input_volume_from_winding_number = !r.info.closed;
-  r.input_volume = 0;
-  for (const Part& p : parts) r.input_volume += p.volume;
-  r.info.volume = r.input_volume;
-  // Concatenated in part order.
-  {
-    std::vector<SurfaceMesh> b;
-    std::vector<TetMesh> t;
-    for (Part& p : parts) {
-      b.push_back(std::move(p.boundary));
-      t.push_back(std::move(p.tets));
-      r.boundary_retries += p.retries;
-      r.envelope.faces += p.envelope.faces;
-      r.envelope.collapses += p.envelope.collapses;
-      r.envelope.bounded = r.envelope.bounded || p.envelope.bounded;
-      r.boundary_target_faces += p.target_faces;
-      TetrahedralizeStats& s = r.tet_stats;
-      s.attempts = std::max(s.attempts, p.tet_stats.attempts);
-      s.edge_length = std::max(s.edge_length, p.tet_stats.edge_length);
-      s.minimum_tets += p.tet_stats.minimum_tets;
-      s.boundary_splits += p.tet_stats.boundary_splits;
-      s.steiner_points += p.tet_stats.steiner_points;
-      s.peeled += p.tet_stats.peeled;
-      s.conforming = s.conforming && p.tet_stats.conforming;
-    }
-    r.boundary = concatenate(b, &SurfaceMesh::F);
-    r.tets = concatenate(t, &TetMesh::T);
-  }
-  // Label: the convex shell that holds the centroid (the most interior one).
-  r.tets.label.resize(r.tets.T.rows());
-  for (Eigen::Index t = 0; t < r.tets.T.rows(); ++t) {
-    const Eigen::RowVector3d c = (r.tets.V.row(r.tets.T(t, 0)) + r.tets.V.row(r.tets.T(t, 1)) +
-                                  r.tets.V.row(r.tets.T(t, 2)) + r.tets.V.row(r.tets.T(t, 3))) / 4.0;
-    int arg = 0;
-    double v = INFINITY;
-    for (size_t s = 0; s < r.decomposition.shells.size(); ++s) {
-      const double sv = r.decomposition.shells[s].hull.signed_value(c);
-      if (sv < v) v = sv, arg = static_cast<int>(s);
-    }
-    r.tets.label(t) = arg + 1;
-  }
+  const std::function<MeshResult(const std::string&)> fallback =
+      opt.wrap ? std::function<MeshResult(const std::string&)>(wrap_route) : shells_route;
+  return boundary_route(parts, eopt, false, fallback);
 
-  timer.start("measuring");
-  measure(r, opt);
-
-  // Why the count is off the target, when it is by more than 35%.
-  const double tets = r.quality.tets;
-  const std::string dihedral = std::to_string(static_cast<int>(opt.tetrahedralize.refine_dihedral));
-  const std::string in_parts =
-      r.parts > 1 ? " over the input's " + std::to_string(r.parts) + " parts (each meshed on its own)" : "";
-  if (tets > 1.35 * target) {
-    if (r.envelope.bounded)
-      r.target_exceeded_because =
-          "keeping the boundary within " + percent(opt.max_deviation) + " of the bounding-box diagonal outside and " +
-          percent(opt.inner_deviation * opt.max_deviation) + " inside the input surface takes " +
-          std::to_string(r.boundary.F.rows()) + " boundary triangles" + in_parts + " (a mesh of " +
-          std::to_string(r.target_tets) + " tetrahedra has about " + std::to_string(r.boundary_target_faces) +
-          "), and tetrahedra with dihedral angles of at least " + dihedral + " degrees between them need " +
-          std::to_string(r.quality.tets);
-    else
-      r.target_exceeded_because = "the boundary's " + std::to_string(r.boundary.F.rows()) + " triangles" + in_parts +
-                                  " and tetrahedra with dihedral angles of at least " + dihedral +
-                                  " degrees (flatter where the solid is thinner than the edge length) need " +
-                                  std::to_string(r.quality.tets) + " tetrahedra";
-  } else if (tets < 0.65 * target) {
-    r.target_exceeded_because = "the solid's boundary holds only " + std::to_string(r.boundary.F.rows()) +
-                                " triangles" + in_parts + " and refining the inside stopped at " +
-                                std::to_string(r.quality.tets) + " tetrahedra";
-  }
-  timer.stop();
-  return r;
 }
 
 MeshResult mesh_file(const std::filesystem::path& path, const MeshOptions& opt, Progress* progress) {
@@ -553,6 +665,11 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
       {"target_tets", r.target_tets},
       {"method", r.method},
       {"fallback_because", r.fallback_because.empty() ? json(nullptr) : json(r.fallback_because)},
+      {"alpha_wrap", r.wrap.used ? json{{"alpha", r.wrap.alpha},
+                                        {"offset", r.wrap.offset},
+                                        {"faces", r.wrap.faces},
+                                        {"deviation", frac(r.wrap.deviation)}}
+                                 : json(nullptr)},
       {"target_exceeded_because", r.target_exceeded_because.empty() ? json(nullptr) : json(r.target_exceeded_because)},
       {"input",
        {{"file", input_name},
@@ -575,7 +692,7 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"hit_max_hulls", r.decomposition.hit_max_hulls},
         {"hull_budget", r.hull_budget}}},
       {"boundary",
-       {{"source", r.method == "boundary" ? json("input") : json(nullptr)},
+       {{"source", r.method == "boundary" ? json("input") : r.method == "alpha_wrap" ? json("alpha_wrap") : json(nullptr)},
         {"parts", r.parts},
         {"target_faces", r.boundary_target_faces},
         {"faces", r.boundary.F.rows()},

@@ -41,6 +41,24 @@ struct MeshOptions {
   double inner_deviation = 0.45;        // how far input surface points may lie outside the tet mesh
                                         // (deviation_in), as a share of max_deviation
   double coverage_tolerance = 0.005;    // fraction of the bbox diagonal for the coverage figure
+  bool wrap = false;                    // inputs that are not closed parts (open, non-manifold,
+                                        // welded or self-intersecting segments): mesh their alpha
+                                        // wrap (alpha_wrap.h) by the boundary route, the convex
+                                        // shells only where that fails (true); or their convex
+                                        // shells (false: tighter but far more tetrahedra and seconds
+                                        // on the organs; docs/meshing.md)
+  double wrap_alpha = 1.0;              // the alpha wrap's alpha, as a multiple of max_deviation
+                                        // (gaps, holes, cavities narrower than this are filled)
+  double wrap_offset = 0.2;             // its offset outside the input, as a multiple of max_deviation
+};
+
+/// The alpha wrap the pipeline made (inputs that are not closed parts).
+struct WrapStats {
+  bool used = false;
+  double alpha = 0;       // fraction of the bbox diagonal
+  double offset = 0;      // fraction of the bbox diagonal
+  int faces = 0;          // faces of the wrap
+  double deviation = 0;   // units: the wrap's largest distance from the input surface
 };
 
 /// Everything `squeeze mesh` computes.
@@ -63,9 +81,12 @@ struct MeshResult {
   TetQuality quality;
   TetrahedralizeStats tet_stats;
   std::string method = "boundary";  // "boundary": the parts' simplified boundaries tetrahedralized;
-                                    // "convex_shells": the fallback (see fallback_because)
+                                    // "alpha_wrap": the same of the input's alpha wrap, where the
+                                    // input is not closed parts; "convex_shells": the last fallback
+                                    // (see fallback_because)
   std::string fallback_because;     // empty, or why the boundary route was not taken
   ShellTetrahedralizeStats shell_stats;  // the fallback's
+  WrapStats wrap;                   // method "alpha_wrap" (or the shells after it failed)
   int target_tets = 0;
   std::string target_exceeded_because;  // empty: the count is within ±35% of the target
   double input_volume = 0;      // the parts' enclosed volumes, summed (overlapping parts count twice,
