@@ -64,11 +64,9 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
   cmd->add_option("--wrap-alpha", args->options.wrap_alpha,
                   "With --wrap: the alpha wrap's alpha (gaps, holes and cavities narrower than this are filled), "
                   "as a multiple of --max-deviation")
-      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--wrap-offset", args->options.wrap_offset,
                   "With --wrap: how far outside the input the alpha wrap lies, as a multiple of --max-deviation")
-      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--tets-per-hull", args->options.tets_per_hull,
                   "The hull budget is at most target-tets / this (0: --max-hulls alone)")

@@ -192,6 +192,24 @@ std::string percent(double x) {
   return buf;
 }
 
+// The largest distance to `to` of points on the triangles (V, F) at most `spacing` apart
+// (surface_samples).
+double farthest_sample(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const TriangleBvh& to, double spacing) {
+  const auto pts = surface_samples(V, F, spacing);
+  std::vector<double> d(pts.size(), 0.0);
+  tbb::parallel_for(size_t(0), pts.size(), [&](size_t i) { d[i] = to.nearest(pts[i]); });
+  double farthest = 0;
+  for (double x : d) farthest = std::max(farthest, x);
+  return farthest;
+}
+
+// The faces of each component: C  #F component id per face (face_components), n components.
+std::vector<std::vector<int>> faces_by_component(const Eigen::VectorXi& C, int n) {
+  std::vector<std::vector<int>> faces(static_cast<size_t>(n));
+  for (Eigen::Index f = 0; f < C.size(); ++f) faces[static_cast<size_t>(C(f))].push_back(static_cast<int>(f));
+  return faces;
+}
+
 // The volume of the solid {x : winding number of `surface` at x > ½}, the union of overlapping
 // or welded segments with each point counted once: the divergence theorem over the faces where the
 // solid's indicator jumps, each face's cone volume weighted by the jump across it (+1 where it is
@@ -233,12 +251,7 @@ void measure(MeshResult& r, const MeshOptions& opt) {
   // spacing / √3 (0.12% of the diagonal).
   const double spacing = std::max({2e-3 * diag, std::sqrt(area(r.input) / 2e5), std::sqrt(area(SurfaceMesh{r.tets.V, tet_boundary}) / 2e5)});
   r.deviation_sample_spacing = spacing;
-  {
-    const auto pts = surface_samples(r.tets.V, tet_boundary, spacing);
-    std::vector<double> d(pts.size(), 0.0);
-    tbb::parallel_for(size_t(0), pts.size(), [&](size_t i) { d[i] = input_surface.nearest(pts[i]); });
-    for (double x : d) r.deviation_out = std::max(r.deviation_out, x);
-  }
+  r.deviation_out = farthest_sample(r.tets.V, tet_boundary, input_surface, spacing);
   {
     const auto pts = surface_samples(r.input.V, r.input.F, spacing);
     std::vector<double> d(pts.size(), 0.0);
@@ -329,11 +342,16 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     return std::move(r);
   };
 
-  // The boundary route: each part's boundary simplified within the bounds `eopt`, then
+  // The envelope's bounds (fractions of the whole input's diagonal).
+  EnvelopeOptions eopt;
+  eopt.max_outside = opt.max_deviation * diag;
+  eopt.max_inside = opt.inner_deviation * opt.max_deviation * diag;
+
+  // The boundary route: each part's boundary simplified within `bounds`, then
   // tetrahedralized; the parts concatenated, labelled and measured against the input. `fail` is
   // taken, with the reason, where a part cannot be meshed. `wrapped`: the parts are components of
   // the input's alpha wrap (then r.input_volume is the caller's).
-  auto boundary_route = [&](std::vector<Part>& parts, const EnvelopeOptions& eopt, bool wrapped,
+  auto boundary_route = [&](std::vector<Part>& parts, const EnvelopeOptions& bounds, bool wrapped,
                             const std::function<MeshResult(const std::string&)>& fail) -> MeshResult {
     // Each part gets the share of target_tets its volume has; its boundary as many faces as a mesh
     // of that many tetrahedra has (edge length from the volume: a regular tetrahedron of edge L has
@@ -351,7 +369,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
         // work, so each part runs start to end on one thread with its own CGAL random state.
         tbb::this_task_arena::isolate([&] {
           Part& p = ps[i];
-          EnvelopeOptions e = eopt;
+          EnvelopeOptions e = bounds;
           e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
           p.target_faces = e.target_faces;
           p.boundary = simplify_envelope(p.surface, e, &p.envelope, progress_here ? progress : nullptr);
@@ -532,23 +550,15 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     }
     if (wrap.F.rows() == 0) return shells_route(why + "; its alpha wrap is empty");
     wrap.F = orient_outward(wrap.V, wrap.F);
-    {
-      const TriangleBvh input_surface(r.input.V, r.input.F);
-      const double spacing = std::max(2e-3 * diag, std::sqrt(area(wrap) / 2e5));
-      const auto pts = surface_samples(wrap.V, wrap.F, spacing);
-      std::vector<double> d(pts.size(), 0.0);
-      tbb::parallel_for(size_t(0), pts.size(), [&](size_t i) { d[i] = input_surface.nearest(pts[i]); });
-      r.wrap.deviation = 0;
-      for (double x : d) r.wrap.deviation = std::max(r.wrap.deviation, x);
-    }
+    r.wrap.deviation = farthest_sample(wrap.V, wrap.F, TriangleBvh(r.input.V, r.input.F),
+                                       std::max(2e-3 * diag, std::sqrt(area(wrap) / 2e5)));
     r.wrap.used = true;
     r.wrap.alpha = wo.alpha;
     r.wrap.offset = wo.offset;
     r.wrap.faces = static_cast<int>(wrap.F.rows());
     Eigen::VectorXi comp;
     const int n = face_components(wrap.F, comp);
-    std::vector<std::vector<int>> faces(static_cast<size_t>(n));
-    for (Eigen::Index f = 0; f < wrap.F.rows(); ++f) faces[static_cast<size_t>(comp(f))].push_back(static_cast<int>(f));
+    const std::vector<std::vector<int>> faces = faces_by_component(comp, n);
     std::vector<Part> parts(static_cast<size_t>(n));
     for (int c = 0; c < n; ++c) {
       Part& p = parts[static_cast<size_t>(c)];
@@ -561,11 +571,9 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     }
     spdlog::debug("alpha wrap: alpha {:.3g}, offset {:.3g}: {} faces, {} components, {:.3g} from the input", wo.alpha * diag,
                   wo.offset * diag, wrap.F.rows(), n, r.wrap.deviation);
-    EnvelopeOptions e;
-    const double eopt_inside = opt.inner_deviation * opt.max_deviation * diag;
-    e.max_outside = std::max(0.25 * opt.max_deviation * diag, opt.max_deviation * diag - r.wrap.deviation);
-    e.max_inside = eopt_inside;  // not widened by the offset: the wrap's faces cut chords through
-                                 // the offset band, down to the input itself at convex bulges
+    EnvelopeOptions e = eopt;  // max_inside not widened by the offset: the wrap's faces cut chords
+                               // through the offset band, down to the input itself at convex bulges
+    e.max_outside = std::max(0.25 * eopt.max_outside, eopt.max_outside - r.wrap.deviation);
     r.method = "alpha_wrap";
     r.fallback_because = why;
     return boundary_route(parts, e, true, [&](const std::string& w) { return shells_route(why + "; on its alpha wrap, " + w); });
@@ -580,9 +588,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   std::vector<Part> parts;
   int unusable = 0;  // components that are not parts (then: the fallback)
   {
-    std::vector<std::vector<int>> faces(static_cast<size_t>(components));
-    for (Eigen::Index f = 0; f < r.input.F.rows(); ++f)
-      faces[static_cast<size_t>(component_of(f))].push_back(static_cast<int>(f));
+    const std::vector<std::vector<int>> faces = faces_by_component(component_of, components);
     std::vector<Part> component(static_cast<size_t>(components));
     std::vector<char> usable(static_cast<size_t>(components), 0);
     tbb::parallel_for(0, components, [&](int c) {
@@ -612,9 +618,6 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     return opt.wrap ? wrap_route(why) : shells_route(why);
   }
   if (parts.empty()) throw InputError("the surface encloses no volume (winding number above 1/2 nowhere)");
-  EnvelopeOptions eopt;
-  eopt.max_outside = opt.max_deviation * diag;
-  eopt.max_inside = opt.inner_deviation * opt.max_deviation * diag;
   const std::function<MeshResult(const std::string&)> fallback =
       opt.wrap ? std::function<MeshResult(const std::string&)>(wrap_route) : shells_route;
   return boundary_route(parts, eopt, false, fallback);
