@@ -1,5 +1,5 @@
 // `squeeze render SCENE TRAJECTORY_DIR -o OUT [--width W --height H --frames A-B --coarse
-//  --export pc2,obj,ply,vtu --gl osmesa|egl]`: offscreen frames of the deformed high-resolution
+//  --export pc2,obj,ply,vtu,mdd,glb --camera PRESET --video F.mp4 --gl osmesa|egl]`: offscreen frames of the deformed high-resolution
 // meshes, the volume plot and exports (docs/render.md).
 
 #include <cstdio>
@@ -9,13 +9,14 @@
 #include "squeeze/common/progress.h"
 #include "squeeze/render/export_formats.h"
 #include "squeeze/render/render.h"
+#include "squeeze/render/settings.h"
 
 namespace squeeze::cli {
 
 namespace {
 
 struct RenderArgs {
-  std::string scene, trajectory, output, frames, exports, gl = "osmesa";
+  std::string scene, trajectory, output, frames, exports, gl = "osmesa", camera, video;
   int width = 0, height = 0, samples = 4;
   bool coarse = false, no_plots = false, no_png = false;
   CLI::Option *width_opt = nullptr, *height_opt = nullptr;
@@ -30,7 +31,8 @@ Runner add_render_command(CLI::App& app, const Global& global) {
       "Render a trajectory offscreen (OSMesa or EGL, no display or GPU needed): every frame FFD-replayed onto\n"
       "the objects' high-resolution surfaces, as OUT/frame_00000.png ...; the volume change of every\n"
       "deformable object along the path as OUT/volume.png and OUT/volume.svg; optional exports for\n"
-      "Blender (.pc2 point caches), other renderers (per-frame OBJ/PLY) and ParaView (.vtu + .pvd).\n"
+      "Blender (.pc2/.mdd point caches, a glTF animation), other renderers (per-frame OBJ/PLY) and ParaView\n"
+      "(.vtu + .pvd); an MP4 video with --video.\n"
       "Example: squeeze render scenes/bunny.json out/bunny -o out/bunny/frames");
   cmd->add_option("SCENE", args->scene, "Scene file (JSON) the trajectory was made from")->required();
   cmd->add_option("TRAJECTORY_DIR", args->trajectory,
@@ -50,6 +52,11 @@ Runner add_render_command(CLI::App& app, const Global& global) {
       ->capture_default_str();
   cmd->add_flag("--no-plots", args->no_plots, "Do not write volume.png / volume.svg");
   cmd->add_flag("--no-png", args->no_png, "Do not write frame PNGs (exports and plots only)");
+  cmd->add_option("--camera", args->camera,
+                  "Camera preset, replacing the scene's camera: " + render::camera_view_names() +
+                      " (fitted to the scene preset's `fit` objects, else every object, over the whole path)");
+  cmd->add_option("--video", args->video, "Also write the frames as an H.264 MP4 video at the frames' size and fps, e.g. "
+                                          "--video out.mp4");
 
   return [args, &global]() -> int {
     const RenderArgs& a = *args;
@@ -67,6 +74,8 @@ Runner add_render_command(CLI::App& app, const Global& global) {
     if (a.samples < 1 || a.samples > 64) throw InputError("--samples " + std::to_string(a.samples) + ": must be in [1, 64]");
     o.samples = a.samples;
     render::parse_exports(a.exports, o);
+    if (!a.camera.empty()) o.camera = a.camera;
+    o.video = a.video;
     Progress progress(!global.quiet);
     o.on_frame = [&progress](const render::FrameProgress& p) {
       if (p.done == 1) progress.stage("rendering frames", p.total);
@@ -77,7 +86,8 @@ Runner add_render_command(CLI::App& app, const Global& global) {
     if (!global.quiet)
       std::fprintf(stderr, "squeeze: %s: %d of %d frames at %dx%d (%d samples, %.1f frames/s), wrote %s\n",
                    a.scene.c_str(), s.rendered, s.total_frames, s.width, s.height, s.samples,
-                   s.frame_seconds > 0 ? s.rendered / s.frame_seconds : 0.0, a.output.c_str());
+                   s.frame_seconds > 0 ? s.rendered / s.frame_seconds : 0.0,
+                   (a.output + (s.video.empty() ? "" : " and " + s.video)).c_str());
     return kExitOk;
   };
 }

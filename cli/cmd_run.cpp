@@ -29,11 +29,11 @@ namespace fs = std::filesystem;
 namespace {
 
 struct RunArgs {
-  std::string scene, output, exports = "pc2,vtu", gl = "osmesa", integrator;
+  std::string scene, output, exports = "pc2,vtu", gl = "osmesa", integrator, camera, video;
   long long seed = -1, iterations = -1;
   double time_limit = 0, fps = 0;
   int width = 0, height = 0;
-  bool no_render = false;
+  bool no_render = false, no_video = false;
 };
 
 using clock_type = std::chrono::steady_clock;
@@ -48,7 +48,8 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       "The whole pipeline on a scene: mesh every object (cached), plan the robot's motion to the goal,\n"
       "replay the plan, FFD the full-resolution surfaces onto the deformed coarse meshes and render\n"
       "them, plot the volume change, export for other tools. Writes OUT/plan.json, OUT/metrics.csv,\n"
-      "OUT/trajectory/, OUT/frames/frame_*.png, OUT/volume.png (+.svg), OUT/export/, OUT/summary.json.\n"
+      "OUT/trajectory/, OUT/frames/frame_*.png, OUT/video.mp4, OUT/volume.png (+.svg), OUT/export/,\n"
+      "OUT/summary.json.\n"
       "Exit 0 when solved, 3 when not (the closest approximate path is still replayed and rendered).\n"
       "Example: squeeze run scenes/barriers1.json -o out/barriers1 --seed 2");
   cmd->add_option("SCENE", args->scene, "Scene file (JSON) with a robot and a goal")->required();
@@ -64,6 +65,12 @@ Runner add_run_command(CLI::App& app, const Global& global) {
   cmd->add_option("--export", args->exports, render::export_option_help())->capture_default_str();
   cmd->add_option("--gl", args->gl, "OpenGL context: osmesa or egl")->capture_default_str();
   cmd->add_flag("--no-render", args->no_render, "Stop after the replay (no frames, plots or exports)");
+  cmd->add_option("--camera", args->camera,
+                  "Camera preset, replacing the scene's camera: " + render::camera_view_names() +
+                      " (fitted to the scene preset's `fit` objects, else every object, over the whole path)");
+  cmd->add_option("--video", args->video,
+                  "H.264 MP4 of the frames (default: OUT/video.mp4 when this FFmpeg has an H.264 encoder)");
+  cmd->add_flag("--no-video", args->no_video, "Do not write a video");
   add_integrator_option(cmd, args->integrator);
 
   return [args, &global]() -> int {
@@ -74,6 +81,14 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     render::RenderOptions ro;
     ro.gl = render::parse_gl_backend(a.gl);
     render::parse_exports(a.exports, ro);
+    if (!a.camera.empty()) {
+      if (!render::find_camera_view(a.camera))
+        throw InputError("--camera " + a.camera + ": must be one of " + render::camera_view_names());
+      ro.camera = a.camera;
+    }
+    if (!a.video.empty() && a.no_video) throw InputError("--video and --no-video: give one");
+    if (!a.video.empty() && fs::absolute(fs::path(a.video)).parent_path() != fs::absolute(fs::path(a.output)))
+      check_output_directory(a.video);  // (a video inside OUT: OUT is created later)
     Progress progress(!global.quiet);
     std::vector<std::pair<std::string, double>> seconds;
     auto t = clock_type::now();
@@ -121,6 +136,10 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       if (a.height > 0) ro.height = a.height;
       render::RenderOptions frames = ro;
       frames.output = out / "frames";
+      if (!a.no_video) {
+        frames.video = a.video.empty() ? out / "video.mp4" : fs::path(a.video);
+        frames.video_optional = a.video.empty();  // the default video: a missing encoder only warns
+      }
       frames.plots = false;
       frames.exports.clear();
       frames.on_frame = [&](const render::FrameProgress& p) {
@@ -160,6 +179,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       sum["outputs"]["frames"] = (out / "frames").string();
       sum["outputs"]["volume_plot"] = (out / "volume.png").string();
       sum["outputs"]["export"] = (out / "export").string();
+      if (!st.video.empty()) sum["outputs"]["video"] = st.video;
     }
     write_atomically(out / "summary.json", [&](const fs::path& p) {
       std::ofstream o(p);
@@ -179,8 +199,8 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       std::fprintf(stderr, "\n  wrote: %s/plan.json, metrics.csv, trajectory/ (%d frames at %.3g fps)", a.output.c_str(),
                    rep.frames, fps);
       if (!a.no_render)
-        std::fprintf(stderr, ", frames/frame_*.png (%dx%d), volume.png, volume.svg%s", st.width, st.height,
-                     !ro.exports.empty() ? ", export/" : "");
+        std::fprintf(stderr, ", frames/frame_*.png (%dx%d), volume.png, volume.svg%s%s", st.width, st.height,
+                     !ro.exports.empty() ? ", export/" : "", st.video.empty() ? "" : (", " + st.video).c_str());
       std::fprintf(stderr, ", summary.json\n");
     }
     return r.status == plan::PlanStatus::solved ? kExitOk : kExitNotSolved;

@@ -12,6 +12,7 @@ packages=(build-essential cmake ninja-build pkg-config
   libgtest-dev libgmock-dev libbenchmark-dev libnanoflann-dev
   libosmesa6-dev libegl-dev libgl-dev libpng-dev libplplot-dev libcairo2-dev
   plplot-driver-cairo libegl-mesa0 libgl1-mesa-dri
+  libtinygltf-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   tetgen)
 
 missing=()

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include "meshing_test_util.h"
 #include "squeeze/common/error.h"
@@ -22,6 +23,12 @@
 #include "squeeze/render/renderer.h"
 #include "squeeze/render/settings.h"
 #include "squeeze/render/trajectory.h"
+#include "squeeze/render/video.h"
+
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#include <tiny_gltf.h>
 
 namespace {
 using namespace sqt;
@@ -224,17 +231,31 @@ TEST(RenderParse, RenderBlockValidation) {
   EXPECT_NE(error_of([&] { parse(R"({"camera": {"target": [0,0,0]}})"); }).find("render.camera.eye: missing"),
             std::string::npos);
   // Camera presets (issue 18): a named side and the objects to frame.
-  const RenderSettings p = parse(R"({"camera": {"preset": "front", "frame": ["heart", "liver"], "fov_deg": 30}})");
+  const RenderSettings p = parse(R"({"camera": {"preset": "front", "fit": ["heart", "liver"], "fov_deg": 30}})");
   EXPECT_FALSE(p.camera);
   ASSERT_TRUE(p.camera_preset);
   EXPECT_EQ(p.camera_preset->view, "front");
-  EXPECT_EQ(p.camera_preset->frame, (std::vector<std::string>{"heart", "liver"}));
+  EXPECT_EQ(p.camera_preset->fit, (std::vector<std::string>{"heart", "liver"}));
+  // "frame" is the former name of "fit", "three_quarter" of "oblique"; both still read.
+  const RenderSettings old = parse(R"({"camera": {"preset": "three_quarter", "frame": ["heart"]}})");
+  EXPECT_EQ(old.camera_preset->fit, (std::vector<std::string>{"heart"}));
+  EXPECT_EQ(*find_camera_view("three_quarter"), *find_camera_view("oblique"));
+  EXPECT_EQ(camera_view_names(), "oblique, front, back, left, right, top");
+  for (const char* v : {"oblique", "front", "back", "left", "right", "top"})
+    EXPECT_EQ(parse(std::string(R"({"camera": {"preset": ")") + v + "\"}}").camera_preset->view, v);
+  EXPECT_EQ(error_of([&] { parse(R"({"camera": {"preset": "side"}})"); }),
+            "scene.json: render.camera.preset: must be one of oblique, front, back, left, right, top, got \"side\"");
+  EXPECT_NE(error_of([&] { parse(R"({"camera": {"preset": "top", "fit": ["a"], "frame": ["b"]}})"); })
+                .find("render.camera.frame: give \"fit\" only"),
+            std::string::npos);
   EXPECT_EQ(p.camera_preset->fov_deg, 30);
   EXPECT_NE(error_of([&] { parse(R"({"camera": {"preset": "side"}})"); }).find("render.camera.preset: must be one of"),
             std::string::npos);
   EXPECT_NE(error_of([&] { parse(R"({"camera": {"preset": "front", "eye": [1,1,1]}})"); }).find("render.camera.eye: unknown key"),
             std::string::npos);
   EXPECT_NE(error_of([&] { parse(R"({"camera": {"preset": "front", "frame": []}})"); }).find("render.camera.frame"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { parse(R"({"camera": {"preset": "front", "fit": [3]}})"); }).find("render.camera.fit[0]"),
             std::string::npos);
   // The front view looks along -z at the bounds' centre.
   const Camera c = frame_bounds(Eigen::AlignedBox3d(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1)), 1.0, 35,
@@ -631,3 +652,341 @@ TEST(RenderCli, BunnySceneFramesAndVolumePlot) {
   EXPECT_EQ(curve_colours(dir / "frames" / "volume.svg").size(), 1u);  // one deformable object
 }
 }  // namespace
+
+// --- Exports for offline rendering (issue 21) ---
+
+namespace {
+
+std::uint32_t be32(const std::string& s, size_t at) {
+  return (std::uint32_t(std::uint8_t(s[at])) << 24) | (std::uint32_t(std::uint8_t(s[at + 1])) << 16) |
+         (std::uint32_t(std::uint8_t(s[at + 2])) << 8) | std::uint32_t(std::uint8_t(s[at + 3]));
+}
+float be_float(const std::string& s, size_t at) {
+  const std::uint32_t u = be32(s, at);
+  float f;
+  std::memcpy(&f, &u, 4);
+  return f;
+}
+float le_float(const std::string& s, size_t at) {
+  float f;
+  std::memcpy(&f, s.data() + at, 4);
+  return f;
+}
+
+// The `v` lines of an OBJ, and whether every vertex is used by an `f` line.
+Eigen::MatrixX3d obj_vertices(const fs::path& obj, bool* all_used = nullptr) {
+  std::ifstream in(obj);
+  std::vector<Eigen::RowVector3d> v;
+  std::set<long> used;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream s(line);
+    std::string tag;
+    s >> tag;
+    if (tag == "v") {
+      Eigen::RowVector3d p;
+      s >> p.x() >> p.y() >> p.z();
+      v.push_back(p);
+    } else if (tag == "f") {
+      for (std::string c; s >> c;) used.insert(std::stol(c.substr(0, c.find('/'))));
+    }
+  }
+  Eigen::MatrixX3d V(static_cast<Eigen::Index>(v.size()), 3);
+  for (size_t i = 0; i < v.size(); ++i) V.row(static_cast<Eigen::Index>(i)) = v[i];
+  if (all_used) *all_used = used.size() == v.size() && (v.empty() || (*used.begin() == 1 && *used.rbegin() == long(v.size())));
+  return V;
+}
+
+}  // namespace
+
+// A box whose scene mesh is a tet mesh with 27 interior nodes (cube.mesh, 5×5×5 nodes) and a
+// sphere bound by FFD, both deformable: every per-vertex export (rest OBJ, .pc2, .mdd) holds exactly
+// the rendered surface's vertices — the box's 98 boundary nodes, each used by a face, so Blender's
+// OBJ importer keeps all of them — in the rest OBJ's order, and every frame of the caches equals
+// the frame's OBJ export (squeeze's own surface) within float precision.
+TEST_F(RenderTest, PointCachesHoldExactlyTheSurfaceVerticesInTheRestObjOrder) {
+  const fs::path sc = dir_->path() / "deformable_box.json";
+  std::ofstream(sc) << R"({"floor": 0.0, "objects": [
+      {"name": "ball", "mesh": "sphere.off", "tets": 60, "role": "robot",
+       "transform": {"scale": 0.1, "translate": [0, 0.35, 0]}},
+      {"name": "box", "mesh": "cube.mesh", "transform": {"scale": [0.3, 0.1, 0.3], "translate": [0.1, 0.05, 0]}}]})";
+  const fs::path traj = write_trajectory(sc, dir_->path() / "sim", 11, 10.0, squash);
+  RenderOptions o = options(sc, traj, "out");
+  o.exports = {"pc2", "mdd", "obj"};
+  o.png = false;
+  o.plots = false;
+  o.frames = std::make_pair(3, 9);
+  render_trajectory(o);
+  const fs::path ex = o.output / "export";
+  for (const std::string name : {"ball", "box"}) {
+    bool all_used = false;
+    const Eigen::MatrixX3d rest = obj_vertices(ex / (name + ".obj"), &all_used);
+    EXPECT_TRUE(all_used) << name << ": a vertex of the rest OBJ is used by no face";
+    if (name == "box") EXPECT_EQ(rest.rows(), 98) << "the 5×5×5 box has 98 boundary nodes";
+    const std::string pc2 = read_text(ex / (name + ".pc2")), mdd = read_text(ex / (name + ".mdd"));
+    int32_t points = 0, samples = 0;
+    float start = 0;
+    std::memcpy(&points, pc2.data() + 16, 4);
+    std::memcpy(&start, pc2.data() + 20, 4);
+    std::memcpy(&samples, pc2.data() + 28, 4);
+    ASSERT_EQ(points, rest.rows()) << name;
+    EXPECT_EQ(samples, 7);
+    EXPECT_EQ(start, 3.0f);
+    // MDD: big-endian counts, then each sample's time (s), then the same points.
+    ASSERT_EQ(be32(mdd, 0), 7u);
+    ASSERT_EQ(be32(mdd, 4), std::uint32_t(points));
+    ASSERT_EQ(mdd.size(), 8u + 7 * 4 + size_t(points) * 12 * 7);
+    for (int i = 0; i < 7; ++i) EXPECT_FLOAT_EQ(be_float(mdd, 8 + 4 * i), (3 + i) / 10.0f);
+    for (int k = 3; k <= 9; ++k) {
+      const Eigen::MatrixX3d want = obj_vertices(ex / "obj" / frame_file_name(name + "_", k, ".obj"));
+      ASSERT_EQ(want.rows(), points);
+      double err_pc2 = 0, err_mdd = 0;
+      for (Eigen::Index v = 0; v < points; ++v)
+        for (int c = 0; c < 3; ++c) {
+          const size_t at = (size_t(k - 3) * points + v) * 12 + c * 4;
+          err_pc2 = std::max(err_pc2, std::abs(le_float(pc2, 32 + at) - want(v, c)));
+          err_mdd = std::max(err_mdd, std::abs(be_float(mdd, 8 + 28 + at) - want(v, c)));
+        }
+      EXPECT_LT(err_pc2, 1e-6) << name << " frame " << k;
+      EXPECT_LT(err_mdd, 1e-6) << name << " frame " << k;
+    }
+  }
+  // The box moves (it is deformable): its last frame is not its first.
+  EXPECT_GT((obj_vertices(ex / "obj" / "box_00009.obj") - obj_vertices(ex / "obj" / "box_00003.obj")).cwiseAbs().maxCoeff(),
+            0.05);
+}
+
+namespace {
+
+// The glTF file loaded with tinygltf's own reader (a second implementation of the format).
+tinygltf::Model load_glb(const fs::path& path) {
+  tinygltf::Model m;
+  tinygltf::TinyGLTF loader;
+  std::string err, warn;
+  EXPECT_TRUE(loader.LoadBinaryFromFile(&m, &err, &warn, path.string())) << err;
+  return m;
+}
+
+// Accessor `a` of `m` as floats (tightly packed float accessors only, as squeeze writes them).
+std::vector<float> floats(const tinygltf::Model& m, int a) {
+  const tinygltf::Accessor& acc = m.accessors[static_cast<size_t>(a)];
+  const tinygltf::BufferView& view = m.bufferViews[static_cast<size_t>(acc.bufferView)];
+  EXPECT_EQ(acc.componentType, TINYGLTF_COMPONENT_TYPE_FLOAT);
+  const size_t n = acc.count * static_cast<size_t>(tinygltf::GetNumComponentsInType(static_cast<uint32_t>(acc.type)));
+  std::vector<float> out(n);
+  std::memcpy(out.data(), m.buffers[static_cast<size_t>(view.buffer)].data.data() + view.byteOffset + acc.byteOffset, n * 4);
+  return out;
+}
+
+std::map<std::string, Eigen::Vector3d> material_colours(const tinygltf::Model& m) {
+  std::map<std::string, Eigen::Vector3d> c;
+  for (const tinygltf::Mesh& mesh : m.meshes) {
+    const auto& f = m.materials[static_cast<size_t>(mesh.primitives[0].material)].pbrMetallicRoughness.baseColorFactor;
+    c[mesh.name] = Eigen::Vector3d(f[0], f[1], f[2]);
+  }
+  return c;
+}
+
+}  // namespace
+
+// export/animation.glb: a node and mesh per object whose POSITION is the rest OBJ's vertices and
+// whose morph target k moves them to frame k (base + target = the frame's OBJ export), one
+// animation of the morph weights, one-hot at t_k = k / fps, LINEAR; materials in the render colours.
+TEST_F(RenderTest, GlbAnimationReproducesEveryFrame) {
+  const fs::path sc = scene();
+  const fs::path traj = write_trajectory(sc, dir_->path() / "sim", 11, 10.0, squash);
+  RenderOptions o = options(sc, traj, "out");
+  o.exports = {"glb", "obj", "pc2"};
+  o.png = false;
+  o.plots = false;
+  o.frames = std::make_pair(2, 10);
+  render_trajectory(o);
+  const fs::path ex = o.output / "export";
+  const tinygltf::Model m = load_glb(ex / "animation.glb");
+  ASSERT_EQ(m.meshes.size(), 2u);
+  ASSERT_EQ(m.nodes.size(), 2u);
+  ASSERT_EQ(m.animations.size(), 1u);
+  const tinygltf::Animation& anim = m.animations[0];
+  ASSERT_EQ(anim.channels.size(), 2u);
+  for (const tinygltf::AnimationChannel& ch : anim.channels) {
+    EXPECT_EQ(ch.target_path, "weights");
+    const tinygltf::AnimationSampler& s = anim.samplers[static_cast<size_t>(ch.sampler)];
+    EXPECT_EQ(s.interpolation, "LINEAR");
+    const std::vector<float> t = floats(m, s.input), w = floats(m, s.output);
+    ASSERT_EQ(t.size(), 9u);
+    ASSERT_EQ(w.size(), 81u);
+    for (int i = 0; i < 9; ++i) {
+      EXPECT_FLOAT_EQ(t[size_t(i)], (2 + i) / 10.0f);
+      for (int j = 0; j < 9; ++j) EXPECT_EQ(w[size_t(i * 9 + j)], i == j ? 1.0f : 0.0f);
+    }
+  }
+  for (size_t n = 0; n < m.nodes.size(); ++n) {
+    const tinygltf::Mesh& mesh = m.meshes[static_cast<size_t>(m.nodes[n].mesh)];
+    EXPECT_EQ(m.nodes[n].name, mesh.name);
+    const tinygltf::Primitive& prim = mesh.primitives.at(0);
+    const std::vector<float> base = floats(m, prim.attributes.at("POSITION"));
+    const Eigen::MatrixX3d rest = obj_vertices(ex / (mesh.name + ".obj"));
+    ASSERT_EQ(base.size(), size_t(rest.rows()) * 3) << mesh.name;
+    ASSERT_EQ(prim.targets.size(), 9u);
+    for (int k = 2; k <= 10; ++k) {
+      const std::vector<float> d = floats(m, prim.targets[size_t(k - 2)].at("POSITION"));
+      const Eigen::MatrixX3d want = obj_vertices(ex / "obj" / frame_file_name(mesh.name + "_", k, ".obj"));
+      double err = 0;
+      for (Eigen::Index v = 0; v < want.rows(); ++v)
+        for (int c = 0; c < 3; ++c) err = std::max(err, std::abs(base[size_t(v * 3 + c)] + d[size_t(v * 3 + c)] - want(v, c)));
+      EXPECT_LT(err, 1e-6) << mesh.name << " frame " << k;
+    }
+  }
+}
+
+// Colours: an object's `color` (a name or [r, g, b]) wins; without one, an object keeps its default
+// colour whatever the other objects are and in whatever order they come (stable per name).
+TEST_F(RenderTest, ColoursAreTheSceneKeyElseStablePerObjectName) {
+  const auto colours_of = [&](const std::string& objects, const std::string& tag) {
+    const fs::path sc = dir_->path() / (tag + ".json");
+    std::ofstream(sc) << R"({"floor": 0.0, "objects": [)" + objects + "]}";
+    const fs::path traj = write_trajectory(sc, dir_->path() / ("sim_" + tag), 2, 10.0, squash);
+    RenderOptions o = options(sc, traj, "out_" + tag);
+    o.exports = {"glb"};
+    o.png = false;
+    o.plots = false;
+    render_trajectory(o);
+    return material_colours(load_glb(o.output / "export" / "animation.glb"));
+  };
+  const std::string ball = R"({"name": "ball", "mesh": "sphere.off", "tets": 60, "transform": {"scale": 0.1, "translate": [0, 0.35, 0]}})";
+  const std::string box = R"({"name": "box", "mesh": "cube.mesh", "kind": "rigid", "transform": {"scale": 0.2, "translate": [0.5, 0.1, 0]}})";
+  const std::string ball2 = R"({"name": "other", "mesh": "sphere.off", "tets": 60, "transform": {"scale": 0.1, "translate": [-0.5, 0.35, 0]}})";
+  const auto a = colours_of(ball + "," + box, "a");
+  const auto b = colours_of(ball2 + "," + box + "," + ball, "b");  // another object first, the order changed
+  EXPECT_EQ(a.at("ball"), b.at("ball"));
+  EXPECT_EQ(a.at("box"), b.at("box"));
+  EXPECT_NE(a.at("ball"), a.at("box"));  // deformable and rigid look different
+  const std::string red_ball = R"({"name": "ball", "color": "red", "mesh": "sphere.off", "tets": 60,
+      "transform": {"scale": 0.1, "translate": [0, 0.35, 0]}})";
+  const std::string teal_box = R"({"name": "box", "color": [0.1, 0.5, 0.5], "mesh": "cube.mesh", "kind": "rigid",
+      "transform": {"scale": 0.2, "translate": [0.5, 0.1, 0]}})";
+  const auto c = colours_of(red_ball + "," + teal_box, "c");
+  EXPECT_LT((c.at("ball") - Eigen::Vector3d(1, 0, 0)).norm(), 1e-6);
+  EXPECT_LT((c.at("box") - Eigen::Vector3d(0.1, 0.5, 0.5)).norm(), 1e-6);
+}
+
+TEST(SceneColor, NamesTriplesAndErrors) {
+  TempDir dir("color");
+  fs::copy_file(data("sphere.off"), dir.path() / "s.off");
+  const auto load = [&](const std::string& color) {
+    const fs::path p = dir.path() / "c.json";
+    std::ofstream(p) << R"({"objects": [{"name": "a", "mesh": "s.off", "color": )" + color + "}]}";
+    return fem::load_scene(p);
+  };
+  EXPECT_EQ(*load(R"("Blue")").objects[0].color, Eigen::Vector3d(0, 0, 1));
+  EXPECT_EQ(*load("[0.25, 0.5, 1]").objects[0].color, Eigen::Vector3d(0.25, 0.5, 1));
+  EXPECT_FALSE(fem::load_scene([&] {
+                 const fs::path p = dir.path() / "n.json";
+                 std::ofstream(p) << R"({"objects": [{"name": "a", "mesh": "s.off"}]})";
+                 return p;
+               }())
+                   .objects[0]
+                   .color);
+  EXPECT_NE(error_of([&] { load(R"("blurple")"); }).find("objects[0].color: unknown colour \"blurple\""), std::string::npos);
+  EXPECT_NE(error_of([&] { load("[1, 2, 0]"); }).find("objects[0].color[1]: must be in [0, 1], got 2"), std::string::npos);
+  EXPECT_NE(error_of([&] { load("[1, 0]"); }).find("objects[0].color"), std::string::npos);
+  EXPECT_NE(error_of([&] { load("7"); }).find("objects[0].color: must be [r, g, b]"), std::string::npos);
+}
+
+namespace {
+
+// Frame count (the video track's sample count, box `stsz`) and size (its `avc1` sample entry) of an
+// MP4, read from the file's boxes (ISO/IEC 14496-12 §8.7.3, 14496-15 §5.4.2).
+struct Mp4Info {
+  long frames = -1;
+  int width = 0, height = 0;
+};
+Mp4Info mp4_info(const fs::path& path) {
+  const std::string s = read_text(path);
+  Mp4Info info;
+  const size_t stsz = s.find("stsz"), avc1 = s.find("avc1", s.find("stsd"));  // the sample entry, not a brand
+  if (stsz != std::string::npos) info.frames = long(be32(s, stsz + 12));
+  if (avc1 != std::string::npos) {
+    info.width = (std::uint8_t(s[avc1 + 28]) << 8) | std::uint8_t(s[avc1 + 29]);
+    info.height = (std::uint8_t(s[avc1 + 30]) << 8) | std::uint8_t(s[avc1 + 31]);
+  }
+  return info;
+}
+
+}  // namespace
+
+TEST(RenderVideo, WritesEveryFrameAtTheFramesSize) {
+  if (!video_available()) GTEST_SKIP() << "no H.264 encoder in this FFmpeg";
+  TempDir dir("video");
+  Image im;
+  im.width = 96;
+  im.height = 64;
+  {
+    VideoWriter v(dir.path() / "a.mp4", 96, 64, 30.0);
+    for (int k = 0; k < 17; ++k) {
+      im.pixels.assign(size_t(96) * 64 * 4, 255);
+      for (int y = 0; y < 64; ++y) im.pixels[(size_t(y) * 96 + (k * 5) % 96) * 4] = 0;  // a moving line
+      v.add(im);
+    }
+    EXPECT_FALSE(fs::exists(dir.path() / "a.mp4"));  // only under a temporary name until finish()
+    v.finish();
+    EXPECT_EQ(v.frames(), 17);
+  }
+  const Mp4Info a = mp4_info(dir.path() / "a.mp4");
+  EXPECT_EQ(a.frames, 17);
+  EXPECT_EQ(a.width, 96);
+  EXPECT_EQ(a.height, 64);
+  // An unfinished video leaves nothing; a wrong-size frame is an error naming the file.
+  {
+    VideoWriter v(dir.path() / "b.mp4", 96, 64, 24.0);
+    v.add(im);
+    Image small;
+    small.width = 32;
+    small.height = 32;
+    small.pixels.assign(size_t(32) * 32 * 4, 0);
+    EXPECT_NE(error_of([&] { v.add(small); }).find("b.mp4: a frame of 32x32 in a 96x64 video"), std::string::npos);
+  }
+  for (const auto& e : fs::directory_iterator(dir.path())) EXPECT_EQ(e.path().filename(), "a.mp4");
+}
+
+// render_trajectory with a video: as many video frames as PNG frames, at their size; --camera
+// presets change the view, and an unknown one is an error naming the option.
+TEST_F(RenderTest, VideoMatchesThePngFramesAndCameraPresetsApply) {
+  if (!video_available()) GTEST_SKIP() << "no H.264 encoder in this FFmpeg";
+  const fs::path sc = scene();
+  const fs::path traj = write_trajectory(sc, dir_->path() / "sim", 11, 10.0, squash);
+  RenderOptions o = options(sc, traj, "out");
+  o.plots = false;
+  o.video = dir_->path() / "out.mp4";
+  const RenderStats st = render_trajectory(o);
+  EXPECT_EQ(st.video, o.video.string());
+  const Mp4Info info = mp4_info(o.video);
+  EXPECT_EQ(info.frames, long(pngs_in(o.output).size()));
+  EXPECT_EQ(info.width, 320);
+  EXPECT_EQ(info.height, 180);
+
+  RenderOptions top = options(sc, traj, "top");
+  top.plots = false;
+  top.frames = std::make_pair(0, 0);
+  top.camera = "top";
+  render_trajectory(top);
+  EXPECT_GT(changed_fraction(read_png(o.output / "frame_00000.png"), read_png(top.output / "frame_00000.png")), 0.05);
+  top.camera = "sideways";
+  EXPECT_EQ(error_of([&] { render_trajectory(top); }),
+            "--camera sideways: must be one of oblique, front, back, left, right, top");
+}
+
+// Medit files carry 17-digit doubles, so they say MeshVersionFormatted 2 (double precision):
+// meshio and Gmsh then read them as float64 (version 1 means single precision). Checked with
+// meshio 5.0 (Debian python3-meshio): points float64.
+TEST(MeditExport, SaysDoublePrecisionAndRoundTripsExactly) {
+  TempDir dir("medit");
+  squeeze::meshing::TetMesh m;
+  m.V.resize(4, 3);
+  m.V << 0.1, 0.2, 0.30000000000000004, 1.0 / 3.0, 0, 0, 0, 1, 0, 0, 0, 1;
+  m.T.resize(1, 4);
+  m.T << 0, 1, 2, 3;
+  squeeze::meshing::save_tet_mesh(dir.path() / "a.mesh", m);
+  const std::string text = read_text(dir.path() / "a.mesh");
+  EXPECT_EQ(text.rfind("MeshVersionFormatted 2\n", 0), 0u) << text.substr(0, 40);
+  EXPECT_EQ(squeeze::meshing::load_tet_mesh(dir.path() / "a.mesh").V, m.V);  // bit for bit
+}

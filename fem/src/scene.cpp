@@ -34,7 +34,46 @@ using Checker = JsonChecker;
 std::string type_name(const json& j) { return json_type_name(j); }
 std::string num(double x) { return format_number(x); }
 
+
+const std::vector<std::pair<std::string, Eigen::Vector3d>>& scene_color_names() {
+  static const std::vector<std::pair<std::string, Eigen::Vector3d>> names = [] {
+    const std::pair<const char*, int> table[] = {
+        {"black", 0x000000},  {"white", 0xffffff},  {"gray", 0x808080},   {"grey", 0x808080},
+        {"silver", 0xc0c0c0}, {"red", 0xff0000},    {"maroon", 0x800000}, {"orange", 0xffa500},
+        {"yellow", 0xffff00}, {"olive", 0x808000},  {"lime", 0x00ff00},   {"green", 0x008000},
+        {"teal", 0x008080},   {"cyan", 0x00ffff},   {"blue", 0x0000ff},   {"navy", 0x000080},
+        {"purple", 0x800080}, {"magenta", 0xff00ff}, {"pink", 0xffc0cb},  {"brown", 0xa52a2a},
+        {"salmon", 0xfa8072}, {"coral", 0xff7f50},  {"gold", 0xffd700},   {"beige", 0xf5f5dc},
+        {"tan", 0xd2b48c},    {"crimson", 0xdc143c}, {"indigo", 0x4b0082}, {"violet", 0xee82ee}};
+    std::vector<std::pair<std::string, Eigen::Vector3d>> v;
+    for (const auto& [n, hex] : table)
+      v.emplace_back(n, Eigen::Vector3d((hex >> 16 & 0xff) / 255.0, (hex >> 8 & 0xff) / 255.0, (hex & 0xff) / 255.0));
+    return v;
+  }();
+  return names;
+}
+
 namespace {
+
+// `color`: [r, g, b] with each in [0, 1], or a name of scene_color_names(). Throws InputError.
+Eigen::Vector3d parse_color(const JsonChecker& c, const nlohmann::json& j, const std::string& path) {
+  if (j.is_string()) {
+    std::string name = c.string(j, path);
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char ch) { return std::tolower(ch); });
+    std::string list;
+    for (const auto& [n, rgb] : scene_color_names()) {
+      if (n == name) return rgb;
+      list += (list.empty() ? "" : ", ") + n;
+    }
+    c.fail(path, "unknown colour \"" + name + "\" (a [r, g, b] triple in [0, 1], or one of: " + list + ")");
+  }
+  if (!j.is_array()) c.fail(path, "must be [r, g, b] in [0, 1] or a colour name");
+  const Eigen::Vector3d rgb = c.vec3(j, path);
+  for (int k = 0; k < 3; ++k)
+    if (!(rgb(k) >= 0 && rgb(k) <= 1))
+      c.fail(path + "[" + std::to_string(k) + "]", "must be in [0, 1], got " + format_number(rgb(k)));
+  return rgb;
+}
 
 // Two independent 64-bit hashes (FNV-1a and a multiply-xorshift mix) = 128 bits of cache key.
 struct Hash128 {
@@ -178,7 +217,8 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
   for (size_t i = 0; i < objs.size(); ++i) {
     const std::string p = "objects[" + std::to_string(i) + "]";
     const json& o = objs[i];
-    c.keys(o, p, {"name", "mesh", "role", "kind", "tets", "transform", "material", "gravity", "velocity", "pinned"});
+    c.keys(o, p, {"name", "mesh", "role", "kind", "tets", "transform", "material", "gravity", "velocity", "pinned",
+                  "color"});
     SceneObject ob;
     if (!o.contains("name")) c.fail(p + ".name", "missing (required)");
     ob.name = c.string(o["name"], p + ".name");
@@ -255,6 +295,7 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
       }
     }
     if (o.contains("gravity")) ob.gravity = c.boolean(o["gravity"], p + ".gravity");
+    if (o.contains("color")) ob.color = parse_color(c, o["color"], p + ".color");
     if (o.contains("velocity")) ob.velocity = c.vec3(o["velocity"], p + ".velocity");
     if (o.contains("pinned")) {
       const json& pins = o["pinned"];

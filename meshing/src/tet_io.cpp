@@ -39,7 +39,7 @@ void finish(std::ofstream& out, const fs::path& target) {
 
 void write_medit(const fs::path& tmp, const fs::path& target, const TetMesh& m) {
   auto out = open_out(tmp, target);
-  out << "MeshVersionFormatted 1\nDimension 3\nVertices\n" << m.V.rows() << '\n';
+  out << "MeshVersionFormatted 2\nDimension 3\nVertices\n" << m.V.rows() << '\n';
   for (Eigen::Index i = 0; i < m.V.rows(); ++i)
     out << m.V(i, 0) << ' ' << m.V(i, 1) << ' ' << m.V(i, 2) << " 0\n";
   out << "Tetrahedra\n" << m.T.rows() << '\n';
@@ -473,7 +473,7 @@ void write_tetgen(const fs::path& path, const TetMesh& m) {
 const std::vector<TetFormat>& tet_formats() {
   // One line per format: extensions, short name, description, reader, writer.
   static const std::vector<TetFormat> formats{
-      {{".mesh"}, "Medit", "Medit (INRIA), ASCII, MeshVersionFormatted 1", read_medit, write_one<write_medit>},
+      {{".mesh"}, "Medit", "Medit (INRIA), ASCII, MeshVersionFormatted 2 (double precision)", read_medit, write_one<write_medit>},
       {{".msh"}, "Gmsh 2.2", "Gmsh 2.2 ASCII (element type 4 = 4-node tetrahedron)", read_gmsh, write_one<write_gmsh>},
       {{".vtk"}, "", "VTK legacy ASCII unstructured grid (cell type 10)", read_vtk, write_one<write_vtk>},
       {{".vtu"}, "", "VTK XML unstructured grid, ASCII", read_vtu, write_one<write_vtu>},

@@ -8,7 +8,7 @@ namespace squeeze::render {
 
 // The registry: one line names every export format, in the order of the help text. Each NAME is
 // defined in its exporter's source (render/src/*_exporter.cpp) as `ExportFormat NAME_export_format()`.
-#define SQUEEZE_EXPORT_FORMATS(X) X(pc2) X(obj) X(ply) X(vtu)
+#define SQUEEZE_EXPORT_FORMATS(X) X(pc2) X(obj) X(ply) X(vtu) X(mdd) X(glb)
 
 #define SQUEEZE_DECLARE_FORMAT(NAME) ExportFormat NAME##_export_format();
 SQUEEZE_EXPORT_FORMATS(SQUEEZE_DECLARE_FORMAT)

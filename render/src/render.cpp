@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <ctime>
 #include <fstream>
 #include <sstream>
@@ -26,6 +27,7 @@
 #include "squeeze/render/renderer.h"
 #include "squeeze/render/settings.h"
 #include "squeeze/render/trajectory.h"
+#include "squeeze/render/video.h"
 
 namespace squeeze::render {
 namespace fs = std::filesystem;
@@ -75,6 +77,33 @@ Eigen::MatrixX2i unique_edges(const Eigen::MatrixX3i& F) {
   return E;
 }
 
+// The vertices of [0, n) that a face of F uses, ascending.
+Eigen::VectorXi referenced_vertices(const Eigen::MatrixX3i& F, Eigen::Index n) {
+  std::vector<char> used(static_cast<size_t>(n), 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) used[static_cast<size_t>(F(f, c))] = 1;
+  std::vector<int> keep;
+  for (Eigen::Index v = 0; v < n; ++v)
+    if (used[static_cast<size_t>(v)]) keep.push_back(static_cast<int>(v));
+  return Eigen::Map<Eigen::VectorXi>(keep.data(), static_cast<Eigen::Index>(keep.size()));
+}
+
+// Removes the vertices of `s` that no face uses, keeping the order of the others (the order of the
+// file: Blender's OBJ importer drops unused vertices, so exports keep only the used ones).
+void drop_unreferenced(meshing::SurfaceMesh& s) {
+  const Eigen::VectorXi keep = referenced_vertices(s.F, s.V.rows());
+  if (keep.size() == s.V.rows()) return;
+  Eigen::VectorXi to_new = Eigen::VectorXi::Constant(s.V.rows(), -1);
+  Eigen::MatrixX3d V(keep.size(), 3);
+  for (Eigen::Index i = 0; i < keep.size(); ++i) {
+    to_new(keep(i)) = static_cast<int>(i);
+    V.row(i) = s.V.row(keep(i));
+  }
+  spdlog::debug("render: {} vertices that no face uses dropped", s.V.rows() - keep.size());
+  s.F = s.F.unaryExpr([&](int v) { return to_new(v); }).eval();
+  s.V = std::move(V);
+}
+
 // Volume of the tetrahedra T at positions X (units³).
 double mesh_volume(const Eigen::MatrixX4i& T, const Eigen::MatrixX3d& X) {
   double v = 0;
@@ -119,17 +148,27 @@ std::optional<Eigen::Vector3f> obj_material_colour(const fs::path& obj) {
   return first;
 }
 
-// Deformable objects: warm and saturated; rigid ones: neutral greys (visibly different).
-Eigen::Vector3f palette(int deformable_index) {
+// A stable index for an object name (FNV-1a): an object keeps its default colour whatever other
+// objects the scene holds, and in whatever order.
+std::uint32_t name_hash(const std::string& name) {
+  std::uint32_t h = 2166136261u;
+  for (unsigned char ch : name) h = (h ^ ch) * 16777619u;
+  return h;
+}
+
+// The default colour of an object by its name: deformable objects warm and saturated (one of
+// eight), rigid ones neutral greys (one of three shades): visibly different kinds.
+Eigen::Vector3f default_colour(const std::string& name, bool rigid) {
   static const float kColours[][3] = {{0.88f, 0.50f, 0.28f}, {0.27f, 0.56f, 0.82f}, {0.42f, 0.72f, 0.36f},
                                       {0.78f, 0.38f, 0.66f}, {0.92f, 0.76f, 0.26f}, {0.33f, 0.74f, 0.74f},
                                       {0.86f, 0.33f, 0.35f}, {0.55f, 0.45f, 0.80f}};
-  const auto& c = kColours[deformable_index % 8];
+  const std::uint32_t h = name_hash(name);
+  if (rigid) {
+    const float g = 0.58f - 0.08f * static_cast<float>(h % 3);
+    return {g, g + 0.02f, g + 0.05f};
+  }
+  const auto& c = kColours[h % 8];
   return {c[0], c[1], c[2]};
-}
-Eigen::Vector3f rigid_colour(int rigid_index) {
-  const float g = 0.58f - 0.08f * static_cast<float>(rigid_index % 3);
-  return {g, g + 0.02f, g + 0.05f};
 }
 
 struct Object {
@@ -145,6 +184,7 @@ struct Object {
   int offset = 0, vertices = 0;   // coarse vertices in a frame
   Eigen::Vector3f colour;
   int mesh_id = -1, lines_id = -1;
+  Eigen::VectorXi boundary;        // tet-mesh object: surface vertex -> coarse vertex (boundary nodes only)
   Eigen::MatrixX3i draw_F;         // faces drawn (split along creases for tet-mesh objects)
   Eigen::VectorXi draw_source;     // drawn vertex -> surface vertex (empty: the same vertices)
   Eigen::MatrixX3d surface, normals, coarse, drawn;  // per frame
@@ -197,6 +237,7 @@ struct Inputs {
   double fps = 0;             // output frames per simulated second: frame k at t = k / fps
   int total = 0;              // output frames of the whole path
   int first = 0, last = 0;    // inclusive range of output frames rendered
+  std::optional<std::string> camera;  // --camera
 };
 
 // Loads and checks the scene, the image size, the trajectory, the frame range, the output folder
@@ -219,6 +260,9 @@ Inputs check_inputs(const RenderOptions& o) {
                      " is more than 100 megapixels");
   if (o.samples < 1 || o.samples > 64) throw InputError("samples: must be in [1, 64]");
 
+  if (o.camera && !find_camera_view(*o.camera))
+    throw InputError("--camera " + *o.camera + ": must be one of " + camera_view_names());
+  in.camera = o.camera;
   in.traj = load_trajectory(o.trajectory);
   check_trajectory_matches_scene(in.traj, in.scene);
 
@@ -256,8 +300,16 @@ Object load_object(const fem::SceneObject& so, const Trajectory& traj, int i, Pr
   ob.coarse_edges = unique_edges(coarse_faces);
   ob.direct = meshing::is_tet_format(so.mesh);
   if (ob.direct) {
-    ob.rest = rest.V;
-    ob.F = coarse_faces;
+    // The surface is the boundary of the tet mesh: its nodes in ascending order (interior nodes
+    // are not part of it, so a per-vertex export holds exactly the vertices its faces use).
+    ob.boundary = referenced_vertices(coarse_faces, rest.V.rows());
+    Eigen::VectorXi to_surface = Eigen::VectorXi::Constant(rest.V.rows(), -1);
+    ob.rest.resize(ob.boundary.size(), 3);
+    for (Eigen::Index i = 0; i < ob.boundary.size(); ++i) {
+      to_surface(ob.boundary(i)) = static_cast<int>(i);
+      ob.rest.row(i) = rest.V.row(ob.boundary(i));
+    }
+    ob.F = coarse_faces.unaryExpr([&](int v) { return to_surface(v); });
   } else {
     if (progress) progress->stage("loading " + so.name);
     meshing::LoadOptions lo;
@@ -266,6 +318,7 @@ Object load_object(const fem::SceneObject& so, const Trajectory& traj, int i, Pr
     const Eigen::Affine3d A = so.transform.affine();
     for (Eigen::Index v = 0; v < s.V.rows(); ++v) s.V.row(v) = (A * Eigen::Vector3d(s.V.row(v).transpose())).transpose();
     if (A.linear().determinant() < 0) s.F.col(1).swap(s.F.col(2));  // a mirroring transform keeps outward faces
+    drop_unreferenced(s);  // vertices no face uses are not part of the surface (nor of its exports)
     ob.rest = std::move(s.V);
     ob.F = std::move(s.F);
     ob.binding = ffd::bind_surface(ob.rest, rest, ffd::BindOptions{}, progress, so.mesh.filename().string());
@@ -287,17 +340,15 @@ Object load_object(const fem::SceneObject& so, const Trajectory& traj, int i, Pr
   return ob;
 }
 
-// Every object of the scene (load_object), coloured: the MTL colour of an OBJ surface, else the
-// palette of its kind in scene order.
+// Every object of the scene (load_object), coloured: its `color` key, else the MTL colour of an
+// OBJ surface, else the default colour of its name and kind.
 std::vector<Object> load_objects(const fem::Scene& scene, const Trajectory& traj, Progress* progress) {
   std::vector<Object> objects;
-  int deformable_count = 0, rigid_count = 0;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const fem::SceneObject& so = scene.objects[i];
     Object ob = load_object(so, traj, static_cast<int>(i), progress);
     const std::optional<Eigen::Vector3f> mtl = ob.direct ? std::nullopt : obj_material_colour(so.mesh);
-    ob.colour = mtl ? *mtl : so.rigid ? rigid_colour(rigid_count) : palette(deformable_count);
-    (so.rigid ? rigid_count : deformable_count)++;
+    ob.colour = so.color ? Eigen::Vector3f(so.color->cast<float>()) : mtl ? *mtl : default_colour(so.name, so.rigid);
     objects.push_back(std::move(ob));
   }
   return objects;
@@ -356,28 +407,30 @@ void set_up_scene(Renderer& renderer, std::vector<Object>& objects, const Inputs
   renderer.set_floor(in.scene.floor);
   renderer.set_bounds(view_bounds);
   const double aspect = double(in.width) / in.height;
-  if (in.settings.camera) {
+  std::optional<CameraPreset> preset = in.settings.camera_preset;
+  if (in.camera) {  // --camera (checked by check_inputs): a preset replaces the scene's camera
+    if (!preset) preset = CameraPreset{};
+    preset->view = *in.camera;
+  }
+  if (in.settings.camera && !in.camera) {
     renderer.set_camera(*in.settings.camera);
-  } else if (const auto& p = in.settings.camera_preset) {
+  } else if (preset) {
     // The named objects' bounds over the motion (grown by 5 %), seen from the preset's side.
     Eigen::AlignedBox3d framed;
-    if (p->frame.empty()) framed = view_bounds;
-    for (const std::string& name : p->frame) {
+    if (preset->fit.empty()) framed = view_bounds;
+    for (const std::string& name : preset->fit) {
       size_t b = 0;
       while (b < objects.size() && objects[b].name != name) ++b;
       if (b == objects.size())
-        throw InputError(in.scene.file.string() + ": render.camera.frame: no object named '" + name + "'");
+        throw InputError(in.scene.file.string() + ": render.camera.fit: no object named '" + name + "'");
       framed.extend(motion.object_bounds[b]);
     }
-    if (!p->frame.empty()) {
+    if (!preset->fit.empty()) {
       const Eigen::Vector3d grow = 0.05 * framed.diagonal();
       framed.min() -= grow;
       framed.max() += grow;
     }
-    Eigen::Vector3d dir(0.55, 0.45, 1.0);
-    for (const auto& [n, d] : camera_views())
-      if (n == p->view) dir = d;
-    renderer.set_camera(frame_bounds(framed, aspect, p->fov_deg, dir));
+    renderer.set_camera(frame_bounds(framed, aspect, preset->fov_deg, *find_camera_view(preset->view)));
   } else {
     renderer.set_camera(frame_bounds(view_bounds, aspect));
   }
@@ -413,7 +466,7 @@ void begin_exports(const std::vector<std::unique_ptr<Exporter>>& exporters, cons
   if (ec) throw InputError(folder.string() + ": cannot create the directory: " + ec.message());
   ExportContext c;
   c.folder = folder;
-  for (const Object& ob : objects) c.objects.push_back(ExportObject{ob.name, ob.rest, ob.F, ob.T});
+  for (const Object& ob : objects) c.objects.push_back(ExportObject{ob.name, ob.rest, ob.F, ob.T, ob.colour, ob.rigid});
   c.first_frame = in.first;
   c.last_frame = in.last;
   c.frame_count = in.last - in.first + 1;
@@ -463,9 +516,10 @@ class StateSampler {
 void pose_objects(std::vector<Object>& objects, const Eigen::MatrixX3d& state, Renderer& renderer) {
   for (Object& ob : objects) {
     ob.coarse = state.middleRows(ob.offset, ob.vertices);
-    if (ob.direct)
-      ob.surface = ob.coarse;
-    else
+    if (ob.direct) {
+      ob.surface.resize(ob.boundary.size(), 3);
+      for (Eigen::Index i = 0; i < ob.boundary.size(); ++i) ob.surface.row(i) = ob.coarse.row(ob.boundary(i));
+    } else
       replay(ob.binding, ob.coarse, ob.surface);
     if (ob.draw_source.size()) {
       ob.drawn.resize(ob.draw_source.size(), 3);
@@ -484,7 +538,7 @@ void pose_objects(std::vector<Object>& objects, const Eigen::MatrixX3d& state, R
 // --no-png) and handed to the exporters; then the last PNG waited for and the exporters finished.
 // Sets stats.rendered and the loop's times. Throws InputError.
 void render_frames(const RenderOptions& o, const Inputs& in, std::vector<Object>& objects, Renderer& renderer,
-                   const std::vector<std::unique_ptr<Exporter>>& exporters, RenderStats& stats) {
+                   const std::vector<std::unique_ptr<Exporter>>& exporters, VideoWriter* video, RenderStats& stats) {
   const auto t1 = Clock::now();
   const std::clock_t c1 = std::clock();
   PngWriter writer(2, 1);
@@ -495,12 +549,13 @@ void render_frames(const RenderOptions& o, const Inputs& in, std::vector<Object>
   double draw_s = 0, wait_s = 0;  // drawing + read-back, waiting for the encoder
   for (int k = in.first; k <= in.last; ++k) {
     pose_objects(objects, sampler.at(k), renderer);
-    if (o.png) {
+    if (o.png || video) {
       const auto d0 = Clock::now();
       writer.recycle(image);
       renderer.draw(image);
       const auto d1 = Clock::now();
-      writer.push(o.output / frame_file_name("frame_", k, ".png"), std::move(image));
+      if (video) video->add(image);
+      if (o.png) writer.push(o.output / frame_file_name("frame_", k, ".png"), std::move(image));
       draw_s += std::chrono::duration<double>(d1 - d0).count();
       wait_s += std::chrono::duration<double>(Clock::now() - d1).count();
     }
@@ -515,6 +570,7 @@ void render_frames(const RenderOptions& o, const Inputs& in, std::vector<Object>
   }
   writer.finish();
   for (const auto& e : exporters) e->finish();
+  if (video) video->finish();
   stats.frame_seconds = std::chrono::duration<double>(Clock::now() - t1).count();
   stats.frame_cpu_seconds = double(std::clock() - c1) / CLOCKS_PER_SEC;
   spdlog::debug("render: {} frames in {:.3f} s: drawing and read-back {:.3f} s, waiting for the PNG encoder {:.3f} s",
@@ -571,7 +627,17 @@ RenderStats render_trajectory(const RenderOptions& o, std::vector<std::unique_pt
   stats.fps = in.fps;
   for (const Object& ob : objects) stats.surface_triangles += ob.F.rows();
   stats.setup_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-  render_frames(o, in, objects, renderer, exporters, stats);
+  std::unique_ptr<VideoWriter> video;
+  if (!o.video.empty()) {
+    std::string why;
+    if (video_available(&why) || !o.video_optional) {
+      video = std::make_unique<VideoWriter>(o.video, in.width, in.height, in.fps);
+      stats.video = o.video.string();
+    } else {
+      spdlog::warn("{}: not written: {}", o.video.string(), why);
+    }
+  }
+  render_frames(o, in, objects, renderer, exporters, video.get(), stats);
   if (o.plots) write_volume_plots(o.output, in, objects, motion);
   return stats;
 }

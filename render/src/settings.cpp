@@ -8,10 +8,24 @@ namespace squeeze::render {
 
 const std::vector<std::pair<std::string, Eigen::Vector3d>>& camera_views() {
   static const std::vector<std::pair<std::string, Eigen::Vector3d>> views = {
-      {"three_quarter", Eigen::Vector3d(0.55, 0.45, 1.0)}, {"front", Eigen::Vector3d(0, 0, 1)},
+      {"oblique", Eigen::Vector3d(0.55, 0.45, 1.0)},       {"front", Eigen::Vector3d(0, 0, 1)},
       {"back", Eigen::Vector3d(0, 0, -1)},                  {"left", Eigen::Vector3d(-1, 0, 0)},
-      {"right", Eigen::Vector3d(1, 0, 0)},                  {"top", Eigen::Vector3d(0, 1, 0)}};
+      {"right", Eigen::Vector3d(1, 0, 0)},                  {"top", Eigen::Vector3d(0, 1, 0)},
+      {"three_quarter", Eigen::Vector3d(0.55, 0.45, 1.0)}};  // the former name of "oblique"
   return views;
+}
+
+std::string camera_view_names() {
+  std::string names;
+  for (const auto& [n, d] : camera_views())
+    if (n != "three_quarter") names += (names.empty() ? "" : ", ") + n;
+  return names;
+}
+
+const Eigen::Vector3d* find_camera_view(const std::string& name) {
+  for (const auto& [n, d] : camera_views())
+    if (n == name) return &d;
+  return nullptr;
 }
 
 RenderSettings parse_render_settings(const nlohmann::json& r, const std::string& file) {
@@ -28,20 +42,17 @@ RenderSettings parse_render_settings(const nlohmann::json& r, const std::string&
   }
   if (r.contains("camera") && r["camera"].is_object() && r["camera"].contains("preset")) {
     const nlohmann::json& j = r["camera"];
-    c.keys(j, "render.camera", {"preset", "frame", "fov_deg"});
+    c.keys(j, "render.camera", {"preset", "fit", "frame", "fov_deg"});
     CameraPreset p;
     p.view = c.string(j["preset"], "render.camera.preset");
-    std::string names;
-    bool known = false;
-    for (const auto& [n, d] : camera_views()) {
-      names += (names.empty() ? "\"" : ", \"") + n + "\"";
-      known = known || n == p.view;
-    }
-    if (!known) c.fail("render.camera.preset", "must be one of " + names + ", got \"" + p.view + "\"");
-    if (j.contains("frame")) {
-      if (!j["frame"].is_array() || j["frame"].empty()) c.fail("render.camera.frame", "must be a non-empty array of object names");
-      for (size_t i = 0; i < j["frame"].size(); ++i)
-        p.frame.push_back(c.string(j["frame"][i], "render.camera.frame[" + std::to_string(i) + "]"));
+    if (!find_camera_view(p.view))
+      c.fail("render.camera.preset", "must be one of " + camera_view_names() + ", got \"" + p.view + "\"");
+    if (j.contains("fit") && j.contains("frame")) c.fail("render.camera.frame", "give \"fit\" only (\"frame\" is its former name)");
+    for (const char* key : {"fit", "frame"}) {
+      if (!j.contains(key)) continue;
+      const std::string q = std::string("render.camera.") + key;
+      if (!j[key].is_array() || j[key].empty()) c.fail(q, "must be a non-empty array of object names");
+      for (size_t i = 0; i < j[key].size(); ++i) p.fit.push_back(c.string(j[key][i], q + "[" + std::to_string(i) + "]"));
     }
     if (j.contains("fov_deg")) {
       p.fov_deg = c.positive(j["fov_deg"], "render.camera.fov_deg");

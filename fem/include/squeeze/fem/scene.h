@@ -96,7 +96,13 @@ struct SceneObject {
   bool gravity = true;                    // false: gravity does not act on this object
   Eigen::Vector3d velocity{0, 0, 0};      // m/s, initial
   std::vector<ScenePin> pinned;           // pins and soft attachments of rest vertices
+  std::optional<Eigen::Vector3d> color;   // render colour, linear [r, g, b] in [0, 1] (`color`: a triple
+                                          // or a name of scene_color_names()); default: the OBJ's MTL
+                                          // Kd, else a palette colour chosen by the object's name
 };
+
+/// The colour names `color` accepts (CSS colour names, lower case) with their [r, g, b] in [0, 1].
+const std::vector<std::pair<std::string, Eigen::Vector3d>>& scene_color_names();
 
 struct SceneGoal {
   Eigen::Vector3d position{0, 0, 0};  // m

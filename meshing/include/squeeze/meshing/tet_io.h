@@ -25,7 +25,7 @@ struct TetFormat {
 };
 
 /// The tetrahedral formats, in the order messages list them:
-///   .mesh       Medit (INRIA), ASCII, MeshVersionFormatted 1
+///   .mesh       Medit (INRIA), ASCII, MeshVersionFormatted 2 (double precision; reads 1 and 2)
 ///   .msh        Gmsh 2.2 ASCII (element type 4 = 4-node tetrahedron)
 ///   .vtk        VTK legacy ASCII unstructured grid (cell type 10)
 ///   .vtu        VTK XML unstructured grid, ASCII

@@ -21,9 +21,12 @@ namespace squeeze::render {
 /// One object of the scene as exporters see it (scene order).
 struct ExportObject {
   std::string name;               // the scene's object name (files are named after it)
-  Eigen::MatrixX3d rest;          // high-resolution surface vertices at rest (world, m)
+  Eigen::MatrixX3d rest;          // high-resolution surface vertices at rest (world, m): exactly the
+                                  // rendered surface's, each used by a face (none unreferenced)
   Eigen::MatrixX3i faces;         // its triangles, outwards when the surface is closed
   Eigen::MatrixX4i tets;          // the coarse tet mesh (indices into ExportState::coarse)
+  Eigen::Vector3f colour{0.8f, 0.8f, 0.8f};  // the render colour, linear RGB in [0, 1]
+  bool rigid = false;             // a rigid object (its surface moves rigidly)
 };
 
 /// What an export gets before the first frame.

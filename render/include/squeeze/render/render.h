@@ -47,6 +47,11 @@ struct RenderOptions {
   std::vector<std::string> exports;            // export formats by registered name (export_formats.h); default: none
   GlBackend gl = GlBackend::osmesa;            // context backend
   int samples = 4;                             // MSAA samples
+  std::optional<std::string> camera;           // a camera preset (camera_views(): oblique, front, …) that
+                                               // replaces the scene's camera; fits the scene preset's `fit`
+                                               // objects if it has them, else every object
+  std::filesystem::path video;                 // H.264 MP4 of the frames (video.h); empty: none
+  bool video_optional = false;                 // true: no H.264 encoder only warns (squeeze run's default video)
   std::function<void(const FrameProgress&)> on_frame;  // called after each frame (may be empty)
 };
 
@@ -60,6 +65,7 @@ struct RenderStats {
   double frame_cpu_seconds = 0;   // CPU time of the process (all threads) during the frame loop
   std::string gl;                 // GL backend and renderer description
   long long surface_triangles = 0;  // triangles drawn per frame
+  std::string video;              // the video written ("" if none): path
 };
 
 /// Parses "A-B" (inclusive, 0 <= A <= B) or "A" into a range. Throws InputError ("--frames x: ...").

@@ -2,7 +2,8 @@
 //   "render": {"width": 1280, "height": 720, "fps": 30,
 //              "camera": {"eye": [x,y,z], "target": [x,y,z], "up": [0,1,0], "fov_deg": 35}}
 //   or a camera preset that frames objects automatically from a named side:
-//              "camera": {"preset": "front", "frame": ["heart", "liver"], "fov_deg": 30}
+//              "camera": {"preset": "front", "fit": ["heart", "liver"], "fov_deg": 30}
+//   ("frame" is accepted as the former name of "fit").
 #pragma once
 #include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
@@ -22,17 +23,23 @@ struct Camera {
 };
 
 /// A camera placed automatically (frame_bounds): looking from the side `view` at the bounds of the
-/// objects named in `frame` (all objects if empty) over the whole motion, +y up.
+/// objects named in `fit` (all objects if empty) over the whole motion, +y up.
 struct CameraPreset {
-  std::string view = "three_quarter";  // a name of camera_views()
-  std::vector<std::string> frame;      // object names; empty: every object
+  std::string view = "oblique";        // a name of camera_views()
+  std::vector<std::string> fit;        // object names; empty: every object
   double fov_deg = 35;                 // vertical field of view, degrees, in (0, 180)
 };
 
 /// The preset views: name and the direction from the framed bounds' centre to the eye.
-/// "front" +z, "back" −z, "left" −x, "right" +x, "top" +y (up −z), "three_quarter" (0.55, 0.45, 1)
-/// (the default framing).
+/// "oblique" (0.55, 0.45, 1) (the default framing), "front" +z, "back" −z, "left" −x, "right" +x,
+/// "top" +y (up −z); "three_quarter" is the former name of "oblique".
 const std::vector<std::pair<std::string, Eigen::Vector3d>>& camera_views();
+
+/// The preset names for help texts and messages: "oblique, front, back, left, right, top".
+std::string camera_view_names();
+
+/// The eye direction of the preset `name` (a name of camera_views()), or nullptr.
+const Eigen::Vector3d* find_camera_view(const std::string& name);
 
 /// The render block, each value empty when the scene does not give it.
 struct RenderSettings {
