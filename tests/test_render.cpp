@@ -859,7 +859,8 @@ TEST_F(RenderTest, ColoursAreTheSceneKeyElseStablePerObjectName) {
   const auto b = colours_of(ball2 + "," + box + "," + ball, "b");  // another object first, the order changed
   EXPECT_EQ(a.at("ball"), b.at("ball"));
   EXPECT_EQ(a.at("box"), b.at("box"));
-  EXPECT_NE(a.at("ball"), a.at("box"));  // deformable and rigid look different
+  EXPECT_NE(a.at("ball"), a.at("box"));     // deformable and rigid look different
+  EXPECT_NE(b.at("ball"), b.at("other"));   // two deformable objects never share a colour
   const std::string red_ball = R"({"name": "ball", "color": "red", "mesh": "sphere.off", "tets": 60,
       "transform": {"scale": 0.1, "translate": [0, 0.35, 0]}})";
   const std::string teal_box = R"({"name": "box", "color": [0.1, 0.5, 0.5], "mesh": "cube.mesh", "kind": "rigid",

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <ctime>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "squeeze/common/atomic_file.h"
@@ -156,19 +157,39 @@ std::uint32_t name_hash(const std::string& name) {
   return h;
 }
 
-// The default colour of an object by its name: deformable objects warm and saturated (one of
-// eight), rigid ones neutral greys (one of three shades): visibly different kinds.
-Eigen::Vector3f default_colour(const std::string& name, bool rigid) {
-  static const float kColours[][3] = {{0.88f, 0.50f, 0.28f}, {0.27f, 0.56f, 0.82f}, {0.42f, 0.72f, 0.36f},
-                                      {0.78f, 0.38f, 0.66f}, {0.92f, 0.76f, 0.26f}, {0.33f, 0.74f, 0.74f},
-                                      {0.86f, 0.33f, 0.35f}, {0.55f, 0.45f, 0.80f}};
-  const std::uint32_t h = name_hash(name);
-  if (rigid) {
-    const float g = 0.58f - 0.08f * static_cast<float>(h % 3);
-    return {g, g + 0.02f, g + 0.05f};
+// Default colours: deformable objects warm and saturated (twelve), rigid ones neutral greys
+// (three shades): visibly different kinds.
+constexpr int kPaletteSize = 12;
+Eigen::Vector3f palette_colour(int i) {
+  static const float kColours[kPaletteSize][3] = {
+      {0.88f, 0.50f, 0.28f}, {0.27f, 0.56f, 0.82f}, {0.42f, 0.72f, 0.36f}, {0.78f, 0.38f, 0.66f},
+      {0.92f, 0.76f, 0.26f}, {0.33f, 0.74f, 0.74f}, {0.86f, 0.33f, 0.35f}, {0.55f, 0.45f, 0.80f},
+      {0.62f, 0.44f, 0.26f}, {0.95f, 0.60f, 0.68f}, {0.20f, 0.45f, 0.45f}, {0.70f, 0.78f, 0.30f}};
+  return {kColours[i][0], kColours[i][1], kColours[i][2]};
+}
+Eigen::Vector3f rigid_colour(const std::string& name) {
+  const float g = 0.58f - 0.08f * static_cast<float>(name_hash(name) % 3);
+  return {g, g + 0.02f, g + 0.05f};
+}
+
+// The default colours of the deformable objects named `names`: each takes the palette slot its
+// name hashes to, or the next free one when an object earlier in name order took it (while any
+// is free). So an object's colour depends on its name only, unless another object's name hashes
+// to the same slot and sorts before it; distinct objects get distinct colours up to twelve.
+std::map<std::string, Eigen::Vector3f> deformable_colours(std::vector<std::string> names) {
+  std::sort(names.begin(), names.end());
+  std::map<std::string, Eigen::Vector3f> colours;
+  std::vector<char> taken(kPaletteSize, 0);
+  int used = 0;
+  for (const std::string& name : names) {
+    int slot = static_cast<int>(name_hash(name) % kPaletteSize);
+    if (used < kPaletteSize)
+      while (taken[static_cast<size_t>(slot)]) slot = (slot + 1) % kPaletteSize;
+    if (!taken[static_cast<size_t>(slot)]) ++used;
+    taken[static_cast<size_t>(slot)] = 1;
+    colours[name] = palette_colour(slot);
   }
-  const auto& c = kColours[h % 8];
-  return {c[0], c[1], c[2]};
+  return colours;
 }
 
 struct Object {
@@ -343,12 +364,16 @@ Object load_object(const fem::SceneObject& so, const Trajectory& traj, int i, Pr
 // Every object of the scene (load_object), coloured: its `color` key, else the MTL colour of an
 // OBJ surface, else the default colour of its name and kind.
 std::vector<Object> load_objects(const fem::Scene& scene, const Trajectory& traj, Progress* progress) {
+  std::vector<std::string> deformable;
+  for (const fem::SceneObject& so : scene.objects)
+    if (!so.rigid) deformable.push_back(so.name);
+  const std::map<std::string, Eigen::Vector3f> palette = deformable_colours(deformable);
   std::vector<Object> objects;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const fem::SceneObject& so = scene.objects[i];
     Object ob = load_object(so, traj, static_cast<int>(i), progress);
     const std::optional<Eigen::Vector3f> mtl = ob.direct ? std::nullopt : obj_material_colour(so.mesh);
-    ob.colour = so.color ? Eigen::Vector3f(so.color->cast<float>()) : mtl ? *mtl : default_colour(so.name, so.rigid);
+    ob.colour = so.color ? Eigen::Vector3f(so.color->cast<float>()) : mtl ? *mtl : so.rigid ? rigid_colour(so.name) : palette.at(so.name);
     objects.push_back(std::move(ob));
   }
   return objects;
@@ -359,6 +384,8 @@ struct Motion {
   std::vector<std::vector<double>> volume;  // per object and trajectory frame: change from frame 0 (%)
   Eigen::AlignedBox3d view_bounds;          // rest surfaces and coarse motion, grown by 5 %, down to the floor
   std::vector<Eigen::AlignedBox3d> object_bounds;  // per object: its rest surface and coarse motion
+  std::vector<std::vector<Eigen::Vector3d>> object_points;  // per object: rest surface (≤ 4000 points) and
+                                                            // coarse vertices at ≤ 17 frames (camera presets)
 };
 
 // Reads every trajectory frame once: the objects' volumes (plot) and the bounds of the motion
@@ -369,8 +396,15 @@ Motion scan_trajectory(const Trajectory& traj, const std::vector<Object>& object
   std::vector<double> rest_volume(objects.size());
   Eigen::AlignedBox3d bounds;
   m.object_bounds.resize(objects.size());
-  for (size_t b = 0; b < objects.size(); ++b)
-    for (Eigen::Index v = 0; v < objects[b].rest.rows(); ++v) m.object_bounds[b].extend(Eigen::Vector3d(objects[b].rest.row(v).transpose()));
+  m.object_points.resize(objects.size());
+  for (size_t b = 0; b < objects.size(); ++b) {
+    const Eigen::Index n = objects[b].rest.rows(), stride = std::max<Eigen::Index>(1, n / 4000);
+    for (Eigen::Index v = 0; v < n; ++v) {
+      m.object_bounds[b].extend(Eigen::Vector3d(objects[b].rest.row(v).transpose()));
+      if (v % stride == 0) m.object_points[b].push_back(objects[b].rest.row(v).transpose());
+    }
+  }
+  const int frame_stride = std::max(1, traj.frames / 16);
   Eigen::MatrixX3d X;
   if (progress) progress->stage("reading the trajectory", traj.frames);
   for (int f = 0; f < traj.frames; ++f) {
@@ -382,6 +416,8 @@ Motion scan_trajectory(const Trajectory& traj, const std::vector<Object>& object
       if (f == 0) rest_volume[b] = vol;
       m.volume[b].push_back(rest_volume[b] > 0 ? 100.0 * (vol / rest_volume[b] - 1.0) : 0.0);
       for (Eigen::Index v = 0; v < Xb.rows(); ++v) m.object_bounds[b].extend(Eigen::Vector3d(Xb.row(v).transpose()));
+      if (f % frame_stride == 0 || f == traj.frames - 1)
+        for (Eigen::Index v = 0; v < Xb.rows(); ++v) m.object_points[b].push_back(Xb.row(v).transpose());
     }
     if (progress) progress->update(f + 1);
   }
@@ -415,22 +451,21 @@ void set_up_scene(Renderer& renderer, std::vector<Object>& objects, const Inputs
   if (in.settings.camera && !in.camera) {
     renderer.set_camera(*in.settings.camera);
   } else if (preset) {
-    // The named objects' bounds over the motion (grown by 5 %), seen from the preset's side.
-    Eigen::AlignedBox3d framed;
-    if (preset->fit.empty()) framed = view_bounds;
+    // The named objects (every object if none is named) over the whole motion, seen from the
+    // preset's side and fitted tightly into the view.
+    std::vector<Eigen::Vector3d> points;
+    for (size_t b = 0; b < objects.size(); ++b)
+      if (preset->fit.empty()) points.insert(points.end(), motion.object_points[b].begin(), motion.object_points[b].end());
     for (const std::string& name : preset->fit) {
       size_t b = 0;
       while (b < objects.size() && objects[b].name != name) ++b;
       if (b == objects.size())
         throw InputError(in.scene.file.string() + ": render.camera.fit: no object named '" + name + "'");
-      framed.extend(motion.object_bounds[b]);
+      points.insert(points.end(), motion.object_points[b].begin(), motion.object_points[b].end());
     }
-    if (!preset->fit.empty()) {
-      const Eigen::Vector3d grow = 0.05 * framed.diagonal();
-      framed.min() -= grow;
-      framed.max() += grow;
-    }
-    renderer.set_camera(frame_bounds(framed, aspect, preset->fov_deg, *find_camera_view(preset->view)));
+    Eigen::MatrixX3d P(static_cast<Eigen::Index>(points.size()), 3);
+    for (size_t i = 0; i < points.size(); ++i) P.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+    renderer.set_camera(frame_points(P, aspect, preset->fov_deg, *find_camera_view(preset->view)));
   } else {
     renderer.set_camera(frame_bounds(view_bounds, aspect));
   }

@@ -482,6 +482,49 @@ Camera frame_bounds(const Eigen::AlignedBox3d& bounds, double aspect, double fov
   return c;
 }
 
+Camera frame_points(const Eigen::MatrixX3d& P, double aspect, double fov_deg, const Eigen::Vector3d& direction,
+                    double margin) {
+  if (P.rows() == 0) throw InputError("camera: nothing to frame");
+  const Eigen::Vector3d d = direction.normalized();  // target -> eye
+  const Eigen::Vector3d up0 = std::abs(d.y()) > 0.99 ? Eigen::Vector3d(0, 0, -1) : Eigen::Vector3d(0, 1, 0);
+  const Eigen::Vector3d right = up0.cross(d).normalized(), up = d.cross(right);
+  const double tv = std::tan(fov_deg * M_PI / 360.0) / margin, th = tv * aspect;
+  // Camera coordinates relative to the points' mean: a = along right, b = along up, z = towards the eye.
+  Eigen::Vector3d c = P.colwise().mean().transpose();
+  Camera cam;
+  cam.fov_deg = fov_deg;
+  cam.up = up0;
+  // The eye at distance s from c along d; the silhouette is centred by moving c across the view,
+  // then the distance is fitted again (a few rounds: the perspective couples the two).
+  double s = 0;
+  for (int round = 0; round < 4; ++round) {
+    s = 0;
+    for (Eigen::Index i = 0; i < P.rows(); ++i) {
+      const Eigen::Vector3d q = P.row(i).transpose() - c;
+      const double z = q.dot(d);
+      s = std::max({s, z + std::abs(q.dot(right)) / th, z + std::abs(q.dot(up)) / tv});
+    }
+    s = std::max(s, 1e-6);
+    double lo_a = 1e300, hi_a = -1e300, lo_b = 1e300, hi_b = -1e300;  // view-plane tangents
+    for (Eigen::Index i = 0; i < P.rows(); ++i) {
+      const Eigen::Vector3d q = P.row(i).transpose() - c;
+      const double depth = std::max(1e-9, s - q.dot(d));
+      lo_a = std::min(lo_a, q.dot(right) / depth), hi_a = std::max(hi_a, q.dot(right) / depth);
+      lo_b = std::min(lo_b, q.dot(up) / depth), hi_b = std::max(hi_b, q.dot(up) / depth);
+    }
+    c += s * (0.5 * (lo_a + hi_a) * right + 0.5 * (lo_b + hi_b) * up);
+  }
+  s = 0;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    const Eigen::Vector3d q = P.row(i).transpose() - c;
+    const double z = q.dot(d);
+    s = std::max({s, z + std::abs(q.dot(right)) / th, z + std::abs(q.dot(up)) / tv});
+  }
+  cam.target = c;
+  cam.eye = c + std::max(s, 1e-6) * d;
+  return cam;
+}
+
 void Renderer::draw(Image& out) {
   Impl& r = *impl_;
   Gl& gl = r.gl;

@@ -82,4 +82,12 @@ bool is_closed_oriented(const Eigen::MatrixX3i& F);
 Camera frame_bounds(const Eigen::AlignedBox3d& bounds, double aspect, double fov_deg = 35,
                     const Eigen::Vector3d& direction = Eigen::Vector3d(0.55, 0.45, 1.0));
 
+/// A camera looking from `direction` (from the target towards the eye) with +y up (−z up when
+/// looking along y), aimed and placed so that every point of P (#P by 3, m) is inside the
+/// perspective view (vertical field of view `fov_deg`, width/height `aspect`) with `margin` around
+/// (1.04: 4 % of the half-extents) and the points' silhouette centred: the tight fit of what is
+/// seen, not of a bounding sphere. Used by the camera presets. Throws InputError if P is empty.
+Camera frame_points(const Eigen::MatrixX3d& P, double aspect, double fov_deg, const Eigen::Vector3d& direction,
+                    double margin = 1.04);
+
 }  // namespace squeeze::render
