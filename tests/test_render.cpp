@@ -180,6 +180,17 @@ class RenderTest : public ::testing::Test {
     X.col(0).array() += 0.02 * k;
     return X;
   }
+  // Renders only the exports (no PNG, no plot) of output frames [first, last] into OUT/export.
+  fs::path render_exports(const fs::path& scene_file, const fs::path& traj, const std::vector<std::string>& exports,
+                          int first, int last) {
+    RenderOptions o = options(scene_file, traj, "out");
+    o.exports = exports;
+    o.png = false;
+    o.plots = false;
+    o.frames = std::make_pair(first, last);
+    render_trajectory(o);
+    return o.output / "export";
+  }
   RenderOptions options(const fs::path& scene_file, const fs::path& traj, const std::string& out) {
     RenderOptions o;
     o.scene = scene_file;
@@ -710,13 +721,7 @@ TEST_F(RenderTest, PointCachesHoldExactlyTheSurfaceVerticesInTheRestObjOrder) {
        "transform": {"scale": 0.1, "translate": [0, 0.35, 0]}},
       {"name": "box", "mesh": "cube.mesh", "transform": {"scale": [0.3, 0.1, 0.3], "translate": [0.1, 0.05, 0]}}]})";
   const fs::path traj = write_trajectory(sc, dir_->path() / "sim", 11, 10.0, squash);
-  RenderOptions o = options(sc, traj, "out");
-  o.exports = {"pc2", "mdd", "obj"};
-  o.png = false;
-  o.plots = false;
-  o.frames = std::make_pair(3, 9);
-  render_trajectory(o);
-  const fs::path ex = o.output / "export";
+  const fs::path ex = render_exports(sc, traj, {"pc2", "mdd", "obj"}, 3, 9);
   for (const std::string name : {"ball", "box"}) {
     bool all_used = false;
     const Eigen::MatrixX3d rest = obj_vertices(ex / (name + ".obj"), &all_used);
@@ -794,13 +799,7 @@ std::map<std::string, Eigen::Vector3d> material_colours(const tinygltf::Model& m
 TEST_F(RenderTest, GlbAnimationReproducesEveryFrame) {
   const fs::path sc = scene();
   const fs::path traj = write_trajectory(sc, dir_->path() / "sim", 11, 10.0, squash);
-  RenderOptions o = options(sc, traj, "out");
-  o.exports = {"glb", "obj", "pc2"};
-  o.png = false;
-  o.plots = false;
-  o.frames = std::make_pair(2, 10);
-  render_trajectory(o);
-  const fs::path ex = o.output / "export";
+  const fs::path ex = render_exports(sc, traj, {"glb", "obj", "pc2"}, 2, 10);
   const tinygltf::Model m = load_glb(ex / "animation.glb");
   ASSERT_EQ(m.meshes.size(), 2u);
   ASSERT_EQ(m.nodes.size(), 2u);
