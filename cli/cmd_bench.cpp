@@ -2,7 +2,16 @@
 // scene with N seeds (each within 1/20 of the paper's solution time unless --time-limit says
 // otherwise), replays every plan to measure the volume change along the path, and writes
 // DIR/table1.md and DIR/table1.csv side by side with the paper's figures.
+//
+// `squeeze bench planners [--seeds N] [--time-limit S] -o DIR` (issue 19): every registered planner
+// (squeeze's "rrt" and OMPL's control planners, plan::planner_names()) on the same bundled scenes
+// under the same time budget; writes DIR/planners.md (solved fraction, median time, iterations,
+// nodes, path duration, largest volume change) and one OMPL benchmark log per scene,
+// DIR/SCENE.log, in the text format of OMPL's Benchmark::saveResultsToStream (1.5), which
+// ompl_benchmark_statistics.py and Planner Arena read.
 #include <algorithm>
+#include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -16,6 +25,8 @@
 #include "squeeze/common/progress.h"
 #include "squeeze/fem/scene.h"
 #include "squeeze/plan/evaluate.h"
+#include "squeeze/plan/planner.h"
+#include <unistd.h>
 
 namespace squeeze::cli {
 namespace fs = std::filesystem;
@@ -60,10 +71,182 @@ std::string f2(double x, const char* f = "%.2f") {
   return b;
 }
 
+// OMPL 1.5's ompl::base::PlannerStatus::asString(), in enum order (the log's "status ENUM").
+constexpr const char* kOmplStatus[] = {"Unknown status", "Invalid start",       "Invalid goal",   "Unrecognized goal type",
+                                       "Timeout",        "Approximate solution", "Exact solution", "Crash",
+                                       "Abort"};
+constexpr int kOmplTimeout = 4, kOmplApproximate = 5, kOmplExact = 6;
+
+struct PlannersArgs {
+  std::string output, scenes = SQUEEZE_SCENES_DIR, only, integrator, algorithms;
+  int seeds = 5;
+  double time_limit = 0, fraction = 1.0 / 20;
+};
+
 std::string mmss(double s) {
   char b[32];
   std::snprintf(b, sizeof b, "%d:%02d", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
   return b;
+}
+
+std::vector<const PaperRow*> bundled_rows(const std::string& scenes, const std::string& only) {
+  std::vector<const PaperRow*> rows;
+  for (const PaperRow& r : kTable1)
+    if (only.empty() || std::string(r.file).find(only) != std::string::npos ||
+        std::string(r.name).find(only) != std::string::npos) {
+      if (!fs::exists(fs::path(scenes) / r.file)) throw InputError((fs::path(scenes) / r.file).string() + ": scene file does not exist");
+      rows.push_back(&r);
+    }
+  if (rows.empty()) throw InputError("--only " + only + ": no bundled scene matches");
+  return rows;
+}
+
+void write_text(const fs::path& file, const std::string& text) {
+  write_atomically(file, [&](const fs::path& p) {
+    std::ofstream f(p);
+    f << text;
+    if (!f) throw InputError(file.string() + ": write failed");
+  });
+}
+
+struct PlannerRun {
+  int status = 0;  // kOmplStatus index
+  bool solved = false;
+  double seconds = 0, memory_mib = 0, distance = 0, duration = 0, volume = 0;
+  int iterations = 0, nodes = 0;
+  bool replay_matches = false;
+};
+
+int run_planners_bench(const PlannersArgs& a, bool quiet) {
+  const fs::path out = a.output;
+  check_output_folder(out);
+  std::vector<std::string> algorithms;
+  if (a.algorithms.empty()) {
+    algorithms = plan::planner_names();
+  } else {
+    std::stringstream ss(a.algorithms);
+    for (std::string name; std::getline(ss, name, ',');) {
+      try {
+        plan::make_planner(name);
+      } catch (const InputError& e) {
+        throw InputError(std::string("--algorithms: ") + e.what());
+      }
+      algorithms.push_back(name);
+    }
+  }
+  const std::vector<const PaperRow*> rows = bundled_rows(a.scenes, a.only);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw InputError(a.output + ": cannot create the directory: " + ec.message());
+  char host[256] = "UNKNOWN";
+  gethostname(host, sizeof host - 1);
+
+  std::ostringstream md;
+  md << "| Scene | Planner | Solved | Median time (s) | Iterations (median) | Nodes (median) | Path duration (s, median) | "
+        "Max volume change | Replays |\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const PaperRow* r : rows) {
+    const fs::path file = fs::path(a.scenes) / r->file;
+    const fem::Scene scene = load_scene_with(file.string(), a.integrator);
+    Progress progress(!quiet);
+    fem::SceneWorld w = fem::build_scene(scene, &progress);
+    const double limit = a.time_limit > 0 ? a.time_limit : r->seconds * a.fraction;
+    const auto started = std::chrono::system_clock::now();
+    const auto t0 = std::chrono::steady_clock::now();
+    std::ostringstream planners_log;
+    for (const std::string& algorithm : algorithms) {
+      plan::PlannerOptions o = plan::planner_options(w);
+      o.algorithm = algorithm;
+      o.time_limit = limit;
+      o.iterations = 100000000;  // the time limit decides
+      std::vector<PlannerRun> runs;
+      for (int seed = 1; seed <= a.seeds; ++seed) {
+        o.seed = static_cast<std::uint64_t>(seed);
+        if (!quiet) std::fprintf(stderr, "squeeze: %s, %s, seed %d of %d (limit %.0f s)\n", r->name, algorithm.c_str(), seed, a.seeds, limit);
+        const plan::PlanEvaluation e = plan::evaluate_plan(w, o, &progress);
+        const plan::PlanStatistics& s = e.result.stats;
+        PlannerRun run;
+        run.solved = e.result.status == plan::PlanStatus::solved;
+        run.status = run.solved ? kOmplExact
+                     : e.result.status == plan::PlanStatus::approximate ? kOmplApproximate
+                                                                         : kOmplTimeout;
+        run.seconds = s.seconds;
+        run.memory_mib = s.peak_memory / 1048576.0;
+        run.distance = s.final_distance;
+        run.iterations = s.iterations;
+        run.nodes = s.nodes;
+        for (const plan::PathSegment& seg : e.result.path) run.duration += seg.steps * e.result.time_step;
+        for (double v : e.max_volume_change) run.volume = std::max(run.volume, v);
+        run.replay_matches = e.replay_matches;
+        runs.push_back(run);
+        if (!quiet)
+          std::fprintf(stderr, "squeeze: %s, %s, seed %d: %s, %d iterations, %d nodes, %.1f s, replay %s\n", r->name,
+                       algorithm.c_str(), seed, plan::to_string(e.result.status), s.iterations, s.nodes, s.seconds,
+                       e.replay_matches ? "bit-identical" : "DIFFERENT");
+      }
+      // The markdown row: medians over the solved runs (time, iterations, nodes, duration), the
+      // volume over all runs.
+      std::vector<double> secs, its, nodes, durs;
+      double volume = 0;
+      int solved = 0, matches = 0;
+      for (const PlannerRun& run : runs) {
+        volume = std::max(volume, run.volume);
+        matches += run.replay_matches;
+        if (!run.solved) continue;
+        ++solved;
+        secs.push_back(run.seconds);
+        its.push_back(run.iterations);
+        nodes.push_back(run.nodes);
+        durs.push_back(run.duration);
+      }
+      md << "| " << r->name << " | " << algorithm << " | " << solved << "/" << runs.size() << " | " << f2(median(secs), "%.1f")
+         << " | " << f2(median(its), "%.0f") << " | " << f2(median(nodes), "%.0f") << " | " << f2(median(durs), "%.2f")
+         << " | " << f2(100 * volume) << " % | " << matches << "/" << runs.size() << " |\n";
+      // OMPL's benchmark log: one planner block.
+      planners_log << "control_" << algorithm << "\n0 common properties\n";
+      const char* props[] = {"approximate solution BOOLEAN", "graph states INTEGER",   "iterations INTEGER",
+                             "max volume change REAL",       "memory REAL",            "path duration REAL",
+                             "solution difference REAL",     "solved BOOLEAN",         "status ENUM",
+                             "time REAL"};
+      planners_log << std::size(props) << " properties for each run\n";
+      for (const char* p : props) planners_log << p << "\n";
+      planners_log << runs.size() << " runs\n";
+      for (const PlannerRun& run : runs) {
+        planners_log << (run.status == kOmplApproximate ? 1 : 0) << "; " << run.nodes << "; " << run.iterations << "; "
+                     << run.volume << "; " << run.memory_mib << "; " << run.duration << "; "
+                     << std::max(0.0, run.distance) << "; " << (run.solved ? 1 : 0) << "; " << run.status << "; "
+                     << run.seconds << "; \n";
+      }
+      planners_log << ".\n";
+    }
+    const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::ostringstream log;
+    const std::time_t start_time = std::chrono::system_clock::to_time_t(started);
+    char when[64];
+    std::strftime(when, sizeof when, "%Y-%m-%d %H:%M:%S", std::gmtime(&start_time));
+    log << "OMPL version 1.5.2\nExperiment " << r->name << "\n1 experiment properties\nscene = " << r->file << "\n"
+        << "Running on " << host << "\nStarting at " << when << "\n<<<|\nsqueeze bench planners: " << r->name
+        << " (" << file.string() << "), " << w.world.tets() << " tetrahedra\n|>>>\n<<<|\n|>>>\n"
+        << 1 << " is the random seed\n"
+        << limit << " seconds per run\n0 MB per run\n"
+        << a.seeds << " runs per planner\n"
+        << total << " seconds spent to collect the data\n1 enum type\nstatus";
+    for (const char* st : kOmplStatus) log << '|' << st;
+    log << "\n" << algorithms.size() << " planners\n" << planners_log.str();
+    std::string stem = fs::path(r->file).stem().string();
+    write_text(out / (stem + ".log"), log.str());
+  }
+  std::ostringstream doc;
+  doc << "# Planners side by side\n\n`squeeze bench planners --seeds " << a.seeds
+      << (a.time_limit > 0 ? " --time-limit " + f2(a.time_limit, "%g") : std::string()) << "`: every plan within "
+      << (a.time_limit > 0 ? f2(a.time_limit, "%g") + " s" : std::string("1/20 of the paper's time"))
+      << "; times are wall-clock seconds of planning, medians over the solved seeds; iterations: squeeze's "
+         "expansions, OMPL's controls drawn; volume: the largest |V/V0 − 1| of any object over every step of the "
+         "replayed paths (settling included), over all seeds; replays: plans whose replay ends in the planner's "
+         "state bit for bit.\n\n"
+      << md.str();
+  write_text(out / "planners.md", doc.str());
+  if (!quiet) std::fprintf(stderr, "%s", doc.str().c_str());
+  return kExitOk;
 }
 
 }  // namespace
@@ -87,18 +270,30 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
       ->check(CLI::NonNegativeNumber);
   add_integrator_option(cmd, args->integrator);
 
-  return [args, &global]() -> int {
+  auto pargs = std::make_shared<PlannersArgs>();
+  CLI::App* planners = bench->add_subcommand(
+      "planners",
+      "Every registered planner (squeeze's \"rrt\" and OMPL's control planners \"ompl:RRT\", \"ompl:KPIECE1\",\n"
+      "\"ompl:SST\", \"ompl:EST\", \"ompl:PDST\") on the bundled scenes with N seeds under the same time\n"
+      "budget. Writes DIR/planners.md (solved fraction, median time, iterations, nodes, path duration,\n"
+      "largest volume change along the replayed path) and DIR/SCENE.log in OMPL's benchmark log format\n"
+      "(ompl_benchmark_statistics.py, Planner Arena).\n"
+      "Example: squeeze bench planners --seeds 2 --time-limit 20 -o out/planners");
+  planners->add_option("-o,--output", pargs->output, "Output directory (created if missing; its parent must exist)")->required();
+  planners->add_option("--seeds", pargs->seeds, "Seeds per scene and planner (1..N)")->check(CLI::Range(1, 1000))->capture_default_str();
+  planners->add_option("--scenes", pargs->scenes, "Folder of the bundled scenes")->capture_default_str();
+  planners->add_option("--only", pargs->only, "Only the scene whose file or name contains this text");
+  planners->add_option("--algorithms", pargs->algorithms, "Comma-separated planner names (default: every registered one)");
+  planners->add_option("--time-limit", pargs->time_limit, "Seconds per plan (default: the paper's time / 20)")
+      ->check(CLI::NonNegativeNumber);
+  add_integrator_option(planners, pargs->integrator);
+
+  return [args, pargs, planners, &global]() -> int {
+    if (planners->parsed()) return run_planners_bench(*pargs, global.quiet);
     const BenchArgs& a = *args;
     const fs::path out = a.output;
     check_output_folder(out);
-    std::vector<const PaperRow*> rows;
-    for (const PaperRow& r : kTable1)
-      if (a.only.empty() || std::string(r.file).find(a.only) != std::string::npos ||
-          std::string(r.name).find(a.only) != std::string::npos) {
-        if (!fs::exists(fs::path(a.scenes) / r.file)) throw InputError((fs::path(a.scenes) / r.file).string() + ": scene file does not exist");
-        rows.push_back(&r);
-      }
-    if (rows.empty()) throw InputError("--only " + a.only + ": no bundled scene matches");
+    const std::vector<const PaperRow*> rows = bundled_rows(a.scenes, a.only);
     std::error_code ec;
     fs::create_directories(out, ec);
     if (ec) throw InputError(a.output + ": cannot create the directory: " + ec.message());

@@ -156,6 +156,14 @@ Runner add_plan_command(CLI::App& app, const Global& global) {
     const PreparedPlanning prep = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
     const plan::PlannerOptions& options = prep.options;
     print_scene_warnings(prep.world, options.max_volume_change);  // squeeze check's warnings
+    {
+      const plan::MaxForceTerms t = plan::max_force_terms(prep.world);
+      spdlog::info("{}: max_force {:.4g} N (default {:.4g} N = max of 2 m g {:.4g}, m d / t_max^2 {:.4g}, K d / 2 {:.4g}, "
+                   "E A eps {:.4g}; m {:.4g} kg, d {:.4g} m, E {:.4g} Pa, A {:.4g} m^2)",
+                   a.scene, options.max_force, t.max_force(options.t_max), 2 * t.mass * t.gravity,
+                   t.mass * t.size / (options.t_max * options.t_max), 0.5 * t.attach_stiffness * t.size, t.squeeze(),
+                   t.mass, t.size, t.youngs_modulus, t.cross_section);
+    }
     const plan::PlanResult r = plan::plan(prep.world, options, &progress);
 
     const plan::PlanFile f = plan::make_plan_file(scene, options, r);

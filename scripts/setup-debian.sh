@@ -7,7 +7,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${SQUEEZE_BUILD_DIR:-$here/build}"
 
 packages=(build-essential cmake ninja-build pkg-config
-  libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  libcgal-dev libgmp-dev libmpfr-dev libboost-dev libompl-dev
   libassimp-dev libeigen3-dev libtbb-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev libnanoflann-dev
   libosmesa6-dev libegl-dev libgl-dev libpng-dev libplplot-dev libcairo2-dev

@@ -2,7 +2,7 @@
 // defined in plan/src/controls/NAME.cpp as `const ControlKind& NAME_control()`.
 #include "squeeze/plan/control.h"
 
-#define SQUEEZE_CONTROL_KINDS(X) X(body) X(control_point) X(interpolation)
+#define SQUEEZE_CONTROL_KINDS(X) X(body) X(control_point) X(interpolation) X(squeeze)
 
 namespace squeeze::plan {
 

@@ -1,5 +1,6 @@
 #include "squeeze/plan/planner.h"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -52,14 +53,37 @@ std::uint64_t state_hash(const fem::State& s) {
   return h;
 }
 
+MaxForceTerms max_force_terms(const fem::SceneWorld& w) {
+  const int r = robot_index(w.scene);
+  const fem::Body& robot = w.world.body(r);
+  MaxForceTerms t;
+  const Eigen::Vector3d lo = robot.rest.colwise().minCoeff(), hi = robot.rest.colwise().maxCoeff();
+  t.size = (hi - lo).norm();
+  // Weight its attachments carry (pinned[].carries_weight) need not be lifted: g counts only the
+  // share of mass they do not.
+  double carried = 0;
+  for (int i = w.world.first_state_row(r), e = i + robot.vertices(); i < e; ++i) {
+    t.mass += w.world.masses()(i);
+    if (w.world.attachment_carries_weight(i)) carried += w.world.masses()(i);
+    if (!w.world.pinned(i)) t.attach_stiffness += w.world.attachment_stiffness(i);
+  }
+  t.gravity = w.world.gravity_of(r).norm() * (t.mass > 0 ? 1.0 - carried / t.mass : 1.0);
+  t.volume = robot.total_volume();
+  t.youngs_modulus = robot.k_edge.size() && t.volume > 0 ? robot.k_edge.sum() / t.volume : 0.0;
+  t.cross_section = std::cbrt(t.volume) * std::cbrt(t.volume);
+  return t;
+}
+
+double MaxForceTerms::max_force(double t_max) const {
+  return std::max({mass * 2.0 * gravity, mass * size / (t_max * t_max), 0.5 * attach_stiffness * size, squeeze()});
+}
+
 PlannerOptions planner_options(const fem::SceneWorld& w) {
   const fem::Scene& scene = w.scene;
   const JsonChecker c{scene.file.string()};
   PlannerOptions o;
   const int r = robot_index(scene);
   const fem::Body& robot = w.world.body(r);
-  double mass = 0;
-  for (int i = 0; i < robot.vertices(); ++i) mass += w.world.masses()(w.world.first_state_row(r) + i);
   const Eigen::Vector3d lo = robot.rest.colwise().minCoeff(), hi = robot.rest.colwise().maxCoeff();
   const double size = (hi - lo).norm();
   o.control_radius = 0.25 * size;
@@ -107,20 +131,8 @@ PlannerOptions planner_options(const fem::SceneWorld& w) {
       c.fail("planner.t_min", "must be <= planner.t_max (" + format_number(o.t_max) + "), got " + format_number(o.t_min));
   }
   if (!(o.interpolation_omega > 0)) o.interpolation_omega = 2 * M_PI / o.t_max;
-  // Default: enough to lift the robot against its own gravity twice over, and to move it about
-  // half its own size within t_max from rest (½ a t² = d / 2). Weight its attachments carry
-  // (pinned[].carries_weight) need not be lifted: g counts only the share of mass they do not.
-  // A robot held by soft attachments (total stiffness K) also gets enough to hold it half its size
-  // away from their rest (K d / 2).
-  double carried = 0, total = 0, stiffness = 0;
-  for (int i = w.world.first_state_row(r), e = i + w.world.body(r).vertices(); i < e; ++i) {
-    total += w.world.masses()(i);
-    if (w.world.attachment_carries_weight(i)) carried += w.world.masses()(i);
-    if (!w.world.pinned(i)) stiffness += w.world.attachment_stiffness(i);
-  }
-  const double g = w.world.gravity_of(r).norm() * (total > 0 ? 1.0 - carried / total : 1.0);
-  o.max_force = max_force ? *max_force
-                          : std::max(mass * std::max(2.0 * g, size / (o.t_max * o.t_max)), 0.5 * stiffness * size);
+  const MaxForceTerms t = max_force_terms(w);
+  o.max_force = max_force ? *max_force : t.max_force(o.t_max);
   return o;
 }
 

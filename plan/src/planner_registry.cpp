@@ -1,13 +1,16 @@
-// The planner registry: one line names every planner. Each NAME is defined in plan/src/NAME.cpp
-// as `std::unique_ptr<Planner> make_NAME_planner()`.
+// The planner registry: one line names every planner, as X("name", ID). Each ID is defined as
+// `std::unique_ptr<Planner> make_ID_planner()`: rrt in plan/src/rrt.cpp, the OMPL ones in
+// plan/src/ompl_planners.cpp.
 #include "squeeze/common/error.h"
 #include "squeeze/plan/planner.h"
 
-#define SQUEEZE_PLANNERS(X) X(rrt)
+#define SQUEEZE_PLANNERS(X)                                                                                \
+  X("rrt", rrt) X("ompl:RRT", ompl_rrt) X("ompl:KPIECE1", ompl_kpiece1) X("ompl:SST", ompl_sst) X("ompl:EST", ompl_est) \
+  X("ompl:PDST", ompl_pdst)
 
 namespace squeeze::plan {
 
-#define SQUEEZE_DECLARE_PLANNER(NAME) std::unique_ptr<Planner> make_##NAME##_planner();
+#define SQUEEZE_DECLARE_PLANNER(NAME, ID) std::unique_ptr<Planner> make_##ID##_planner();
 SQUEEZE_PLANNERS(SQUEEZE_DECLARE_PLANNER)
 #undef SQUEEZE_DECLARE_PLANNER
 
@@ -17,7 +20,7 @@ struct Entry {
   std::unique_ptr<Planner> (*make)();
 };
 const std::vector<Entry>& registry() {
-#define SQUEEZE_PLANNER_ENTRY(NAME) Entry{#NAME, &make_##NAME##_planner},
+#define SQUEEZE_PLANNER_ENTRY(NAME, ID) Entry{NAME, &make_##ID##_planner},
   static const std::vector<Entry> table = {SQUEEZE_PLANNERS(SQUEEZE_PLANNER_ENTRY)};
 #undef SQUEEZE_PLANNER_ENTRY
   return table;

@@ -58,33 +58,53 @@ bool placed_inside(const fem::World& world, int a, int b) {
   return centre_in(world.body(a), world.body(b)) || centre_in(world.body(b), world.body(a));
 }
 
+double touch_tolerance(const fem::Body& robot) { return 1e-3 * robot.mean_edge_length(); }
+
 void check_robot_start(const fem::SceneWorld& w) {
   const fem::Scene& scene = w.scene;
   const int r = robot_index(scene);
   const fem::Body& robot = w.world.body(r);
   const std::string where = scene.file.string() + ": objects[" + std::to_string(r) + "].transform: ";
-  if (scene.floor && robot.rest.col(1).minCoeff() < *scene.floor)
-    throw InputError(where + "the robot starts below the floor (y = " + std::to_string(*scene.floor) + ")");
+  // Touching is not penetrating: a robot resting on the floor, on a wall of the bounds or on an
+  // obstacle's face (up to rounding of its transform and of its coarse mesh) is a valid start.
+  const double tol = touch_tolerance(robot);
+  if (scene.floor && robot.rest.col(1).minCoeff() < *scene.floor - tol)
+    throw InputError(where + "the robot starts below the floor (y = " + format_number(*scene.floor) +
+                     " m; its lowest vertex at " + format_number(robot.rest.col(1).minCoeff()) + " m, tolerance " +
+                     format_number(tol) + " m)");
   for (int k = 0; k < 3; ++k)
-    if (robot.rest.col(k).minCoeff() < w.bounds.min()(k) || robot.rest.col(k).maxCoeff() > w.bounds.max()(k))
+    if (robot.rest.col(k).minCoeff() < w.bounds.min()(k) - tol || robot.rest.col(k).maxCoeff() > w.bounds.max()(k) + tol)
       throw InputError(where + "the robot starts outside the bounds (its coarse mesh spans " +
                        std::to_string(robot.rest.col(k).minCoeff()) + " .. " + std::to_string(robot.rest.col(k).maxCoeff()) +
                        " on axis " + "xyz"[k] + ", bounds " + std::to_string(w.bounds.min()(k)) + " .. " +
                        std::to_string(w.bounds.max()(k)) + ")");
-  // Vertices of `a` strictly inside tetrahedra of `b` (rest positions).
-  auto inside = [](const fem::Body& a, const fem::Body& b) {
+  // Vertices of `a` inside tetrahedra of `b` (rest positions) deeper than tol from every face of
+  // the tetrahedron (a vertex on a face, within tol, touches).
+  auto inside = [tol](const fem::Body& a, const fem::Body& b) {
     const Eigen::AlignedBox3d abox(a.rest.colwise().minCoeff().transpose(), a.rest.colwise().maxCoeff().transpose());
     int count = 0;
     for (int t = 0; t < b.tets(); ++t) {
       Eigen::AlignedBox3d tb;
-      for (int k = 0; k < 4; ++k) tb.extend(b.rest.row(b.T(t, k)).transpose().eval());
+      Eigen::Vector3d p[4];
+      for (int k = 0; k < 4; ++k) {
+        p[k] = b.rest.row(b.T(t, k)).transpose();
+        tb.extend(p[k]);
+      }
       if (!tb.intersects(abox)) continue;
-      const fem::TetFrame f(b.rest.row(b.T(t, 0)).transpose(), b.rest.row(b.T(t, 1)).transpose(),
-                            b.rest.row(b.T(t, 2)).transpose(), b.rest.row(b.T(t, 3)).transpose());
+      const fem::TetFrame f(p[0], p[1], p[2], p[3]);
+      // Height of vertex k over its opposite face: barycentric l_k times it is the distance to that face.
+      const double six_v = std::abs((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]));
+      Eigen::Vector4d height;
+      for (int k = 0; k < 4; ++k) {
+        const Eigen::Vector3d& q0 = p[(k + 1) % 4];
+        const double area2 = (p[(k + 2) % 4] - q0).cross(p[(k + 3) % 4] - q0).norm();  // twice the face's area
+        height(k) = area2 > 0 ? six_v / area2 : 0.0;
+      }
       for (int i = 0; i < a.vertices(); ++i) {
         if (!tb.contains(a.rest.row(i).transpose())) continue;
         Eigen::Vector4d l;
-        if (f.contains(a.rest.row(i).transpose(), &l) && l.minCoeff() > 1e-9) ++count;
+        if (f.contains(a.rest.row(i).transpose(), &l) && l.minCoeff() > 1e-9 && l.cwiseProduct(height).minCoeff() > tol)
+          ++count;
       }
     }
     return count;

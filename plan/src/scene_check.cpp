@@ -129,7 +129,7 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
       }
     if (scene.floor)
       for (int v = 0; v < B.vertices(); ++v)
-        if (B.rest(v, 1) < *scene.floor) {
+        if (B.rest(v, 1) < *scene.floor - touch_tolerance(B)) {  // touching the floor is resting on it
           ++o.below_floor;
           o.below_floor_depth = std::max(o.below_floor_depth, *scene.floor - B.rest(v, 1));
         }

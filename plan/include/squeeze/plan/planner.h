@@ -7,9 +7,12 @@
 // of PlannerOptions::algorithm from the registry. Registered planners:
 //   "rrt"  the paper's kinodynamic RRT (Algorithm 1), rrt.cpp: every tree node is a full
 //          simulation state of the robot and every deformable obstacle; see docs/plan.md.
+//   "ompl:RRT", "ompl:KPIECE1", "ompl:SST", "ompl:EST", "ompl:PDST"
+//          OMPL's control-based planners (libompl 1.5) over the same states, controls and
+//          propagator, ompl_planners.cpp (OMPL's headers stay there); see docs/plan.md.
 // To add a planner: a class deriving from Planner in its own file plan/src/NAME.cpp defining
-// `std::unique_ptr<Planner> make_NAME_planner()`, that file in plan/CMakeLists.txt, and NAME in the
-// one registration line of plan/src/planner_registry.cpp.
+// `std::unique_ptr<Planner> make_ID_planner()`, that file in plan/CMakeLists.txt, and
+// X("name", ID) in the one registration line of plan/src/planner_registry.cpp.
 //
 // Determinism: planners draw from a seeded Random (random.h) and must give the same plan for a
 // seed whatever the number of threads (the RRT draws a whole batch before running it in parallel).
@@ -49,7 +52,8 @@ struct PlannerOptions {
   double goal_bias = 0.05;         // probability that x is the goal position
   double t_min = 0.05;             // s, shortest expansion
   double t_max = 0.5;              // s, longest expansion
-  double max_force = 0;            // N; scene default: robot mass × max(2 |g|, d / t_max²), d its bbox diagonal
+  double max_force = 0;            // N; scene default: MaxForceTerms::max_force (the robot's weight, size,
+                                   // attachments and stiffness)
   double control_radius = 0;       // m; scene default: ¼ of the robot's bounding-box diagonal
   double max_volume_change = 0.1;  // fraction of rest volume, any deformable object
   double interpolation_omega = 0;  // 1/s, ω of the interpolation force; default 2π / t_max
@@ -64,6 +68,26 @@ struct PlannerOptions {
                                    // false: it is discarded whole (the paper's Algorithm 1)
   double time_limit = 0;           // s of wall time, 0: none (CLI --time-limit)
 };
+
+/// What the default planner.max_force is made of: the robot's mechanics (docs/plan.md, "max_force").
+struct MaxForceTerms {
+  double mass = 0;              // kg, of the robot
+  double gravity = 0;           // m/s², |g| on the share of its mass its attachments do not carry
+  double size = 0;              // m, d: its bounding-box diagonal at rest
+  double attach_stiffness = 0;  // N/m, K: the sum of its soft attachments' stiffnesses
+  double volume = 0;            // m³, V: its rest volume
+  double youngs_modulus = 0;    // Pa, E: Σ k_edge / V, the modulus its distance constraints give (for the
+                                // default stiffnesses, the object's youngs_modulus)
+  double cross_section = 0;     // m², A = V^(2/3)
+  static constexpr double kSqueezeStrain = 0.2;  // ε: the fraction it must be able to compress itself by
+  /// N, E · A · ε: the force that compresses it by ε against its own elasticity.
+  double squeeze() const { return youngs_modulus * cross_section * kSqueezeStrain; }
+  /// N, the default: max(2 m |g| (lift it twice over), m d / t_max² (move it half its size from rest
+  /// within t_max: ½ a t² = d / 2), K d / 2 (hold it half its size from its attachments), E A ε).
+  double max_force(double t_max) const;
+};
+/// The terms of the default max_force for the robot of a built scene.
+MaxForceTerms max_force_terms(const fem::SceneWorld& world);
 
 /// Reads and validates `scene.planner` (errors "FILE: planner.KEY: problem"), deriving the
 /// defaults from the built world: max_force from the robot's mass, control_radius from its size.
@@ -101,7 +125,8 @@ struct PlanResult {
   PlanStatistics stats;
   double time_step = 0;              // s, h used
   std::vector<PathSegment> path;     // from the start state to the final node
-  std::vector<fem::State> path_states;  // state at the end of every segment (path.size())
+  std::vector<fem::State> path_states;  // state at the end of every segment (path.size()); empty for planners
+                                        // that keep only the final state (the OMPL ones: final_state_hash)
   Control settle;                       // the replay's final interpolation phase (settle_control)
   int settle_steps = 0;                 // its time steps: options.settle / h
   int start_settle_steps = 0;           // steps without control from the scene's initial state to the start (settle_start)

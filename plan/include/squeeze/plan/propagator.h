@@ -111,12 +111,18 @@ int robot_index(const fem::Scene& scene);
 /// Index of the scene's goal object (goal.object, else the robot); throws InputError if it is rigid.
 int goal_object_index(const fem::Scene& scene);
 
+/// How far (m) a robot vertex may lie past a surface at rest and still count as touching it, not
+/// penetrating it: 0.1 % of the robot's mean coarse edge length (0.05 mm for a 20 cm cube of 5 cm
+/// edges). A robot resting on the floor or on a face of an obstacle is a valid start.
+double touch_tolerance(const fem::Body& robot);
+
 /// Throws InputError "FILE: objects[i].transform: the robot starts inside NAME (…)" if, at rest, a
-/// vertex of the robot's coarse mesh lies strictly inside a tetrahedron of another object or a
-/// vertex of another object strictly inside a robot tetrahedron (barycentric coordinates all
-/// > 1e-9) — with rest overlaps on (contact.rest_overlap, the default) only if one was placed
-/// inside the other (placed_inside: a touching overlap, however deep its coarse meshes make it, is
-/// a contact at rest) — or the robot starts below the floor or outside the bounds.
+/// vertex of the robot's coarse mesh lies inside a tetrahedron of another object or a vertex of
+/// another object inside a robot tetrahedron, deeper than touch_tolerance from each of its faces —
+/// with rest overlaps on (contact.rest_overlap, the default) only if one was placed inside the
+/// other (placed_inside: a touching overlap, however deep its coarse meshes make it, is a contact
+/// at rest) — or the robot starts below the floor or outside the bounds by more than
+/// touch_tolerance.
 void check_robot_start(const fem::SceneWorld& world);
 
 /// Whether, at rest, the centre of mass of object a lies inside a tetrahedron of object b or the
