@@ -294,9 +294,6 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
     const fs::path out = a.output;
     check_output_folder(out);
     const std::vector<const PaperRow*> rows = bundled_rows(a.scenes, a.only);
-    std::error_code ec;
-    fs::create_directories(out, ec);
-    if (ec) throw InputError(a.output + ": cannot create the directory: " + ec.message());
 
     std::ostringstream md, csv;
     csv << "environment,obstacles,paper_tets,paper_iterations,paper_seconds,tets,seeds,solved,time_limit_s,"
@@ -360,16 +357,15 @@ Runner add_bench_command(CLI::App& app, const Global& global) {
          << " MiB | " << f2(100 * volume) << " % (" << f2(100 * r->volume_bound, "%.0f") << " %) | "
          << f2(r->seconds / ms, "%.0f") << "× | " << scene.integrator << " |\n";
     }
-    write_atomically(out / "table1.csv", [&](const fs::path& p) {
-      std::ofstream f(p);
-      f << csv.str();
-      if (!f) throw InputError((out / "table1.csv").string() + ": write failed");
-    });
-    write_atomically(out / "table1.md", [&](const fs::path& p) {
-      std::ofstream f(p);
-      f << md.str();
-      if (!f) throw InputError((out / "table1.md").string() + ": write failed");
-    });
+    // Both tables into a staging folder beside OUT, swapped in whole (common/atomic_file.h): a kill
+    // never leaves a new table1.csv beside an old table1.md.
+    FolderReplacement staged(out);
+    for (const auto& [name, text] : {std::pair<const char*, std::string>{"table1.csv", csv.str()}, {"table1.md", md.str()}}) {
+      std::ofstream f(staged.staging() / name);
+      f << text;
+      if (!f) throw InputError((out / name).string() + ": write failed");
+    }
+    staged.commit();
     if (!global.quiet) std::fprintf(stderr, "%s", md.str().c_str());
     return kExitOk;
   };

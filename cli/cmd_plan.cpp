@@ -13,6 +13,7 @@
 #include "commands.h"
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
+#include "squeeze/common/json_check.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/fem/scene.h"
 #include "squeeze/plan/plan_io.h"
@@ -59,33 +60,38 @@ PreparedPlanning prepare_planning(const fem::Scene& scene, const PlanOverrides& 
 }
 
 ReplayOutput write_replay(const fem::SceneWorld& world, const plan::PlanFile& f, const std::string& plan_name,
-                          const std::string& output, double fps, int settle_steps, Progress& progress) {
-  check_output_folder(output);
+                          const fs::path& folder, double fps, int settle_steps, Progress& progress) {
   const fem::Scene& scene = world.scene;
+  const double h = f.time_step;
+  long long total = settle_steps;
+  for (const auto& seg : f.path) total += seg.steps;
+  const double duration = total * h;
+  const double frames_d = std::floor(duration * fps + 1e-9);
+  if (!(frames_d <= 1e7))  // the plan's length, not only --fps: say both
+    throw InputError(plan_name + ": the path and settling last " + format_number(duration) + " s (" +
+                     std::to_string(total) + " steps of time_step " + format_number(h) + " s): at --fps " +
+                     format_number(fps) + " that is more than 10 million frames");
   fem::SceneWorld at_h = world;  // the plan's time step (a copy: nothing rebuilt)
   if (at_h.time_step() != f.time_step) at_h.set_time_step(f.time_step);
   // The plan's start: the scene settled without control for its start_settle_steps; volume changes
   // are measured against it, as the planner measured them.
   const fem::State start = plan::settle_start_state(at_h, 0, nullptr, f.start_settle_steps);
+  if (fem::diverged(start))
+    throw InputError(plan_name + ": start_settle_steps: the scene diverges while settling before the path at time_step " +
+                     format_number(h) + " s");
   plan::PropagatorOptions po;
   po.stop_when_invalid = false;
   for (int b = 0; b < at_h.world.bodies(); ++b) po.reference_volume.push_back(at_h.world.body_volume(start, b));
   plan::SimulationPropagator p(at_h, po);  // a copy of the built world
-  const double h = f.time_step;
   for (size_t i = 0; i < f.path.size(); ++i)
     f.path[i].control.kind->validate(f.path[i].control, p.robot(),
                                      plan_name + ": path[" + std::to_string(i) + "] does not fit the robot of " +
                                          scene.file.string() + " (the plan was made for another scene)");
-  long long total = settle_steps;
-  for (const auto& seg : f.path) total += seg.steps;
-  const double duration = total * h;
-  const double frames_d = std::floor(duration * fps + 1e-9);
-  if (frames_d > 1e7) throw InputError("--fps: too many frames (at most 10 million)");
   ReplayOutput out;
   out.frames = static_cast<int>(frames_d) + 1;
 
   fem::SceneWorld metrics_world = p.world();  // contacts for the metrics, apart from the replay
-  TrajectoryWriter writer(metrics_world, output, fps, h, out.frames);
+  TrajectoryWriter writer(metrics_world, folder, fps, h, out.frames);
   const fem::World& w = p.world().world;
   for (int b = 0; b < w.bodies(); ++b) out.names.push_back(scene.objects[b].name);
   out.max_volume_change.assign(w.bodies(), 0.0);
@@ -106,8 +112,13 @@ ReplayOutput write_replay(const fem::SceneWorld& world, const plan::PlanFile& f,
   };
   frame(s0, 0.0);
   progress.stage("replaying", static_cast<double>(total));
+  const long long path_steps = total - settle_steps;
   p.on_step = [&](const fem::State& s, int) {
     ++step;
+    if (fem::diverged(s))  // as the planner discards a diverged expansion (Validity::diverged)
+      throw InputError(plan_name + ": the replay diverged at t = " + format_number(step * h) + " s (" +
+                       (step <= path_steps ? "during the path: its controls" : "during the final settling: its settle values") +
+                       " are too large for this scene at its time_step " + format_number(h) + " s)");
     if (step == total) settled = s;
     while (next < out.frames && frame_step(next) <= step) frame(s, next++ / fps);
     progress.update(static_cast<double>(step));
@@ -219,11 +230,18 @@ Runner add_replay_command(CLI::App& app, const Global& global) {
     const ReplayArgs& a = *args;
     if (!(a.fps > 0) || !std::isfinite(a.fps)) throw InputError("--fps must be > 0");
     Progress progress(!global.quiet);
+    check_output_folder(a.output);
     const plan::PlanFile f = plan::load_plan(a.plan);
     const fem::Scene scene = load_scene_with(a.scene, f.integrator);  // the plan's integrator
+    constexpr double kMaxSettleSteps = 1e8;
+    if (a.settle >= 0 && !(a.settle / f.time_step <= kMaxSettleSteps))
+      throw InputError("--settle " + format_number(a.settle) + ": at most " + format_number(kMaxSettleSteps * f.time_step) +
+                       " s (100 million steps of the plan's time_step " + format_number(f.time_step) + " s of " + a.plan + ")");
     const int settle_steps = a.settle >= 0 ? static_cast<int>(std::lround(a.settle / f.time_step)) : f.settle_steps;
     const fem::SceneWorld world = fem::build_scene(scene, &progress);
-    const ReplayOutput r = write_replay(world, f, a.plan, a.output, a.fps, settle_steps, progress);
+    FolderReplacement out(a.output);  // the new output beside the old one, swapped in whole
+    const ReplayOutput r = write_replay(world, f, a.plan, out.staging(), a.fps, settle_steps, progress);
+    out.commit();
     if (!global.quiet) {
       double worst = 0;
       for (double v : r.max_volume_change) worst = std::max(worst, v);

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "commands.h"
+#include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/render/export_formats.h"
@@ -81,7 +82,12 @@ Runner add_render_command(CLI::App& app, const Global& global) {
       if (p.done == 1) progress.stage("rendering frames", p.total);
       progress.update(p.done);
     };
+    // Into a staging folder beside OUT, swapped in whole (common/atomic_file.h): a kill or a full
+    // disk leaves the old OUT complete; frames of other --frames ranges already in OUT are kept.
+    FolderReplacement out(a.output);
+    o.output = out.staging();
     const render::RenderStats s = render::render_trajectory(o, &progress);
+    out.commit();
     progress.finish();
     if (!global.quiet)
       std::fprintf(stderr, "squeeze: %s: %d of %d frames at %dx%d (%d samples, %.1f frames/s), wrote %s\n",

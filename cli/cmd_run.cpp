@@ -99,10 +99,11 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     const plan::PlannerOptions& options = prep.options;
     print_scene_warnings(prep.world, options.max_volume_change);  // squeeze check's warnings
     seconds.emplace_back("meshing", since(t));
-    const fs::path out = a.output;
-    std::error_code ec;
-    fs::create_directories(out, ec);
-    if (ec) throw InputError(a.output + ": cannot create the directory: " + ec.message());
+    // Everything is written into a staging folder beside OUT and swapped in whole at the end, so a
+    // kill at any moment leaves the complete old OUT or the complete new one.
+    FolderReplacement staged(a.output);
+    const fs::path out = staged.staging();
+    const fs::path final_out = a.output;
 
     // Plan.
     t = clock_type::now();
@@ -115,7 +116,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     t = clock_type::now();
     const double fps = a.fps > 0 ? a.fps : rs.fps.value_or(30.0);
     const ReplayOutput rep =
-        write_replay(prep.world, f, (out / "plan.json").string(), a.output, fps, f.settle_steps, progress);
+        write_replay(prep.world, f, (final_out / "plan.json").string(), out, fps, f.settle_steps, progress);
     // The scene's world is built once (prepare_planning); planning, replay and metrics use copies.
     const long long builds = fem::scene_builds() - builds_before;
     spdlog::info("squeeze run: built the scene's world {} time{} (planning, replay and metrics use copies)", builds,
@@ -157,7 +158,8 @@ Runner add_run_command(CLI::App& app, const Global& global) {
       seconds.emplace_back("plots and exports", since(t));
     }
 
-    // Summary.
+    // Summary. (The video's path as the user finds it: OUT/video.mp4 once OUT is in place.)
+    const std::string video_path = a.video.empty() ? (final_out / "video.mp4").string() : a.video;
     const plan::PlanStatistics& s = r.stats;
     nlohmann::json sum;
     sum["scene"] = f.scene;
@@ -172,20 +174,21 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     for (const auto& [k, v] : seconds) sum["seconds"][k] = v;
     sum["seconds"]["total"] = since(t_all);
     for (size_t b = 0; b < rep.names.size(); ++b) sum["max_volume_change"][rep.names[b]] = rep.max_volume_change[b];
-    sum["outputs"] = {{"plan", (out / "plan.json").string()},
-                      {"metrics", (out / "metrics.csv").string()},
-                      {"trajectory", (out / "trajectory").string()}};
+    sum["outputs"] = {{"plan", (final_out / "plan.json").string()},
+                      {"metrics", (final_out / "metrics.csv").string()},
+                      {"trajectory", (final_out / "trajectory").string()}};
     if (!a.no_render) {
-      sum["outputs"]["frames"] = (out / "frames").string();
-      sum["outputs"]["volume_plot"] = (out / "volume.png").string();
-      sum["outputs"]["export"] = (out / "export").string();
-      if (!st.video.empty()) sum["outputs"]["video"] = st.video;
+      sum["outputs"]["frames"] = (final_out / "frames").string();
+      sum["outputs"]["volume_plot"] = (final_out / "volume.png").string();
+      sum["outputs"]["export"] = (final_out / "export").string();
+      if (!st.video.empty()) sum["outputs"]["video"] = video_path;
     }
     write_atomically(out / "summary.json", [&](const fs::path& p) {
       std::ofstream o(p);
       o << sum.dump(2) << '\n';
       if (!o) throw InputError((out / "summary.json").string() + ": write failed");
     });
+    staged.commit();
     if (!global.quiet) {
       std::fprintf(stderr, "\nsqueeze run %s: %s after %d iterations (%d nodes, %.1f it/s); robot %.3g m from the goal "
                    "(tolerance %.3g m) after the path and %.1f s of settling\n",
@@ -200,7 +203,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
                    rep.frames, fps);
       if (!a.no_render)
         std::fprintf(stderr, ", frames/frame_*.png (%dx%d), volume.png, volume.svg%s%s", st.width, st.height,
-                     !ro.exports.empty() ? ", export/" : "", st.video.empty() ? "" : (", " + st.video).c_str());
+                     !ro.exports.empty() ? ", export/" : "", st.video.empty() ? "" : (", " + video_path).c_str());
       std::fprintf(stderr, ", summary.json\n");
     }
     return r.status == plan::PlanStatus::solved ? kExitOk : kExitNotSolved;

@@ -73,25 +73,29 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
       print_scene_warnings(w, limit);  // squeeze check's warnings
     }
     const double interval = 1.0 / a.fps;
-    const int substeps = std::max(1, static_cast<int>(std::ceil(interval / w.time_step() - 1e-9)));
+    const double substeps_d = std::ceil(interval / w.time_step() - 1e-9);
+    if (!(substeps_d <= 1e8))  // never a wrapped-around count: a step that cannot be honoured is an error
+      throw InputError(a.scene + ": time_step " + format_number(w.time_step()) + " s: " + format_number(substeps_d) +
+                       " steps per frame interval of --fps " + format_number(a.fps) + " (at most 100 million)");
+    const int substeps = std::max(1, static_cast<int>(substeps_d));
     const double h = interval / substeps;
     w.set_time_step(h);  // divides the frame interval, never larger than the scene's step
     const int nobj = w.world.bodies();
     spdlog::info("time step {}{}", w.time_step_choice.describe(scene),
                  h != w.time_step_choice.h ? ", lowered to " + std::to_string(h) + " s to divide the frame interval" : "");
 
-    TrajectoryWriter writer(w, a.output, a.fps, h, frames);
+    FolderReplacement out(a.output);  // the new output beside the old one, swapped in whole by commit()
+    TrajectoryWriter writer(w, out.staging(), a.fps, h, frames);
     fem::State s = w.initial_state();
     progress.stage("simulating", frames);
     for (int f = 0; f < frames; ++f) {
-      bool diverged = false;
+      bool diverged = fem::diverged(s);
       if (f > 0)
         for (int k = 0; k < substeps && !diverged; ++k) {
           w.step(s);
-          // Faster than 1 km/s is a blow-up, not motion (and would make collision detection crawl).
-          diverged = !(s.v.size() == 0 || s.v.cwiseAbs().maxCoeff() < 1e3);
+          diverged = fem::diverged(s);  // the planner's test (Validity::diverged)
         }
-      if (diverged || !s.x.allFinite() || !s.v.allFinite())
+      if (diverged)
         throw InputError(a.scene + ": the simulation diverged before t = " + format_number(f * interval) +
                          " s: lower time_step or the material stiffness");
       writer.add_frame(s, f * interval);
@@ -99,11 +103,11 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
     }
     progress.finish();
     writer.commit();
+    out.commit();
     spdlog::info("{}", describe_integrator_stats(w.world));
-    const fs::path out = a.output;
     if (!global.quiet)
       std::fprintf(stderr, "squeeze: %s: %d objects, %d frames, time step %.3g s, wrote %s\n", a.scene.c_str(), nobj,
-                   frames, h, out.string().c_str());
+                   frames, h, a.output.c_str());
     return kExitOk;
   };
 }

@@ -1,6 +1,7 @@
 // What `squeeze plan`, `squeeze replay` and `squeeze run` share: preparing a scene for planning,
 // and replaying a plan into an output folder (metrics.csv + trajectory/). Defined in cmd_plan.cpp.
 #pragma once
+#include <filesystem>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -43,10 +44,11 @@ struct ReplayOutput {
 };
 
 /// Re-simulates plan `f` in the built scene `world` (path, then `settle_steps` of settling) and
-/// writes OUTPUT/metrics.csv and OUTPUT/trajectory/ at `fps`. Throws InputError on bad input (a
-/// plan that does not fit the scene names `plan_name`).
+/// writes FOLDER/metrics.csv and FOLDER/trajectory/ at `fps` (FOLDER: a FolderReplacement's staging
+/// folder). Throws InputError on bad input (a plan that does not fit the scene names `plan_name`)
+/// and when the replay diverges (fem::diverged: NaN or faster than 1 km/s), naming `plan_name`.
 ReplayOutput write_replay(const fem::SceneWorld& world, const plan::PlanFile& f, const std::string& plan_name,
-                          const std::string& output, double fps, int settle_steps, Progress& progress);
+                          const std::filesystem::path& folder, double fps, int settle_steps, Progress& progress);
 
 std::string hex64(std::uint64_t h);
 

@@ -23,15 +23,10 @@ std::string fmt(double x) {
 }
 }  // namespace
 
-TrajectoryWriter::TrajectoryWriter(fem::SceneWorld& w, const std::string& output, double fps, double h, int frames)
-    : w_(w), out_(output), frames_(frames), fps_(fps), h_(h) {
-  check_output_folder(output);
+TrajectoryWriter::TrajectoryWriter(fem::SceneWorld& w, const fs::path& folder, double fps, double h, int frames)
+    : w_(w), out_(folder), frames_(frames), fps_(fps), h_(h) {
   std::error_code ec;
-  created_ = !fs::exists(out_, ec);
-  fs::create_directories(out_, ec);
-  if (ec) throw InputError(output + ": cannot create the directory: " + ec.message());
-  tmp_ = out_ / (".trajectory.tmp-" + std::to_string(::getpid()));
-  fs::remove_all(tmp_, ec);
+  tmp_ = out_ / "trajectory";
   fs::create_directories(tmp_ / "rest", ec);
   fs::create_directories(tmp_ / "frames", ec);
   if (ec) throw InputError((tmp_ / "frames").string() + ": cannot create the directory: " + ec.message());
@@ -78,14 +73,6 @@ TrajectoryWriter::TrajectoryWriter(fem::SceneWorld& w, const std::string& output
   csv_ << '\n';
 }
 
-TrajectoryWriter::~TrajectoryWriter() {
-  std::error_code ec;
-  if (!committed_) {
-    fs::remove_all(tmp_, ec);
-    if (created_) fs::remove_all(out_, ec);
-  }
-}
-
 void TrajectoryWriter::add_frame(const fem::State& s, double t) {
   // Contacts of this very state (the step's statistics belong to the state before it).
   const fem::StepStats st = w_.world.contact_stats(s);
@@ -127,17 +114,11 @@ void TrajectoryWriter::commit() {
     idx << index_ << '\n';
     if (!idx) throw InputError((tmp_ / "index.json").string() + ": write failed");
   }
-  write_atomically(out_ / "metrics.csv", [&](const fs::path& p) {
-    std::ofstream o(p);
+  {
+    std::ofstream o(out_ / "metrics.csv");
     o << csv_.str();
     if (!o) throw InputError((out_ / "metrics.csv").string() + ": write failed");
-  });
-  const fs::path traj = out_ / "trajectory";
-  std::error_code ec;
-  fs::remove_all(traj, ec);
-  fs::rename(tmp_, traj, ec);
-  if (ec) throw InputError(traj.string() + ": cannot move the trajectory into place: " + ec.message());
-  committed_ = true;
+  }
 }
 
 }  // namespace squeeze::cli

@@ -2,6 +2,7 @@
 # Installs the Debian 12 packages squeeze builds against, if any is missing, then configures and
 # builds squeeze in Release mode into build/ (or $SQUEEZE_BUILD_DIR). Safe to run again.
 # Usage: scripts/setup-debian.sh            (as root, or with sudo available)
+#        SQUEEZE_SETUP_PACKAGES_ONLY=1 scripts/setup-debian.sh   only the packages (scripts/test.sh --sanitize)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${SQUEEZE_BUILD_DIR:-$here/build}"
@@ -26,6 +27,8 @@ if ((${#missing[@]})); then
   "${sudo_cmd[@]}" apt-get update -q
   DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
+
+[ "${SQUEEZE_SETUP_PACKAGES_ONLY:-0}" = 1 ] && exit 0
 
 launcher=()
 command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)

@@ -463,6 +463,48 @@ TEST(PlanCli, ReplayRefusesAMissingAlteredOrMalformedHash) {
   }
 }
 
+// Issue 20: a replay that diverges (a huge settle.omega used to write NaN metrics and exit 0), a
+// --settle beyond any step count and a plan time_step beyond the scene's range are one-line errors
+// that blame the right thing; an existing output is left as it was.
+TEST(PlanCli, ReplayStopsOnDivergenceAndBlamesTheRightValue) {
+  const sqt::TempDir tmp("plan-diverge");
+  const fs::path& d = tmp.path();
+  const fs::path scene = write_scene(d, mini_scene({{"planner", {{"iterations", 8}}}}));
+  const fs::path plan_file = d / "plan.json", out = d / "out";
+  const int rc = run(d, {"-q", "plan", scene.string(), "-o", plan_file.string(), "--seed", "1"});
+  ASSERT_TRUE(rc == 0 || rc == 3) << rc;
+  std::string err;
+  ASSERT_EQ(run(d, {"-q", "replay", scene.string(), plan_file.string(), "-o", out.string()}, &err), 0) << err;
+  const std::string metrics = sqt::read_text(out / "metrics.csv");
+  std::ifstream in(plan_file);
+  const nlohmann::json good = nlohmann::json::parse(in);
+  struct Case {
+    const char* what;
+    nlohmann::json plan;
+    std::vector<std::string> extra;
+    std::vector<std::string> expect;
+  };
+  nlohmann::json omega = good, step = good;
+  omega["settle"]["omega"] = 1e300;
+  step["time_step"] = 1e300;
+  const std::vector<Case> cases = {
+      {"huge settle.omega", omega, {}, {"bad.json: the replay diverged at t = ", "during the final settling"}},
+      {"huge --settle", good, {"--settle", "1e9"}, {"--settle 1000000000: at most ", "plan.json"}},
+      {"huge time_step", step, {}, {"bad.json: time_step: must be in [1e-06, 1] s, got 1e+300"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const fs::path bad = c.extra.empty() ? d / "bad.json" : plan_file;
+    if (c.extra.empty()) std::ofstream(bad) << c.plan.dump(2);
+    std::vector<std::string> args = {"-q", "replay", scene.string(), bad.string(), "-o", out.string()};
+    args.insert(args.end(), c.extra.begin(), c.extra.end());
+    EXPECT_EQ(run(d, args, &err), 1) << err;
+    for (const std::string& e : c.expect) EXPECT_NE(err.find(e), std::string::npos) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_EQ(sqt::read_text(out / "metrics.csv"), metrics);  // the old output, untouched
+  }
+}
+
 // Issue 15: controls have one home. Every registered kind has a name, a weight key, and
 // survives the plan file; unknown kinds and weights name the registered ones.
 TEST(ControlRegistry, EveryKindRoundTripsThroughThePlanFile) {

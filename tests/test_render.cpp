@@ -602,6 +602,35 @@ TEST(RenderCli, CubeDropEndToEndAndBadInput) {
   }
   EXPECT_TRUE(fs::exists(dir / "frames" / "volume.png"));
   EXPECT_TRUE(fs::exists(dir / "frames" / "volume.svg"));
+  // Issue 20: the manifest, written last, lists what the render completed.
+  {
+    const nlohmann::json m = nlohmann::json::parse(read_text(dir / "frames" / "render-manifest.json"));
+    EXPECT_EQ(m["format"], "squeeze-render-manifest");
+    EXPECT_EQ(m["frames"]["first"], 0);
+    EXPECT_EQ(m["frames"]["last"], 3);
+    ASSERT_EQ(m["frames"]["files"].size(), 4u);
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(dir / "frames" / m["frames"]["files"][k].get<std::string>(), frames[k]);
+    EXPECT_EQ(m["plots"], nlohmann::json({"volume.png", "volume.svg"}));
+    EXPECT_TRUE(m["exports"].empty());
+  }
+  // Rendering a sub-range into the same folder replaces it as a whole (common/atomic_file.h): the
+  // other frames are carried over, the manifest lists this run's frames and exports, no staging folder is left.
+  r = run_squeeze({"-q", "render", scene, "sim", "-o", "frames", "--width", "64", "--height", "48", "--frames", "2-3",
+                   "--export", "obj", "--no-plots"},
+                  dir.path(), 300);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(pngs_in(dir / "frames").size(), 4u);
+  EXPECT_EQ(read_png(dir / "frames" / "frame_00000.png").width, 1280);  // carried over
+  EXPECT_EQ(read_png(dir / "frames" / "frame_00002.png").width, 64);    // this run's
+  {
+    const nlohmann::json m = nlohmann::json::parse(read_text(dir / "frames" / "render-manifest.json"));
+    EXPECT_EQ(m["frames"]["files"], nlohmann::json({"frame_00002.png", "frame_00003.png"}));
+    EXPECT_TRUE(m["plots"].empty());
+    ASSERT_FALSE(m["exports"].empty());
+    for (const auto& e : m["exports"]) EXPECT_TRUE(fs::is_regular_file(dir / "frames" / e.get<std::string>())) << e;
+  }
+  for (const auto& e : fs::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find(".squeeze-"), std::string::npos) << e.path();
 
   // Bad input: one line "squeeze: error: ...", exit 1, no PNG written.
   const auto bad = [&](std::vector<std::string> args, const std::string& expect) {

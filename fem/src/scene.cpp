@@ -17,6 +17,8 @@
 #include <set>
 #include <sstream>
 
+#include <spdlog/spdlog.h>
+
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 #include "squeeze/common/json_check.h"
@@ -187,8 +189,14 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
       c.fail("integrator", "must be one of " + list + ", got \"" + s.integrator + "\"");
     }
   }
-  if (j.contains("time_step") && !(j["time_step"].is_string() && j["time_step"] == "auto"))
+  if (j.contains("time_step") && !(j["time_step"].is_string() && j["time_step"] == "auto")) {
+    // A step the stages cannot honour is an error, never replaced: below 1e-6 s (the automatic
+    // step's floor too) a frame would take millions of steps; above 1 s nothing stays resolved.
     s.time_step = c.positive(j["time_step"], "time_step");
+    if (!(*s.time_step >= kMinTimeStep && *s.time_step <= kMaxTimeStep))
+      c.fail("time_step", "must be in [" + format_number(kMinTimeStep) + ", " + format_number(kMaxTimeStep) +
+                              "] s or \"auto\", got " + format_number(*s.time_step));
+  }
   if (j.contains("gravity")) s.gravity = c.vec3(j["gravity"], "gravity");
   if (j.contains("floor")) {
     if (j["floor"].is_null() || (j["floor"].is_boolean() && !j["floor"].get<bool>())) s.floor.reset();
@@ -390,15 +398,17 @@ fs::path mesh_cache_dir() {
   return {};
 }
 
-meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progress* progress) {
+meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progress* progress,
+                                 std::string* off_target) {
   if (cache_hit) *cache_hit = false;
+  if (off_target) off_target->clear();
   if (meshing::is_tet_format(mesh)) return meshing::load_tet_mesh(mesh);
   meshing::MeshOptions options;
   options.tetrahedralize.target_tets = tets;
   // The cache key: format version, the input's extension and bytes, every meshing option.
   const std::string bytes = read_file_bytes(mesh);
   std::ostringstream opt;
-  opt << std::setprecision(17) << "squeeze-mesh-cache-v1|algorithm " << meshing::kMeshingAlgorithmVersion << "|" << mesh.extension().string() << '|'
+  opt << std::setprecision(17) << "squeeze-mesh-cache-v2|algorithm " << meshing::kMeshingAlgorithmVersion << "|" << mesh.extension().string() << '|'
       << options.decomposition.concavity << ',' << options.decomposition.max_hulls << ','
       << options.decomposition.max_hull_volume_ratio << ',' << options.decomposition.voxel_resolution << ','
       << options.decomposition.cut_samples << ',' << options.decomposition.flat_thickness << '|'
@@ -411,25 +421,59 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
   Hash128 h;
   h.add(opt.str());
   h.add(bytes);
+  const std::string key = h.hex();
   const fs::path dir = mesh_cache_dir();
-  const fs::path cached = dir.empty() ? fs::path() : dir / "meshes" / (h.hex() + ".mesh");
+  const fs::path cached = dir.empty() ? fs::path() : dir / "meshes" / (key + ".mesh");
+  const fs::path record = dir.empty() ? fs::path() : dir / "meshes" / (key + ".json");
   std::error_code ec;
   if (!cached.empty() && fs::is_regular_file(cached, ec)) {
+    // An entry is used only when its record names the key it was made for and the checksum of the
+    // mesh file's bytes matches: a damaged, truncated or swapped entry is meshed again.
+    std::string problem;
     try {
-      meshing::TetMesh m = meshing::load_tet_mesh(cached);
-      if (cache_hit) *cache_hit = true;
-      return m;
-    } catch (const InputError&) {
-      // A damaged cache entry: mesh again and overwrite it.
+      const nlohmann::json j = parse_json(read_file_bytes(record), record.string());
+      Hash128 content;
+      content.add(read_file_bytes(cached));
+      if (!j.is_object() || j.value("format", "") != "squeeze-mesh-cache" || j.value("key", "") != key)
+        problem = "its record " + record.filename().string() + " is not that of this key";
+      else if (j.value("checksum", "") != content.hex())
+        problem = "its checksum does not match its content";
+      else {
+        meshing::TetMesh m = meshing::load_tet_mesh(cached);
+        if (cache_hit) *cache_hit = true;
+        if (off_target) *off_target = j.value("off_target", "");
+        return m;
+      }
+    } catch (const std::exception& e) {  // InputError, or a record of the wrong shape
+      problem = std::string("it cannot be read: ") + e.what();
     }
+    spdlog::warn("{}: the cached mesh of {} is not used, {}: meshing it again", cached.string(), mesh.string(), problem);
   }
   if (progress) progress->stage("meshing " + mesh.filename().string());
   meshing::MeshResult r = meshing::mesh_file(mesh, options, nullptr);
   if (progress) progress->finish();
+  if (off_target) *off_target = r.target_exceeded_because;
   if (!cached.empty()) {
     fs::create_directories(cached.parent_path(), ec);
     try {
-      if (!ec) meshing::save_tet_mesh(cached, r.tets);  // atomic: through a temporary file renamed at the end
+      if (!ec) {
+        meshing::save_tet_mesh(cached, r.tets);  // atomic: through a temporary file renamed at the end
+        Hash128 content;
+        content.add(read_file_bytes(cached));
+        nlohmann::json j = {{"format", "squeeze-mesh-cache"},
+                            {"version", 2},
+                            {"key", key},
+                            {"checksum", content.hex()},
+                            {"source", fs::absolute(mesh).lexically_normal().string()},
+                            {"target_tets", tets},
+                            {"tets", r.tets.T.rows()},
+                            {"off_target", r.target_exceeded_because}};
+        write_atomically(record, [&](const fs::path& tmp) {  // after the mesh: a record vouches for a complete file
+          std::ofstream o(tmp);
+          o << j.dump(2) << '\n';
+          if (!o) throw InputError(record.string() + ": write failed");
+        });
+      }
     } catch (const InputError&) {
       // An unwritable cache only costs time.
     }
@@ -605,10 +649,20 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     const SceneObject& o = scene.objects[i];
     const std::string p = "objects[" + std::to_string(i) + "]";
     meshing::TetMesh m;
+    std::string off_target;
     try {
-      m = object_tet_mesh(o.mesh, o.tets, nullptr, progress);
+      m = object_tet_mesh(o.mesh, o.tets, nullptr, progress, &off_target);
     } catch (const InputError& e) {
       throw InputError(file + ": " + p + ".mesh: " + e.what());
+    }
+    // The tet count is a target met within about ±35%. Far fewer than asked cannot honour the
+    // request: an error; more than asked (the surface needs them): a warning that says so.
+    if (!off_target.empty() && !meshing::is_tet_format(o.mesh)) {
+      const long long n = m.T.rows();
+      const std::string what = p + ".tets: " + std::to_string(o.tets) + " requested, but meshing " +
+                               o.mesh.filename().string() + " gives " + std::to_string(n) + " tetrahedra (" + off_target + ")";
+      if (n < 0.65 * o.tets) throw InputError(file + ": " + what + ": ask for at most about " + std::to_string(n));
+      spdlog::warn("{}: {}", file, what);
     }
     Material mat;
     mat.density = o.density;
@@ -691,7 +745,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     choice = auto_time_step(world, scene);
   }
   const double h = choice.h;
-  if (!scene.time_step && h < 1e-6)
+  if (!scene.time_step && h < kMinTimeStep)
     throw InputError(file + ": time_step: the stable step of these meshes is only " + num(h) +
                      " s (tiny or flat tetrahedra, or very stiff materials): set time_step, another tets count, or a "
                      "tet mesh of better quality");

@@ -327,14 +327,19 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     r.info.volume = r.input_volume;
     timer.start("tetrahedralizing");
     ShellTetrahedralizeOptions so = opt.shells;
-    so.target_tets = opt.tetrahedralize.target_tets;
+    // The fallback never makes more than shells.max_tets: a larger target cannot be honoured, so it
+    // aims at the cap at once (instead of attempts that overshoot it) and the report says why.
+    so.target_tets = std::min(opt.tetrahedralize.target_tets, so.max_tets);
     so.seed = opt.tetrahedralize.seed;
     r.tets = tetrahedralize_shells(r.decomposition.shells, so, &r.shell_stats, progress, &r.input.V);
     if (r.tets.T.rows() == 0) throw InputError("tetrahedralization produced no tetrahedra");
     timer.start("measuring");
     measure(r, opt);
     const double n = r.quality.tets, target = opt.tetrahedralize.target_tets;
-    if (n > 1.35 * target || n < 0.65 * target)
+    if (target > so.max_tets && n < 0.65 * target)
+      r.target_exceeded_because = "the convex shells' fallback (" + why + ") makes at most " +
+                                  std::to_string(so.max_tets) + " tetrahedra; it landed at " + std::to_string(r.quality.tets);
+    else if (n > 1.35 * target || n < 0.65 * target)
       r.target_exceeded_because = "the convex shells' Mesh_3 refinement (the fallback: " + why + ") landed at " +
                                   std::to_string(r.quality.tets) + " tetrahedra after " +
                                   std::to_string(r.shell_stats.attempts) + " attempts";

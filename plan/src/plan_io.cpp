@@ -9,6 +9,7 @@
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 #include "squeeze/common/json_check.h"
+#include "squeeze/fem/scene.h"
 
 namespace squeeze::plan {
 using json = nlohmann::json;
@@ -132,6 +133,9 @@ PlanFile load_plan(const std::filesystem::path& file) {
   const std::string st = c.string(j["status"], "status");
   p.status = st == "solved" ? PlanStatus::solved : st == "approximate" ? PlanStatus::approximate : PlanStatus::failed;
   p.time_step = c.positive(j["time_step"], "time_step");
+  if (!(p.time_step >= fem::kMinTimeStep && p.time_step <= fem::kMaxTimeStep))  // the scene's range
+    c.fail("time_step", "must be in [" + format_number(fem::kMinTimeStep) + ", " + format_number(fem::kMaxTimeStep) +
+                            "] s, got " + format_number(p.time_step));
   if (j.contains("integrator")) p.integrator = c.string(j["integrator"], "integrator");
   if (!j["path"].is_array()) c.fail("path", "must be an array");
   for (size_t i = 0; i < j["path"].size(); ++i) {

@@ -176,9 +176,7 @@ double SimulationPropagator::max_volume_change(const fem::State& s, int* object)
 }
 
 Validity SimulationPropagator::check(const fem::State& s) {
-  // Faster than 1 km/s is a blow-up, not motion (the same bound as `squeeze simulate`).
-  if (!s.x.allFinite() || !s.v.allFinite() || (s.v.size() && s.v.cwiseAbs().maxCoeff() > 1e3))
-    return Validity::diverged;
+  if (fem::diverged(s)) return Validity::diverged;  // the same test as `squeeze simulate` and `replay`
   int object = -1;
   const double change = max_volume_change(s, &object);
   if (!std::isfinite(change)) return Validity::diverged;

@@ -222,7 +222,7 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
     const long long steps = std::min<long long>(20000, std::max<long long>(1, std::llround(std::ceil(options.settle / h - 1e-9))));
     for (long long k = 0; k < steps && !out.settle_diverged; ++k) {
       sim.step(s);
-      out.settle_diverged = !s.x.allFinite() || !s.v.allFinite() || (s.v.size() > 0 && !(s.v.cwiseAbs().maxCoeff() < 1e3));
+      out.settle_diverged = fem::diverged(s);
       if (out.settle_diverged) break;
       for (int b = 0; b < nb; ++b) {
         if (world.body(b).rigid) continue;

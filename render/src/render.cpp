@@ -1,5 +1,6 @@
 #include "squeeze/render/render.h"
 
+#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -628,6 +629,40 @@ void write_volume_plots(const fs::path& out, const Inputs& in, const std::vector
   save_plot(out / "volume.svg", plot);
 }
 
+// OUT/render-manifest.json, written last (atomically): the frames of the range, the plots and every
+// file under OUT/export/, each complete (PNGs and exports are renamed into place when complete).
+void write_manifest(const RenderOptions& o, const Inputs& in, const RenderStats& stats) {
+  nlohmann::json m;
+  m["format"] = "squeeze-render-manifest";
+  m["version"] = 1;
+  m["scene"] = fs::absolute(o.scene).lexically_normal().string();
+  m["trajectory"] = fs::absolute(o.trajectory).lexically_normal().string();
+  m["fps"] = in.fps;
+  m["total_frames"] = in.total;
+  m["width"] = stats.width;
+  m["height"] = stats.height;
+  m["frames"] = {{"first", in.first}, {"last", in.last}, {"files", nlohmann::json::array()}};
+  if (o.png)
+    for (int k = in.first; k <= in.last; ++k) m["frames"]["files"].push_back(frame_file_name("frame_", k, ".png"));
+  m["plots"] = nlohmann::json::array();
+  if (o.plots) m["plots"] = {"volume.png", "volume.svg"};
+  std::vector<std::string> exports;
+  std::error_code ec;
+  const fs::path folder = o.output / "export";
+  if (!o.exports.empty() && fs::is_directory(folder, ec))
+    for (fs::recursive_directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
+      if (it->is_regular_file(ec)) exports.push_back(fs::relative(it->path(), o.output, ec).generic_string());
+  if (ec) throw InputError(folder.string() + ": cannot list the exports: " + ec.message());
+  std::sort(exports.begin(), exports.end());
+  m["exports"] = exports;
+  const fs::path path = o.output / kRenderManifest;
+  write_atomically(path, [&](const fs::path& tmp) {
+    std::ofstream f(tmp);
+    f << m.dump(2) << '\n';
+    if (!f) throw InputError(path.string() + ": write failed");
+  });
+}
+
 }  // namespace
 
 RenderStats render_trajectory(const RenderOptions& o, Progress* progress) {
@@ -674,6 +709,7 @@ RenderStats render_trajectory(const RenderOptions& o, std::vector<std::unique_pt
   }
   render_frames(o, in, objects, renderer, exporters, video.get(), stats);
   if (o.plots) write_volume_plots(o.output, in, objects, motion);
+  write_manifest(o, in, stats);  // last: what it lists is complete
   return stats;
 }
 

@@ -148,10 +148,14 @@ std::filesystem::path mesh_cache_dir();
 /// The coarse tetrahedral mesh of an object in its model units (before the transform): loaded
 /// directly if `mesh` is a tet mesh (meshing::is_tet_format: .mesh, .msh, ...), otherwise made by the
 /// meshing pipeline with target_tets = tets and cached as CACHE/meshes/HASH.mesh, HASH being a
-/// 128-bit hash of the file's bytes and every meshing option. `cache_hit` (optional) tells
-/// whether the cache served it. Throws InputError "PATH: problem".
+/// 128-bit hash of the file's bytes and every meshing option, with CACHE/meshes/HASH.json beside it
+/// (the key it was made for, a checksum of the .mesh file's bytes, the count and why it is off the
+/// target); an entry whose record is missing or does not match (a damaged or swapped file) is meshed
+/// again with a warning and overwritten. `cache_hit` (optional) tells whether the cache served it;
+/// `off_target` (optional) gets why the count is more than 35% off `tets`
+/// (MeshResult::target_exceeded_because), or "". Throws InputError "PATH: problem".
 meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bool* cache_hit = nullptr,
-                        Progress* progress = nullptr);
+                                 Progress* progress = nullptr, std::string* off_target = nullptr);
 
 /// The automatic time step of a world and what sets it (scene key `time_step`: "auto").
 struct TimeStepChoice {
@@ -163,6 +167,11 @@ struct TimeStepChoice {
   /// One line: "0.0333 s (implicit: the frame interval 1/30 s)", "8.2e-05 s (verlet: elastic stability of 'ball', ...)".
   std::string describe(const Scene& scene) const;
 };
+
+/// The range of a scene's `time_step` (s): a given step outside it is an error (load_scene), and so
+/// is an automatic step below kMinTimeStep (build_scene).
+constexpr double kMinTimeStep = 1e-6;
+constexpr double kMaxTimeStep = 1.0;
 
 /// The frame interval the implicit integrator's automatic step keeps to (s).
 constexpr double kImplicitFrameInterval = 1.0 / 30;

@@ -20,6 +20,17 @@ struct State {
   Eigen::VectorXd overlap;
 };
 
+/// The speed (m/s) above which a state counts as diverged: faster than 1 km/s is a blow-up, not
+/// motion (and would make collision detection crawl).
+constexpr double kDivergedSpeed = 1e3;
+
+/// Whether `s` has diverged: a position or velocity that is NaN or infinite, or a speed component
+/// above kDivergedSpeed. The one test of `plan` (Validity::diverged), `simulate`, `replay` and
+/// `squeeze check`'s settle.
+inline bool diverged(const State& s) {
+  return !s.x.allFinite() || !s.v.allFinite() || (s.v.size() > 0 && !(s.v.cwiseAbs().maxCoeff() <= kDivergedSpeed));
+}
+
 /// What the last collision pass found (World::last_stats, ForceWorkspace::stats).
 struct StepStats {
   int contacts = 0;            // (vertex, tet) pairs found by the spatial hash

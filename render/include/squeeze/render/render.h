@@ -84,7 +84,13 @@ void parse_exports(const std::string& list, RenderOptions& options);
 /// `progress` (may be null) gets the loading and binding stages. The exports named in
 /// options.exports go into OUT/export/ (an unknown name throws InputError, before anything is
 /// written); an exception mid-way leaves no export file half-written (exporter.h).
+/// Last of all, OUT/render-manifest.json lists what this render completed (kRenderManifest;
+/// docs/render.md "Manifest"): a reader trusts the files it lists, and a folder without it holds no
+/// completed render.
 RenderStats render_trajectory(const RenderOptions& options, Progress* progress = nullptr);
+
+/// The name of the manifest render_trajectory writes last into its output folder.
+constexpr const char* kRenderManifest = "render-manifest.json";
 
 /// The same, driving `more` exporters (begun, fed every frame and finished like the registered
 /// ones, after them) besides those named in options.exports: formats that are not registered.
