@@ -1,6 +1,8 @@
 #include "squeeze/common/json_check.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 #include <cstring>
 #include <iomanip>
 #include <sstream>
@@ -15,11 +17,16 @@ namespace {
 constexpr const char* kNonFinite = "\x01squeeze-non-finite:";  // marks NaN/Infinity literals
 
 // JSON has no NaN or Infinity; scenes written by scripts sometimes contain them anyway. Replace
-// such bare literals (outside strings) by a marked string so that validation can name the key.
-std::string mark_non_finite(const std::string& text) {
+// such bare literals (outside strings), and numbers too large for a double (1e400: the parser
+// would stop with "number overflow"), by a marked string so that validation can name the key.
+// Also checks the nesting depth (at most kMaxJsonDepth): the parser would build it, but the
+// document's destructor and copies recurse once per level, so 200,000 levels overflow the stack.
+constexpr int kMaxJsonDepth = 256;
+std::string mark_non_finite(const std::string& text, const std::string& file) {
   std::string out;
   out.reserve(text.size());
   bool in_string = false;
+  int depth = 0;
   for (size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     if (in_string) {
@@ -33,10 +40,34 @@ std::string mark_non_finite(const std::string& text) {
       out += c;
       continue;
     }
+    if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth)
+        throw InputError(file + ": invalid JSON: nested more than " + std::to_string(kMaxJsonDepth) + " levels deep");
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+    const bool boundary_before = i == 0 || !std::isalnum(static_cast<unsigned char>(text[i - 1]));
+    if (boundary_before && (c == '-' || std::isdigit(static_cast<unsigned char>(c)))) {
+      // A number: its characters as the JSON grammar allows them; marked if it overflows a double.
+      size_t n = 0;
+      while (i + n < text.size() && (std::isdigit(static_cast<unsigned char>(text[i + n])) ||
+                                     std::strchr("+-.eE", text[i + n])))
+        ++n;
+      const std::string number = text.substr(i, n);
+      char* end = nullptr;
+      const double x = std::strtod(number.c_str(), &end);
+      if (n > 0 && end == number.c_str() + n && std::isinf(x)) {
+        out += '"';
+        out += "\\u0001squeeze-non-finite:";
+        out += number;
+        out += '"';
+        i += n - 1;
+        continue;
+      }
+    }
     bool replaced = false;
     for (const char* lit : {"-Infinity", "+Infinity", "Infinity", "-NaN", "NaN", "-nan", "nan", "-inf", "inf"}) {
       const size_t n = std::char_traits<char>::length(lit);
-      const bool boundary_before = i == 0 || !std::isalnum(static_cast<unsigned char>(text[i - 1]));
       const bool boundary_after = i + n >= text.size() || !std::isalnum(static_cast<unsigned char>(text[i + n]));
       if (boundary_before && boundary_after && text.compare(i, n, lit) == 0) {
         out += '"';
@@ -53,6 +84,27 @@ std::string mark_non_finite(const std::string& text) {
   return out;
 }
 
+// Where the parser is in the document, for naming a duplicate key: per open object or array, the
+// current key or element index.
+struct JsonPath {
+  struct Level {
+    bool array = false;
+    long index = -1;           // arrays: the element being read
+    std::string key;           // objects: the key being read
+    std::vector<std::string> keys;  // objects: the keys seen
+  };
+  std::vector<Level> levels;
+  std::string str() const {
+    std::string p;
+    for (const Level& l : levels)
+      if (l.array) p += "[" + std::to_string(std::max(0L, l.index)) + "]";
+      else if (!l.key.empty()) p += (p.empty() ? "" : ".") + l.key;
+    return p;
+  }
+  void element() {  // a value starts (or an object or array) inside the current level
+    if (!levels.empty() && levels.back().array) ++levels.back().index;
+  }
+};
 }  // namespace
 
 std::string json_type_name(const json& j) {
@@ -74,9 +126,37 @@ std::string format_number(double x) {
 
 
 json parse_json(const std::string& text, const std::string& file) {
+  const std::string marked = mark_non_finite(text, file);
+  JsonPath path;
+  // Duplicate keys are an error (the parser would keep the last one silently).
+  const json::parser_callback_t check = [&](int, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+      case json::parse_event_t::array_start:
+        path.element();
+        path.levels.push_back({event == json::parse_event_t::array_start, -1, {}, {}});
+        break;
+      case json::parse_event_t::key: {
+        JsonPath::Level& l = path.levels.back();
+        l.key = parsed.get<std::string>();
+        if (std::find(l.keys.begin(), l.keys.end(), l.key) != l.keys.end())
+          throw InputError(file + ": " + path.str() + ": duplicate key (each key may appear once in an object)");
+        l.keys.push_back(l.key);
+        break;
+      }
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        if (!path.levels.empty()) path.levels.pop_back();
+        break;
+      case json::parse_event_t::value:
+        path.element();
+        break;
+    }
+    return true;
+  };
   try {
-    return json::parse(mark_non_finite(text));
-  } catch (const json::parse_error& e) {
+    return json::parse(marked, check);
+  } catch (const json::exception& e) {  // parse errors; anything else the parser reports
     std::string what = e.what();
     const auto pos = what.find("] ");
     if (pos != std::string::npos) what = what.substr(pos + 2);

@@ -240,7 +240,10 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
     if (mesh.empty()) c.fail(p + ".mesh", "must not be empty");
     ob.mesh = fs::path(mesh).is_absolute() ? fs::path(mesh) : base / mesh;
     std::error_code ec;
-    if (!fs::is_regular_file(ob.mesh, ec)) c.fail(p + ".mesh", "file " + ob.mesh.string() + " does not exist");
+    if (!fs::exists(ob.mesh, ec)) c.fail(p + ".mesh", "file " + ob.mesh.string() + " does not exist");
+    if (fs::is_directory(ob.mesh, ec)) c.fail(p + ".mesh", ob.mesh.string() + " is a directory, not a mesh file");
+    if (!fs::is_regular_file(ob.mesh, ec))
+      c.fail(p + ".mesh", ob.mesh.string() + " is not a regular file (a device, a pipe or a socket)");
     if (o.contains("role")) {
       const std::string r = c.string(o["role"], p + ".role");
       if (r != "robot" && r != "obstacle") c.fail(p + ".role", "must be \"robot\" or \"obstacle\", got \"" + r + "\"");
@@ -268,9 +271,16 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
         } else {
           ob.transform.scale.setConstant(c.positive(t["scale"], q + ".scale"));
         }
+        for (int k = 0; k < 3; ++k)  // metres from any unit (1e-6: micrometres to metres), not overflow
+          if (ob.transform.scale(k) > 1e6 || ob.transform.scale(k) < 1e-9)
+            c.fail(q + ".scale", "must be in [1e-9, 1e6], got " + num(ob.transform.scale(k)));
       }
       if (t.contains("rotate_deg")) ob.transform.rotate_deg = c.vec3(t["rotate_deg"], q + ".rotate_deg");
-      if (t.contains("translate")) ob.transform.translate = c.vec3(t["translate"], q + ".translate");
+      if (t.contains("translate")) {
+        ob.transform.translate = c.vec3(t["translate"], q + ".translate");
+        if (ob.transform.translate.cwiseAbs().maxCoeff() > 1e6)
+          c.fail(q + ".translate", "must be within 1e6 m of the origin");
+      }
     }
     if (o.contains("material")) {
       const json& m = o["material"];
@@ -679,7 +689,15 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     mat.k_volume = o.k_volume.value_or(3.0 * o.youngs_modulus * V / std::max(1, body->tets()));
     mat.mass_scaling = o.rigid ? 0.0 : o.mass_scaling;
     mat.deformation_damping = o.deformation_damping;
-    body->set_material(mat);  // masses (mass scaling) from the final stiffnesses
+    const auto set_material = [&](const Material& m2) {
+      try {
+        body->set_material(m2);
+      } catch (const InputError& e) {  // a stiffness or damping that overflows its products
+        throw InputError(file + ": " + p + ".material: " + e.what() + " (k_distance " + num(m2.k_distance) +
+                         ", k_volume " + num(m2.k_volume) + ", damping " + num(m2.damping_distance) + ")");
+      }
+    };
+    set_material(mat);  // masses (mass scaling) from the final stiffnesses
     if (o.damping) {
       mat.damping_distance = mat.damping_volume = *o.damping;
     } else {
@@ -698,7 +716,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
       mat.damping_distance = tau * mat.k_distance;
       mat.damping_volume = tau * mat.k_volume;
     }
-    body->set_material(mat);
+    set_material(mat);
     meshing::TetMesh rest;
     rest.V = body->rest;
     rest.T = body->T;

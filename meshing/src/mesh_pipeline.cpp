@@ -633,6 +633,10 @@ MeshResult mesh_file(const std::filesystem::path& path, const MeshOptions& opt, 
   const auto t0 = std::chrono::steady_clock::now();
   if (progress) progress->stage("loading " + path.filename().string());
   const SurfaceMesh s = load_surface(path);
+  if (s.F.rows() > kMaxMeshTriangles)
+    throw InputError(path.string() + ": " + std::to_string(s.F.rows()) + " triangles: squeeze mesh takes surfaces of up to " +
+                     std::to_string(kMaxMeshTriangles) +
+                     " (the simulation mesh is coarse anyway): decimate it first, e.g. Blender's Decimate modifier");
   const double load = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   MeshResult r = mesh_surface(s, opt, progress);
   r.seconds.insert(r.seconds.begin(), {"loading", load});

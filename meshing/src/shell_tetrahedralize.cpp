@@ -9,6 +9,8 @@
 #include <CGAL/Random.h>
 #include <CGAL/make_mesh_3.h>
 #include <CGAL/refine_mesh_3.h>
+#include <CGAL/perturb_mesh_3.h>
+#include <CGAL/exude_mesh_3.h>
 
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
@@ -152,17 +154,24 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
     }
     Criteria criteria(params::facet_angle = 25, params::facet_size = size, params::facet_distance = fd,
                       params::cell_radius_edge_ratio = 3, params::cell_size = size);
-    // Perturbation and exudation run to completion (a time limit would make the result depend on
-    // the machine's load).
+    // Perturbation and exudation run to completion in practice; their time limit is a bound for
+    // pathological inputs (reaching it makes the result depend on the machine's load: warned).
     const auto limits = params::mesh_3_options(params::maximal_number_of_vertices =
                                                    static_cast<std::size_t>(2 * opt.max_tets));
-    CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(),
-                        params::perturb(params::time_limit = opt.optimize_seconds,
-                                        params::sliver_bound = opt.sliver_bound),
-                        params::exude(params::time_limit = opt.optimize_seconds,
-                                      params::sliver_bound = opt.sliver_bound),
+    CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(), params::no_perturb(),
+                        params::no_exude(),
                         // A safety net against runaway refinement (memory): far above max_tets.
                         limits);
+    if (CGAL::perturb_mesh_3(c3t3, domain, params::time_limit = opt.optimize_seconds,
+                             params::sliver_bound = opt.sliver_bound) == CGAL::TIME_LIMIT_REACHED)
+      spdlog::warn("tetrahedralize: Mesh_3's sliver perturber stopped at its time limit ({} s): the mesh may differ "
+                   "from run to run",
+                   opt.optimize_seconds);
+    if (CGAL::exude_mesh_3(c3t3, params::time_limit = opt.optimize_seconds, params::sliver_bound = opt.sliver_bound) ==
+        CGAL::TIME_LIMIT_REACHED)
+      spdlog::warn("tetrahedralize: Mesh_3's sliver exuder stopped at its time limit ({} s): the mesh may differ "
+                   "from run to run",
+                   opt.optimize_seconds);
     TetMesh mesh;
     std::map<Tr::Vertex_handle, int> index;
     std::vector<Eigen::Vector3d> pts;

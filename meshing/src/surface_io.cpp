@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -40,11 +41,17 @@ std::string lower(std::string s) {
 }
 
 // Walks the node tree, applying accumulated transforms, and appends the triangles of every mesh.
-void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent,
-             std::vector<std::array<double, 3>>& pts, std::vector<std::array<int, 3>>& tris) {
+// Checks what assimp hands over before using it (mesh and vertex indices, counts that would not
+// fit an int, node depth): a broken file is an InputError naming `name`, never a crash.
+void collect(const std::string& name, const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent,
+             std::vector<std::array<double, 3>>& pts, std::vector<std::array<int, 3>>& tris, int depth = 0) {
+  if (depth > 1000) throw InputError(name + ": scene graph nested more than 1000 deep");
   const aiMatrix4x4 m = parent * node->mTransformation;
   for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+    if (node->mMeshes[k] >= scene->mNumMeshes) throw InputError(name + ": a node refers to a mesh that does not exist");
     const aiMesh* mesh = scene->mMeshes[node->mMeshes[k]];
+    if (pts.size() + mesh->mNumVertices > static_cast<size_t>(std::numeric_limits<int>::max()))
+      throw InputError(name + ": more than 2^31 vertices");
     const int base = static_cast<int>(pts.size());
     for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
       const aiVector3D p = m * mesh->mVertices[i];
@@ -52,13 +59,17 @@ void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent
     }
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
       const aiFace& face = mesh->mFaces[f];
+      for (unsigned j = 0; j < face.mNumIndices; ++j)
+        if (face.mIndices[j] >= mesh->mNumVertices)
+          throw InputError(name + ": face " + std::to_string(f) + " refers to vertex " + std::to_string(face.mIndices[j]) +
+                           " of " + std::to_string(mesh->mNumVertices));
       for (unsigned j = 2; j < face.mNumIndices; ++j)  // fan; assimp triangulated already
         tris.push_back({base + static_cast<int>(face.mIndices[0]),
                         base + static_cast<int>(face.mIndices[j - 1]),
                         base + static_cast<int>(face.mIndices[j])});
     }
   }
-  for (unsigned c = 0; c < node->mNumChildren; ++c) collect(scene, node->mChildren[c], m, pts, tris);
+  for (unsigned c = 0; c < node->mNumChildren; ++c) collect(name, scene, node->mChildren[c], m, pts, tris, depth + 1);
 }
 
 // OBJ in file order (assimp duplicates OBJ vertices per face corner): `v` and `f` lines only;
@@ -115,6 +126,88 @@ void read_obj_in_order(const fs::path& path, std::vector<std::array<double, 3>>&
                          " out of range (" + std::to_string(pts.size()) + " vertices)");
 }
 
+// Checks a PLY file's header before assimp reads it (assimp 5.2 loops forever on a header without
+// end_header, and reads past the data of a truncated file): the magic line, the format, every
+// element's count, and that the data after the header can hold that many items (at least one byte
+// per ASCII value and its separator, the scalar sizes of a binary file). Throws InputError.
+void check_ply(const fs::path& path) {
+  const std::string name = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(name + ": cannot open for reading");
+  std::string line;
+  if (!std::getline(in, line) || (line != "ply" && line != "ply\r")) throw InputError(name + ": not a PLY file (no 'ply' line)");
+  bool ascii = true, format = false, ended = false;
+  double min_bytes = 0;  // of the data after the header
+  double count = 0, per_item = 0, items = 0;
+  const auto size_of = [&](const std::string& t) -> int {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+    if (t == "double" || t == "float64") return 8;
+    throw InputError(name + ": PLY header: unknown property type '" + t + "'");
+  };
+  for (int lines = 0; std::getline(in, line); ++lines) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (lines > 10000 || in.tellg() > (1 << 20)) break;
+    std::istringstream ss(line);
+    std::string kw;
+    ss >> kw;
+    if (kw == "end_header") {
+      ended = true;
+      break;
+    }
+    if (kw == "format") {
+      std::string f;
+      ss >> f;
+      if (f != "ascii" && f != "binary_little_endian" && f != "binary_big_endian")
+        throw InputError(name + ": PLY header: unknown format '" + f + "'");
+      ascii = f == "ascii";
+      format = true;
+    } else if (kw == "element") {
+      min_bytes += count * per_item;
+      items += count;
+      std::string element, n;
+      ss >> element >> n;
+      char* end = nullptr;
+      count = std::strtod(n.c_str(), &end);
+      if (n.empty() || *end || !(count >= 0) || count != std::floor(count) || count > std::numeric_limits<int>::max())
+        throw InputError(name + ": PLY header: element " + element + " has count '" + n + "' (a whole number below 2^31 expected)");
+      per_item = 0;
+    } else if (kw == "property") {
+      std::string t;
+      ss >> t;
+      if (t == "list") {
+        std::string count_type, item_type;
+        ss >> count_type >> item_type;
+        size_of(item_type);
+        per_item += ascii ? 2 : size_of(count_type);  // the list's length, at least
+      } else {
+        per_item += ascii ? 2 : size_of(t);
+      }
+    }
+  }
+  if (!ended) throw InputError(name + ": PLY header has no end_header line (truncated?)");
+  if (!format) throw InputError(name + ": PLY header has no format line");
+  min_bytes += count * per_item;
+  items += count;
+  const auto header_end = static_cast<double>(in.tellg());
+  std::error_code ec;
+  const double size = static_cast<double>(fs::file_size(path, ec));
+  if (!ec && size - header_end < min_bytes - (ascii ? 1 : 0))
+    throw InputError(name + ": the PLY header announces at least " + std::to_string(static_cast<long long>(min_bytes)) +
+                     " bytes of data, the file holds " + std::to_string(static_cast<long long>(size - header_end)) +
+                     " (truncated?)");
+  if (ascii) {  // one item per line: fewer lines than items is a truncated file
+    double lines = 0;
+    while (lines < items && std::getline(in, line))
+      if (line.find_first_not_of(" \t\r") != std::string::npos) ++lines;
+    if (lines < items)
+      throw InputError(name + ": the PLY header announces " + std::to_string(static_cast<long long>(items)) +
+                       " items (one per line), the file holds " + std::to_string(static_cast<long long>(lines)) +
+                       " (truncated?)");
+  }
+}
+
 // OFF in file order and full double precision (assimp parses OFF in single precision): header
 // OFF, COFF, NOFF or CNOFF (extra per-vertex columns ignored), '#' comments, polygons as fans.
 void read_off_in_order(const fs::path& path, std::vector<std::array<double, 3>>& pts,
@@ -150,6 +243,14 @@ void read_off_in_order(const fs::path& path, std::vector<std::array<double, 3>>&
   }
   if (!(ss >> nf) || nv < 0 || nf < 0) fail("malformed vertex and face counts");
   if (nv == 0) throw InputError(name + ": holds no vertices");
+  {  // the counts against the file's size before allocating: a vertex line takes at least 6 bytes
+     // ("0 0 0\n"), a face line 2
+    std::error_code ec;
+    const double size = static_cast<double>(fs::file_size(path, ec));
+    if (!ec && 6.0 * nv + 2.0 * nf > size)
+      fail("counts of " + std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces do not fit in a file of " +
+           std::to_string(static_cast<long long>(size)) + " bytes (truncated or corrupt?)");
+  }
   pts.resize(static_cast<size_t>(nv));
   for (auto& p : pts) {
     if (!next(ss)) fail("ends before its " + std::to_string(nv) + " vertices");
@@ -166,6 +267,8 @@ void read_off_in_order(const fs::path& path, std::vector<std::array<double, 3>>&
     if (!next(ss)) fail("ends before its " + std::to_string(nf) + " faces");
     long n = 0;
     if (!(ss >> n) || n < 0) fail("malformed face");
+    if (static_cast<double>(n) > static_cast<double>(line.size()) / 2 + 1)  // each index takes 2 characters at least
+      fail("a face of " + std::to_string(n) + " corners on a line of " + std::to_string(line.size()) + " characters");
     poly.resize(static_cast<size_t>(n));
     for (long& v : poly)
       if (!(ss >> v)) fail("malformed face");
@@ -226,6 +329,41 @@ const OwnSurfaceFormat* own_surface_format(const std::string& ext) {
   return nullptr;
 }
 
+// A vertex far outside the rest of the model (a stray vertex at 1e11 m, a units mix-up) makes the
+// bounding box, and every tolerance relative to it, meaningless: the mesh comes out empty or the
+// meshing takes minutes. The rest of the model is the box between the 1st and 99th percentile of
+// each coordinate; a vertex more than 1000 times its diagonal away from it is an error.
+void check_outliers(const std::string& name, const std::vector<std::array<double, 3>>& pts) {
+  if (pts.size() < 20) return;
+  std::array<double, 3> lo{}, hi{};
+  std::vector<double> c(pts.size());
+  for (int k = 0; k < 3; ++k) {
+    for (size_t i = 0; i < pts.size(); ++i) c[i] = pts[i][k];
+    const size_t a = pts.size() / 100, b = pts.size() - 1 - pts.size() / 100;
+    std::nth_element(c.begin(), c.begin() + static_cast<long>(a), c.end());
+    lo[k] = c[a];
+    std::nth_element(c.begin(), c.begin() + static_cast<long>(b), c.end());
+    hi[k] = c[b];
+  }
+  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  if (!(diag > 0)) return;  // degenerate bulk: other checks report it
+  for (size_t i = 0; i < pts.size(); ++i) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double out = std::max({0.0, lo[k] - pts[i][k], pts[i][k] - hi[k]});
+      d2 += out * out;
+    }
+    if (std::sqrt(d2) > 1000 * diag) {
+      std::ostringstream s;
+      s << name << ": vertex " << i << " at (" << pts[i][0] << ", " << pts[i][1] << ", " << pts[i][2] << ") lies "
+        << std::sqrt(d2) / diag << " times the size of the rest of the model away from it (a stray vertex or mixed "
+        << "units: remove it or fix the file)";
+      throw InputError(s.str());
+    }
+  }
+}
+
 }  // namespace
 
 SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
@@ -233,6 +371,7 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(name + ": no such file");
   if (fs::is_directory(path, ec)) throw InputError(name + ": is a directory, not a mesh file");
+  if (!fs::is_regular_file(path, ec)) throw InputError(name + ": is not a regular file (a device, a pipe or a socket)");
   {
     std::ifstream probe(path, std::ios::binary);
     if (!probe) throw InputError(name + ": cannot open for reading");
@@ -244,19 +383,23 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
   if (own && own->read && (own->read_always || options.keep_order)) {
     own->read(path, pts, tris);
   } else {
+    if (lower(path.extension().string()) == ".ply") check_ply(path);
     Assimp::Importer importer;
     // Keep only triangles; polygons are triangulated, points and lines dropped.
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    // aiProcess_ValidateDataStructure runs first: indices past the vertex list (a truncated or
+    // corrupt file) are reported instead of reaching the other steps, which assert or crash on them.
     const aiScene* scene = importer.ReadFile(
-        name, options.keep_order ? 0u
-                                 : aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_JoinIdenticalVertices);
+        name, aiProcess_ValidateDataStructure |
+                  (options.keep_order ? 0u
+                                      : aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_JoinIdenticalVertices));
     if (!scene || !scene->mRootNode) {
       std::string why = importer.GetErrorString();
       if (why.empty()) why = "unknown or unreadable format";
       std::replace(why.begin(), why.end(), '\n', ' ');
       throw InputError(name + ": cannot read: " + why);
     }
-    collect(scene, scene->mRootNode, aiMatrix4x4(), pts, tris);
+    collect(name, scene, scene->mRootNode, aiMatrix4x4(), pts, tris);
   }
   if (pts.empty()) throw InputError(name + ": holds no vertices");
   if (tris.empty()) throw InputError(name + ": holds no triangles");
@@ -264,6 +407,7 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
     for (double d : pts[i])
       if (!std::isfinite(d))
         throw InputError(name + ": vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
+  check_outliers(name, pts);
 
   if (options.keep_order) {  // the file's vertices and faces as they are
     SurfaceMesh mesh;

@@ -5,6 +5,7 @@
 #include <unordered_map>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -124,11 +125,23 @@ void write_tetgen_ele(const fs::path& tmp, const fs::path& target, const TetMesh
 struct Reader {
   fs::path path;
   std::vector<std::array<double, 3>> pts;
-  std::vector<std::array<int, 4>> tets;
-  std::vector<int> labels;
+  std::vector<std::array<long, 4>> tets;  // as read (64-bit: checked against the vertex count by finish)
+  std::vector<long> labels;               // as read (checked to fit an int by finish)
 
   [[noreturn]] void fail(const std::string& what) const {
     throw InputError(path.string() + ": " + what);
+  }
+  // A count read from the file, checked before anything is allocated for it: not negative, below
+  // 2^31, and `n` items of at least `min_bytes` characters each fit in the file.
+  size_t count(long n, double min_bytes, const std::string& what) const {
+    if (n < 0) fail("negative " + what + " count " + std::to_string(n));
+    if (n > std::numeric_limits<int>::max()) fail(what + " count " + std::to_string(n) + " is above 2^31 - 1");
+    std::error_code ec;
+    const double size = static_cast<double>(fs::file_size(path, ec));
+    if (!ec && static_cast<double>(n) * min_bytes > size)
+      fail(what + " count " + std::to_string(n) + " does not fit in a file of " +
+           std::to_string(static_cast<long long>(size)) + " bytes (truncated or corrupt?)");
+    return static_cast<size_t>(n);
   }
   TetMesh finish(int base) const {
     if (pts.empty()) fail("holds no vertices");
@@ -144,15 +157,20 @@ struct Reader {
     }
     m.T.resize(static_cast<Eigen::Index>(tets.size()), 4);
     m.label.resize(static_cast<Eigen::Index>(tets.size()));
+    if (!labels.empty() && labels.size() != tets.size())
+      fail(std::to_string(labels.size()) + " labels for " + std::to_string(tets.size()) + " tetrahedra");
     for (size_t t = 0; t < tets.size(); ++t) {
       for (int k = 0; k < 4; ++k) {
-        const int v = tets[t][k] - base;
-        if (v < 0 || v >= static_cast<int>(pts.size()))
+        const long v = tets[t][k] - static_cast<long>(base);  // 64-bit: no overflow for any int read
+        if (v < 0 || v >= static_cast<long>(pts.size()))
           fail("tetrahedron " + std::to_string(t) + " has vertex index " + std::to_string(tets[t][k]) +
                " out of range");
-        m.T(static_cast<Eigen::Index>(t), k) = v;
+        m.T(static_cast<Eigen::Index>(t), k) = static_cast<int>(v);
       }
-      m.label(static_cast<Eigen::Index>(t)) = labels.empty() ? 1 : labels[t];
+      const long label = labels.empty() ? 1 : labels[t];
+      if (label < std::numeric_limits<int>::min() || label > std::numeric_limits<int>::max())
+        fail("tetrahedron " + std::to_string(t) + " has label " + std::to_string(label) + " outside the int range");
+      m.label(static_cast<Eigen::Index>(t)) = static_cast<int>(label);
     }
     return m;
   }
@@ -191,8 +209,7 @@ TetMesh read_medit(const fs::path& p) {
     if (kw == "Vertices") {
       long n;
       read_value(in, n, r, "vertex count");
-      if (n < 0) r.fail("negative vertex count");
-      r.pts.resize(static_cast<size_t>(n));
+      r.pts.resize(r.count(n, 8, "vertex"));  // "0 0 0 0\n"
       for (auto& q : r.pts) {
         read_value(in, q[0], r, "a coordinate");
         read_value(in, q[1], r, "a coordinate");
@@ -203,9 +220,8 @@ TetMesh read_medit(const fs::path& p) {
     } else if (kw == "Tetrahedra") {
       long n;
       read_value(in, n, r, "tetrahedron count");
-      if (n < 0) r.fail("negative tetrahedron count");
-      r.tets.resize(static_cast<size_t>(n));
-      r.labels.resize(static_cast<size_t>(n));
+      r.tets.resize(r.count(n, 10, "tetrahedron"));  // "1 2 3 4 0\n"
+      r.labels.resize(r.tets.size());
       for (size_t t = 0; t < r.tets.size(); ++t) {
         for (int k = 0; k < 4; ++k) read_value(in, r.tets[t][k], r, "a tetrahedron index");
         read_value(in, r.labels[t], r, "a tetrahedron reference");
@@ -216,6 +232,7 @@ TetMesh read_medit(const fs::path& p) {
                       : kw == "Hexahedra" ? 9 : 1;
       long n;
       read_value(in, n, r, "an element count");
+      r.count(n, 2.0 * per, kw);
       for (long i = 0; i < n * per; ++i) {
         long skip;
         read_value(in, skip, r, "an element index");
@@ -245,8 +262,7 @@ TetMesh read_gmsh(const fs::path& p) {
     } else if (kw == "$Nodes") {
       long n;
       read_value(in, n, r, "node count");
-      if (n < 0) r.fail("negative node count");
-      r.pts.resize(static_cast<size_t>(n));
+      r.pts.resize(r.count(n, 8, "node"));  // "1 0 0 0\n"
       for (long i = 0; i < n; ++i) {
         long id;
         read_value(in, id, r, "a node id");
@@ -256,6 +272,7 @@ TetMesh read_gmsh(const fs::path& p) {
     } else if (kw == "$Elements") {
       long n;
       read_value(in, n, r, "element count");
+      r.count(n, 6, "element");  // "1 15 0 1\n" at least
       std::string line;
       std::getline(in, line);
       for (long i = 0; i < n; ++i) {
@@ -263,10 +280,13 @@ TetMesh read_gmsh(const fs::path& p) {
         std::istringstream ls(line);
         long id, type, ntags;
         if (!(ls >> id >> type >> ntags)) r.fail("malformed element line '" + line + "'");
-        std::vector<long> tags(static_cast<size_t>(std::max(0L, ntags)));
+        if (ntags < 0 || static_cast<double>(ntags) > static_cast<double>(line.size()) / 2)
+          r.fail("element " + std::to_string(id) + " has a tag count of " + std::to_string(ntags) + " on a line of " +
+                 std::to_string(line.size()) + " characters");
+        std::vector<long> tags(static_cast<size_t>(ntags));
         for (auto& t : tags) ls >> t;
         if (type != 4) continue;
-        std::array<int, 4> tet;
+        std::array<long, 4> tet;
         for (int k = 0; k < 4; ++k) {
           long node;
           if (!(ls >> node)) r.fail("malformed tetrahedron line '" + line + "'");
@@ -275,7 +295,7 @@ TetMesh read_gmsh(const fs::path& p) {
           tet[k] = it->second;
         }
         r.tets.push_back(tet);
-        r.labels.push_back(tags.empty() ? 1 : static_cast<int>(tags[0]));
+        r.labels.push_back(tags.empty() ? 1 : tags[0]);
       }
     }
   }
@@ -286,9 +306,9 @@ TetMesh read_vtk(const fs::path& p) {
   Reader r{p, {}, {}, {}};
   auto in = open_in(p);
   std::string kw;
-  std::vector<std::vector<int>> cells;
+  std::vector<std::vector<long>> cells;
   std::vector<int> types;
-  std::vector<int> cell_labels;
+  std::vector<long> cell_labels;
   while (in >> kw) {
     if (kw == "BINARY") r.fail("binary legacy VTK is not supported (write ASCII)");
     if (kw == "POINTS") {
@@ -296,14 +316,14 @@ TetMesh read_vtk(const fs::path& p) {
       std::string type;
       read_value(in, n, r, "point count");
       in >> type;
-      r.pts.resize(static_cast<size_t>(std::max(0L, n)));
+      r.pts.resize(r.count(n, 6, "point"));  // "0 0 0\n"
       for (auto& q : r.pts)
         for (int k = 0; k < 3; ++k) read_value(in, q[k], r, "a coordinate");
     } else if (kw == "CELLS") {
       long n, size;
       read_value(in, n, r, "cell count");
       read_value(in, size, r, "cell list size");
-      cells.resize(static_cast<size_t>(std::max(0L, n)));
+      cells.resize(r.count(n, 2, "cell"));  // "0\n"
       for (auto& c : cells) {
         int k;
         read_value(in, k, r, "a cell size");
@@ -314,7 +334,7 @@ TetMesh read_vtk(const fs::path& p) {
     } else if (kw == "CELL_TYPES") {
       long n;
       read_value(in, n, r, "cell type count");
-      types.resize(static_cast<size_t>(std::max(0L, n)));
+      types.resize(r.count(n, 2, "cell type"));
       for (auto& t : types) read_value(in, t, r, "a cell type");
     } else if (kw == "SCALARS" && !cells.empty() && !types.empty()) {
       std::string name, type, lookup, table;
@@ -329,6 +349,9 @@ TetMesh read_vtk(const fs::path& p) {
     }
   }
   if (types.size() != cells.size()) r.fail("CELL_TYPES does not match CELLS");
+  if (!cell_labels.empty() && cell_labels.size() != cells.size())
+    r.fail("the label SCALARS (" + std::to_string(cell_labels.size()) + " values) do not match CELLS (" +
+           std::to_string(cells.size()) + ")");
   for (size_t c = 0; c < cells.size(); ++c) {
     if (types[c] != 10) continue;
     if (cells[c].size() != 4) r.fail("tetrahedron cell " + std::to_string(c) + " has " + std::to_string(cells[c].size()) + " vertices");
@@ -376,13 +399,13 @@ TetMesh read_vtu(const fs::path& p) {
       r.pts.push_back(q);
     }
   }
-  std::vector<long> conn, offs;
-  std::vector<int> types, labels;
+  std::vector<long> conn, offs, labels;
+  std::vector<int> types;
   { std::istringstream s(array("connectivity", false)); long v; while (s >> v) conn.push_back(v); }
   { std::istringstream s(array("offsets", false)); long v; while (s >> v) offs.push_back(v); }
   { std::istringstream s(array("types", false)); int v; while (s >> v) types.push_back(v); }
   if (xml.find("Name=\"label\"") != std::string::npos) {
-    std::istringstream s(array("label", false)); int v; while (s >> v) labels.push_back(v);
+    std::istringstream s(array("label", false)); long v; while (s >> v) labels.push_back(v);
   }
   if (offs.size() != types.size()) r.fail("offsets and types differ in length");
   long start = 0;
@@ -390,8 +413,7 @@ TetMesh read_vtu(const fs::path& p) {
     if (offs[c] > static_cast<long>(conn.size()) || offs[c] < start) r.fail("bad offsets");
     if (types[c] == 10) {
       if (offs[c] - start != 4) r.fail("tetrahedron cell with " + std::to_string(offs[c] - start) + " vertices");
-      r.tets.push_back({static_cast<int>(conn[start]), static_cast<int>(conn[start + 1]),
-                        static_cast<int>(conn[start + 2]), static_cast<int>(conn[start + 3])});
+      r.tets.push_back({conn[start], conn[start + 1], conn[start + 2], conn[start + 3]});
       r.labels.push_back(labels.size() == offs.size() ? labels[c] : 1);
     }
     start = offs[c];
@@ -413,11 +435,15 @@ TetMesh read_tetgen(const fs::path& p) {
     read_value(in, nattr, r, "attribute count");
     read_value(in, nmark, r, "boundary marker count");
     if (dim != 3) r.fail("dimension must be 3");
-    r.pts.resize(static_cast<size_t>(std::max(0L, n)));
+    if (nattr < 0 || nmark < 0 || nattr > 1000 || nmark > 1) r.fail("attribute or marker count out of range");
+    r.pts.resize(r.count(n, 8.0 + 2 * (nattr + nmark), "node"));
     for (size_t i = 0; i < r.pts.size(); ++i) {
       long id;
       read_value(in, id, r, "a node id");
-      if (i == 0) base = static_cast<int>(id);
+      if (i == 0) {
+        if (id != 0 && id != 1) r.fail("the first node's id is " + std::to_string(id) + " (0 or 1 expected)");
+        base = static_cast<int>(id);
+      }
       for (int k = 0; k < 3; ++k) read_value(in, r.pts[i][k], r, "a coordinate");
       for (int k = 0; k < nattr + nmark; ++k) { double skip; read_value(in, skip, r, "a node attribute"); }
     }
@@ -430,19 +456,24 @@ TetMesh read_tetgen(const fs::path& p) {
   read_value(in, per, re, "nodes per tetrahedron");
   read_value(in, nattr, re, "attribute count");
   if (per != 4 && per != 10) re.fail("nodes per tetrahedron must be 4 or 10");
+  if (nattr < 0 || nattr > 1000) re.fail("attribute count " + std::to_string(nattr) + " out of range");
+  re.count(n, 2.0 * (1 + per + nattr), "tetrahedron");
   for (long t = 0; t < n; ++t) {
     long id;
     read_value(in, id, re, "a tetrahedron id");
-    std::array<int, 4> tet;
+    std::array<long, 4> tet;
     for (int k = 0; k < per; ++k) {
-      int v;
+      long v;
       read_value(in, v, re, "a tetrahedron index");
       if (k < 4) tet[k] = v;
     }
     double label = 1;
     for (int k = 0; k < nattr; ++k) read_value(in, label, re, "a region attribute");
+    if (!(std::abs(label) <= std::numeric_limits<int>::max()) || label != std::floor(label))
+      re.fail("tetrahedron " + std::to_string(id) + " has region attribute " + std::to_string(label) +
+              " (an integer in the int range expected)");
     r.tets.push_back(tet);
-    r.labels.push_back(static_cast<int>(label));
+    r.labels.push_back(static_cast<long>(label));
   }
   r.path = ele;
   return r.finish(base);

@@ -899,7 +899,11 @@ class Mesher {
 
   // CGAL's exuder on the tetrahedra below sliver_bound: weights only, never a surface face.
   void exude() {
-    CGAL::exude_mesh_3(c3t3_, CGAL::parameters::sliver_bound = opt_.sliver_bound, CGAL::parameters::time_limit = 0);
+    if (CGAL::exude_mesh_3(c3t3_, CGAL::parameters::sliver_bound = opt_.sliver_bound,
+                           CGAL::parameters::time_limit = opt_.exude_seconds) == CGAL::TIME_LIMIT_REACHED)
+      spdlog::warn("tetrahedralize: CGAL's sliver exuder stopped at its time limit ({} s): the mesh may differ from "
+                   "run to run",
+                   opt_.exude_seconds);
   }
 
   TetMesh extract() {

@@ -156,10 +156,10 @@ PlanFile load_plan(const std::filesystem::path& file) {
   p.final_state_hash = std::strtoull(h.c_str(), nullptr, 16);
   if (j.contains("statistics") && j["statistics"].is_object()) {
     const json& s = j["statistics"];
-    p.stats.iterations = s.value("iterations", 0);
-    p.stats.nodes = s.value("nodes", 0);
-    p.stats.seconds = s.value("seconds", 0.0);
-    p.stats.final_distance = s.value("final_distance", 0.0);
+    if (s.contains("iterations")) p.stats.iterations = static_cast<int>(c.integer(s["iterations"], "statistics.iterations", 0, (1LL << 31) - 1));
+    if (s.contains("nodes")) p.stats.nodes = static_cast<int>(c.integer(s["nodes"], "statistics.nodes", 0, (1LL << 31) - 1));
+    if (s.contains("seconds")) p.stats.seconds = c.non_negative(s["seconds"], "statistics.seconds");
+    if (s.contains("final_distance")) p.stats.final_distance = c.non_negative(s["final_distance"], "statistics.final_distance");
   }
   return p;
 }

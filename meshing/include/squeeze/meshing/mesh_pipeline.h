@@ -113,6 +113,10 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& options, 
 /// Loads `path` (see load_surface) and runs mesh_surface on it.
 MeshResult mesh_file(const std::filesystem::path& path, const MeshOptions& options, Progress* progress = nullptr);
 
+/// The largest surface mesh_file() takes (triangles): beyond it an InputError asks for a decimated
+/// surface before any work (docs/meshing.md, "Limits").
+constexpr long kMaxMeshTriangles = 1000000;
+
 /// All convex shells as one surface (for --shells).
 SurfaceMesh shells_surface(const Decomposition& d);
 

@@ -33,8 +33,9 @@ struct ShellTetrahedralizeOptions {
   double min_dihedral = 10.0;     // degrees; boundary tetrahedra below it are peeled off afterwards
   double sliver_bound = 10.0;     // degrees; Mesh_3's sliver perturber and exuder work on tetrahedra
                                   // whose smallest dihedral angle is below this
-  double optimize_seconds = 0.0;  // time limit of each of Mesh_3's sliver perturber and exuder; 0: none
-                                  // (a limit makes results depend on machine load)
+  double optimize_seconds = 30.0; // time limit of each of Mesh_3's sliver perturber and exuder (0: none):
+                                  // a bound for pathological inputs, far above what they take on real
+                                  // meshes (reaching it is warned: the result then depends on load)
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
 };
 

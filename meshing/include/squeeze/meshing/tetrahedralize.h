@@ -23,6 +23,8 @@ struct TetrahedralizeOptions {
                                   // edge it would cut); where a part is thinner than the edge
                                   // length this decides how finely its faces are split
   double sliver_bound = 12.0;     // degrees: CGAL's sliver exuder then works on tetrahedra below this
+  double exude_seconds = 30.0;    // the exuder's time limit (0: none): a bound for pathological inputs,
+                                  // far above what it takes on real meshes (reaching it is warned)
   double min_dihedral = 5.0;      // degrees: the floor the result is checked against (stats)
   int max_tets = 100000;          // a safety net: refinement stops when the mesh reaches this
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
