@@ -48,7 +48,7 @@ for t in "${targets[@]}"; do
      -print_final_stats=1 -artifact_prefix="$findings/" >"$log" 2>&1)
   rc=$?
   set -e
-  execs=$(grep -o 'stat::number_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
   cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*')
   ft=$(grep -o 'ft: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*')
   found=$(ls "$findings" | wc -l)

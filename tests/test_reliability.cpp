@@ -218,7 +218,7 @@ std::vector<Fault> faults() {
        [](const fs::path& d) {
          sphere(d);
          return std::vector<std::string>{
-             "simulate", write(d, "s.json", R"({"objects": [{"name": "a", "mesh": "sphere.off", "tets": 60,
+             "simulate", write(d, "s.json", R"({"objects": [{"name": "a", "mesh": "sphere.off", "tets": 320,
                  "material": {"damping": 1e308}}]})"), "--duration", "0.05", "-o", "out"};
        },
        {"s.json", "objects[0].material"}, {"damping"}},
@@ -227,7 +227,7 @@ std::vector<Fault> faults() {
          sphere(d);
          return std::vector<std::string>{
              "plan", write(d, "s.json", R"({"floor": null, "gravity": [0, 0, 0], "objects": [{"name": "a", "mesh": "sphere.off",
-                 "tets": 60, "role": "robot"}], "bounds": {"min": [-5, -5, -5], "max": [5, 5, 5]}, "goal": {"position": [3, 0, 0]}})"),
+                 "tets": 320, "role": "robot"}], "bounds": {"min": [-5, -5, -5], "max": [5, 5, 5]}, "goal": {"position": [3, 0, 0]}})"),
              "-o", "/", "--iterations", "1"};
        },
        {"/"}, {"is a directory"}},

@@ -318,9 +318,10 @@ struct OwnSurfaceFormat {
 constexpr OwnSurfaceFormat kOwnSurfaceFormats[] = {
     // OFF: ours in all modes (assimp reads it in single precision, and reports no NaN).
     {".off", read_off_in_order, true, write_off},
-    // OBJ: ours to keep the file's vertex order (assimp duplicates vertices per face corner);
-    // assimp's otherwise (materials, groups, welding).
-    {".obj", read_obj_in_order, false, write_obj},
+    // OBJ: ours in all modes too. Only geometry matters here (materials and groups are merged
+    // anyway); assimp duplicates vertices per face corner, reads single precision, and turns a
+    // face whose texture index has no `vt` line into a one-vertex point (assimp 5.2).
+    {".obj", read_obj_in_order, true, write_obj},
 };
 
 const OwnSurfaceFormat* own_surface_format(const std::string& ext) {
