@@ -180,15 +180,16 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
       }
       job.object = workers[k]->invalid_object();
     });
+    // 3. Added in batch order. When the time limit fell inside this batch, the expansions it cut
+    // short are dropped and the ones that finished before it are kept (as OMPL's planners keep the
+    // motion in flight when their termination condition fires); the planner then stops.
     bool timed_out = false;
-    for (int k = 0; k < n; ++k) timed_out = timed_out || jobs[k].validity == Validity::timeout;
-    if (timed_out) {  // the time limit fell inside this batch: it does not count
-      result.timed_out = true;
-      break;
-    }
-    // 3. Added in batch order.
     for (int k = 0; k < n; ++k) {
       Job& job = jobs[k];
+      if (job.validity == Validity::timeout) {
+        timed_out = true;
+        continue;
+      }
       ++result.stats.iterations;
       switch (job.validity) {
         case Validity::diverged: ++result.stats.discarded_diverged; continue;
@@ -197,7 +198,7 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
           if (job.object >= 0) ++result.stats.discarded_volume_by_object[static_cast<size_t>(job.object)];
           continue;
         case Validity::bounds: ++result.stats.discarded_bounds; continue;
-        case Validity::timeout: continue;  // not reached (the batch is dropped above)
+        case Validity::timeout: continue;  // not reached (skipped above)
         case Validity::valid: break;
       }
       if (job.truncated) ++result.stats.truncated;
@@ -220,6 +221,10 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
       std::snprintf(buf, sizeof buf, "nodes %zu, best distance %.3g m, %.1f it/s", nodes.size(), nodes[best].distance,
                     secs > 0 ? result.stats.iterations / secs : 0.0);
       progress->update(result.stats.iterations, buf);
+    }
+    if (timed_out) {
+      result.timed_out = true;
+      break;
     }
   }
   if (progress) progress->finish();
