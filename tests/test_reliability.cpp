@@ -11,6 +11,8 @@
 #include <sstream>
 
 #include "meshing_test_util.h"
+#include "squeeze/common/error.h"
+#include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_io.h"
 
 namespace {
@@ -260,5 +262,33 @@ TEST_P(FaultTest, OneLineNamingTheFileNonZeroExitBelow64) {
 
 INSTANTIATE_TEST_SUITE_P(Reliability, FaultTest, ::testing::ValuesIn(faults()),
                          [](const ::testing::TestParamInfo<Fault>& i) { return i.param.name; });
+
+// Every input the fuzzer once crashed on (tests/fuzz/fuzz_surface/regression-*, in fuzz_surface's
+// layout: the first byte picks the extension and the load mode, the rest is the file) loads or
+// throws InputError; before the fix, assimp's triangulation aborted the process on the PLY one.
+TEST(Reliability, SurfaceFuzzerFindingsLoadOrFailWithInputError) {
+  const fs::path corpus = fs::path(SQUEEZE_TEST_DATA) / ".." / "fuzz" / "fuzz_surface";
+  TempDir dir("fuzz_regressions");
+  int seen = 0;
+  for (const auto& e : fs::directory_iterator(corpus)) {
+    if (e.path().filename().string().rfind("regression-", 0) != 0) continue;
+    ++seen;
+    std::ifstream in(e.path(), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_FALSE(bytes.empty());
+    static const char* kExt[] = {".off", ".obj", ".ply", ".stl"};
+    const unsigned char mode = static_cast<unsigned char>(bytes[0]);
+    const fs::path file = dir.path() / (std::string("in") + kExt[mode % 4]);
+    std::ofstream(file, std::ios::binary) << bytes.substr(1);
+    squeeze::meshing::LoadOptions o;
+    o.keep_order = (mode >> 2) & 1;
+    SCOPED_TRACE(e.path().filename().string());
+    try {
+      squeeze::meshing::load_surface(file, o);
+    } catch (const squeeze::InputError&) {
+    }
+  }
+  EXPECT_GE(seen, 1) << "no regression input in " << corpus;
+}
 
 }  // namespace

@@ -63,7 +63,7 @@ void collect(const std::string& name, const aiScene* scene, const aiNode* node, 
         if (face.mIndices[j] >= mesh->mNumVertices)
           throw InputError(name + ": face " + std::to_string(f) + " refers to vertex " + std::to_string(face.mIndices[j]) +
                            " of " + std::to_string(mesh->mNumVertices));
-      for (unsigned j = 2; j < face.mNumIndices; ++j)  // fan; assimp triangulated already
+      for (unsigned j = 2; j < face.mNumIndices; ++j)  // polygons as fans; points and lines dropped
         tris.push_back({base + static_cast<int>(face.mIndices[0]),
                         base + static_cast<int>(face.mIndices[j - 1]),
                         base + static_cast<int>(face.mIndices[j])});
@@ -386,14 +386,14 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
   } else {
     if (lower(path.extension().string()) == ".ply") check_ply(path);
     Assimp::Importer importer;
-    // Keep only triangles; polygons are triangulated, points and lines dropped.
-    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    // aiProcess_ValidateDataStructure runs first: indices past the vertex list (a truncated or
-    // corrupt file) are reported instead of reaching the other steps, which assert or crash on them.
+    // Only aiProcess_ValidateDataStructure: indices past the vertex list (a truncated or corrupt
+    // file) are reported as an error. No assimp triangulation: collect() splits polygons as fans and
+    // drops points and lines itself, because Debian's assimp 5.2 aborts the process (ai_assert) in
+    // aiProcess_Triangulate on a corrupt ASCII PLY face that passes validation (found by
+    // fuzz_surface; tests/fuzz/fuzz_surface/ keeps the input). Welding is ours too (below).
     const aiScene* scene = importer.ReadFile(
         name, aiProcess_ValidateDataStructure |
-                  (options.keep_order ? 0u
-                                      : aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_JoinIdenticalVertices));
+                  (options.keep_order || options.merge_coincident ? 0u : aiProcess_JoinIdenticalVertices));
     if (!scene || !scene->mRootNode) {
       std::string why = importer.GetErrorString();
       if (why.empty()) why = "unknown or unreadable format";

@@ -17,10 +17,11 @@ struct LoadOptions {
                                  // order: no welding, no dropping, no assimp post-processing (see below)
 };
 
-/// Loads every triangle (and polygon, triangulated) of every mesh in `path`, in any format assimp
-/// reads (OFF, OBJ with or without MTL, PLY ascii/binary, STL ascii/binary, glTF, ...), with node
-/// transforms applied, so several meshes in one file come out as one SurfaceMesh. Points and lines
-/// are ignored.
+/// Loads every triangle (and polygon, split as a fan from its first corner: convex polygons only
+/// come out right) of every mesh in `path`, in any format assimp reads (OFF, OBJ with or without
+/// MTL, PLY ascii/binary, STL ascii/binary, glTF, ...), with node transforms applied, so several
+/// meshes in one file come out as one SurfaceMesh. Points and lines are ignored. OFF and OBJ are
+/// read by squeeze's own parsers (double precision), the rest by assimp.
 /// Returns the mesh; vertices keep first-occurrence order.
 /// With `keep_order` (used by `squeeze deform`, whose output must match its input vertex for
 /// vertex), V is the file's vertex list as written, unreferenced vertices included, and F its faces
