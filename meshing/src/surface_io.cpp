@@ -146,16 +146,43 @@ void check_ply(const fs::path& path) {
     if (t == "double" || t == "float64") return 8;
     throw InputError(name + ": PLY header: unknown property type '" + t + "'");
   };
-  for (int lines = 0; std::getline(in, line); ++lines) {
+  // Strict header (assimp 5.2 allocates without end on some malformed headers that a lenient
+  // check lets through, e.g. "end_header" followed by a vertical tab: found by fuzz_surface):
+  // printable ASCII only, known keywords, each line with exactly its fields.
+  bool in_element = false;
+  for (int lines = 2; std::getline(in, line); ++lines) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (lines > 10000 || in.tellg() > (1 << 20)) break;
+    const auto bad = [&](const std::string& what) {
+      throw InputError(name + ": PLY header line " + std::to_string(lines) + ": " + what);
+    };
+    for (unsigned char c : line)
+      if (c != ' ' && c != '\t' && (c < 0x21 || c > 0x7e)) bad("holds a control or non-ASCII byte");
     std::istringstream ss(line);
     std::string kw;
     ss >> kw;
+    std::vector<std::string> fields;
+    for (std::string f; ss >> f;) fields.push_back(f);
+    if (kw == "comment" || kw == "obj_info") continue;
     if (kw == "end_header") {
+      if (!fields.empty()) bad("end_header followed by more text");
       ended = true;
       break;
     }
+    if (kw != "format" && kw != "element" && kw != "property")
+      bad("unknown keyword '" + kw + "' (format, element, property, comment, obj_info or end_header expected)");
+    if (kw == "format" && fields.size() != 2) bad("a format line is 'format TYPE VERSION'");
+    if (kw == "element" && fields.size() != 2) bad("an element line is 'element NAME COUNT'");
+    if (kw == "property") {
+      if (!in_element) bad("a property before any element");
+      const bool list = !fields.empty() && fields[0] == "list";
+      if (fields.size() != (list ? 4u : 2u))
+        bad("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE ITEM_TYPE NAME'");
+    }
+    if (kw == "element") in_element = true;
+    ss.clear();
+    ss.str(line);
+    ss >> kw;
     if (kw == "format") {
       std::string f;
       ss >> f;
