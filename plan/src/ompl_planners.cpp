@@ -230,19 +230,8 @@ class SqueezeControlSpace : public oc::ControlSpace {
   void draw(plan::Control& c) const {
     ++drawn_;
     const PlannerOptions& o = *sh_.options;
-    const std::vector<const ControlKind*>& kinds = control_kinds();
-    const double pick = rng_.uniform() * o.weights.sum();
-    size_t kind = kinds.size() - 1;
-    double acc = 0;
-    for (size_t i = 0; i + 1 < kinds.size(); ++i) {
-      acc += o.weights.w[i];
-      if (pick < acc) {
-        kind = i;
-        break;
-      }
-    }
     c = plan::Control();
-    c.kind = kinds[kind];
+    c.kind = o.weights.pick(rng_.uniform());
     if (c.kind->toward_goal() || rng_.uniform() < o.goal_bias) {
       c.target = sh_.pb->goal;
     } else {

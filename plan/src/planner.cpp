@@ -1,5 +1,7 @@
 #include "squeeze/plan/planner.h"
 
+#include "squeeze/plan/control.h"
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -30,6 +32,17 @@ double ForceWeights::sum() const {
   double s = 0;
   for (double x : w) s += x;
   return s;
+}
+
+const ControlKind* ForceWeights::pick(double u) const {
+  const std::vector<const ControlKind*>& kinds = control_kinds();
+  const double target = u * sum();
+  double acc = 0;
+  for (size_t i = 0; i + 1 < kinds.size(); ++i) {
+    acc += w[i];
+    if (target < acc) return kinds[i];
+  }
+  return kinds.back();
 }
 
 const char* to_string(PlanStatus s) {

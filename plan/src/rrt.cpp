@@ -88,7 +88,6 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
   const int max_steps = std::max(min_steps, static_cast<int>(std::lround(options.t_max / h)));
   const Robot& robot = pb.robot;
   const Eigen::Vector3d goal = pb.goal;
-  const std::vector<const ControlKind*>& kinds = control_kinds();
   SamplingContext ctx;
   ctx.robot = &robot;
   ctx.max_force = options.max_force;
@@ -112,7 +111,6 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
   ComTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
 
   Random rng(options.seed);
-  const double wsum = options.weights.sum();
   const Eigen::AlignedBox3d& bounds = w.bounds;
   int best = 0, solved_node = -1;
   if (nodes[0].distance <= pb.tolerance) solved_node = 0;
@@ -141,18 +139,7 @@ PlanResult Rrt::solve(const PlanningProblem& pb, const PlannerOptions& options, 
     for (int k = 0; k < n; ++k) {
       Job& job = jobs[k];
       Control c;
-      // The kind: by the cumulative weights, in registry order (the last kind takes the rest).
-      const double pick = rng.uniform() * wsum;
-      size_t kind = kinds.size() - 1;
-      double acc = 0;
-      for (size_t i = 0; i + 1 < kinds.size(); ++i) {
-        acc += options.weights.w[i];
-        if (pick < acc) {
-          kind = i;
-          break;
-        }
-      }
-      c.kind = kinds[kind];
+      c.kind = options.weights.pick(rng.uniform());
       Eigen::Vector3d x;
       if (c.kind->toward_goal() || rng.uniform() < options.goal_bias) {
         x = goal;

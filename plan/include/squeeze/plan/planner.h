@@ -42,6 +42,9 @@ struct ForceWeights {
   double& operator[](const std::string& kind);
   double operator[](const std::string& kind) const;
   double sum() const;  // Σ in registry order
+  /// The kind a uniform draw `u` in [0, 1) picks: by the cumulative weights, in registry order (the
+  /// last kind takes the rest). The RRT and the OMPL adapters draw their controls through it.
+  const ControlKind* pick(double u) const;
 };
 
 /// The scene's "planner" block (scenes/README.md), defaults filled in.
