@@ -223,7 +223,10 @@ int run_planners_bench(const PlannersArgs& a, bool quiet) {
     const std::time_t start_time = std::chrono::system_clock::to_time_t(started);
     char when[64];
     std::strftime(when, sizeof when, "%Y-%m-%d %H:%M:%S", std::gmtime(&start_time));
-    log << "OMPL version 1.5.2\nExperiment " << r->name << "\n1 experiment properties\nscene = " << r->file << "\n"
+    // ompl_benchmark_statistics.py takes the experiment's name as the line's last word: no spaces.
+    std::string experiment = r->name;
+    std::replace(experiment.begin(), experiment.end(), ' ', '_');
+    log << "OMPL version 1.5.2\nExperiment " << experiment << "\n1 experiment properties\nscene VARCHAR(512) = " << r->file << "\n"
         << "Running on " << host << "\nStarting at " << when << "\n<<<|\nsqueeze bench planners: " << r->name
         << " (" << file.string() << "), " << w.world.tets() << " tetrahedra\n|>>>\n<<<|\n|>>>\n"
         << 1 << " is the random seed\n"
