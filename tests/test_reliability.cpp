@@ -105,6 +105,13 @@ std::vector<Fault> faults() {
       {"ply_binary_truncated",
        [](const fs::path& d) { return std::vector<std::string>{"mesh", write(d, "cut.ply", binary_ply(20)), "-o", "out.mesh"}; },
        {"cut.ply"}, {"truncated", "out of range"}},
+      {"ply_binary_list_count_past_the_end",  // a 255-corner face in a file of four triangles
+       [](const fs::path& d) {
+         std::string b = binary_ply(0);
+         b[b.size() - 4 * 13] = static_cast<char>(255);
+         return std::vector<std::string>{"mesh", write(d, "huge.ply", b), "-o", "out.mesh"};
+       },
+       {"huge.ply"}, {"past the end"}},
       {"deform_obj_of_truncated_binary_ply",
        [](const fs::path& d) {
          squeeze::meshing::TetMesh m;

@@ -126,113 +126,158 @@ void read_obj_in_order(const fs::path& path, std::vector<std::array<double, 3>>&
                          " out of range (" + std::to_string(pts.size()) + " vertices)");
 }
 
-// Checks a PLY file's header before assimp reads it (assimp 5.2 loops forever on a header without
-// end_header, and reads past the data of a truncated file): the magic line, the format, every
-// element's count, and that the data after the header can hold that many items (at least one byte
-// per ASCII value and its separator, the scalar sizes of a binary file). Throws InputError.
+// Checks a PLY file before assimp reads it, since assimp 5.2 loops forever on a header without
+// end_header, reads past truncated data, and allocates whatever a corrupt list count asks for
+// (fuzz_surface found each). The header must be strict: printable ASCII, known keywords, each line
+// with exactly its fields, known types, element counts below 2^31. Then the whole body is walked as
+// the header describes it: ASCII, one item per line with one token per scalar and, for a list, a
+// non-negative whole count followed by that many tokens; binary, every list count read (in the
+// file's byte order) and its items found within the file. Throws InputError naming the line or item.
 void check_ply(const fs::path& path) {
   const std::string name = path.string();
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(name + ": cannot open for reading");
   std::string line;
   if (!std::getline(in, line) || (line != "ply" && line != "ply\r")) throw InputError(name + ": not a PLY file (no 'ply' line)");
-  bool ascii = true, format = false, ended = false;
-  double min_bytes = 0;  // of the data after the header
-  double count = 0, per_item = 0, items = 0;
+  struct Property {
+    bool list = false;
+    int count_size = 0;  // bytes of a list's count (binary)
+    int size = 0;        // bytes of the scalar or of each list item (binary)
+  };
+  struct Element {
+    std::string name;
+    long long count = 0;
+    std::vector<Property> properties;
+  };
+  std::vector<Element> elements;
+  bool ascii = true, big_endian = false, format = false, ended = false;
+  int lines = 1;
+  const auto bad = [&](const std::string& what) {
+    throw InputError(name + ": PLY header line " + std::to_string(lines) + ": " + what);
+  };
   const auto size_of = [&](const std::string& t) -> int {
     if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
     if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
     if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
     if (t == "double" || t == "float64") return 8;
-    throw InputError(name + ": PLY header: unknown property type '" + t + "'");
+    bad("unknown property type '" + t + "'");
+    return 0;
   };
-  // Strict header (assimp 5.2 allocates without end on some malformed headers that a lenient
-  // check lets through, e.g. "end_header" followed by a vertical tab: found by fuzz_surface):
-  // printable ASCII only, known keywords, each line with exactly its fields.
-  bool in_element = false;
-  for (int lines = 2; std::getline(in, line); ++lines) {
+  while (std::getline(in, line)) {
+    ++lines;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (lines > 10000 || in.tellg() > (1 << 20)) break;
-    const auto bad = [&](const std::string& what) {
-      throw InputError(name + ": PLY header line " + std::to_string(lines) + ": " + what);
-    };
     for (unsigned char c : line)
       if (c != ' ' && c != '\t' && (c < 0x21 || c > 0x7e)) bad("holds a control or non-ASCII byte");
     std::istringstream ss(line);
     std::string kw;
     ss >> kw;
-    std::vector<std::string> fields;
-    for (std::string f; ss >> f;) fields.push_back(f);
+    std::vector<std::string> f;
+    for (std::string t; ss >> t;) f.push_back(t);
     if (kw == "comment" || kw == "obj_info") continue;
     if (kw == "end_header") {
-      if (!fields.empty()) bad("end_header followed by more text");
+      if (!f.empty()) bad("end_header followed by more text");
       ended = true;
       break;
     }
-    if (kw != "format" && kw != "element" && kw != "property")
-      bad("unknown keyword '" + kw + "' (format, element, property, comment, obj_info or end_header expected)");
-    if (kw == "format" && fields.size() != 2) bad("a format line is 'format TYPE VERSION'");
-    if (kw == "element" && fields.size() != 2) bad("an element line is 'element NAME COUNT'");
-    if (kw == "property") {
-      if (!in_element) bad("a property before any element");
-      const bool list = !fields.empty() && fields[0] == "list";
-      if (fields.size() != (list ? 4u : 2u))
-        bad("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE ITEM_TYPE NAME'");
-    }
-    if (kw == "element") in_element = true;
-    ss.clear();
-    ss.str(line);
-    ss >> kw;
     if (kw == "format") {
-      std::string f;
-      ss >> f;
-      if (f != "ascii" && f != "binary_little_endian" && f != "binary_big_endian")
-        throw InputError(name + ": PLY header: unknown format '" + f + "'");
-      ascii = f == "ascii";
+      if (f.size() != 2) bad("a format line is 'format TYPE VERSION'");
+      if (f[0] != "ascii" && f[0] != "binary_little_endian" && f[0] != "binary_big_endian")
+        throw InputError(name + ": PLY header: unknown format '" + f[0] + "'");
+      ascii = f[0] == "ascii";
+      big_endian = f[0] == "binary_big_endian";
       format = true;
     } else if (kw == "element") {
-      min_bytes += count * per_item;
-      items += count;
-      std::string element, n;
-      ss >> element >> n;
+      if (f.size() != 2) bad("an element line is 'element NAME COUNT'");
       char* end = nullptr;
-      count = std::strtod(n.c_str(), &end);
-      if (n.empty() || *end || !(count >= 0) || count != std::floor(count) || count > std::numeric_limits<int>::max())
-        throw InputError(name + ": PLY header: element " + element + " has count '" + n + "' (a whole number below 2^31 expected)");
-      per_item = 0;
+      const double count = std::strtod(f[1].c_str(), &end);
+      if (*end || !(count >= 0) || count != std::floor(count) || count > std::numeric_limits<int>::max())
+        throw InputError(name + ": PLY header: element " + f[0] + " has count '" + f[1] + "' (a whole number below 2^31 expected)");
+      elements.push_back({f[0], static_cast<long long>(count), {}});
     } else if (kw == "property") {
-      std::string t;
-      ss >> t;
-      if (t == "list") {
-        std::string count_type, item_type;
-        ss >> count_type >> item_type;
-        size_of(item_type);
-        per_item += ascii ? 2 : size_of(count_type);  // the list's length, at least
+      if (elements.empty()) bad("a property before any element");
+      Property prop;
+      prop.list = !f.empty() && f[0] == "list";
+      if (f.size() != (prop.list ? 4u : 2u))
+        bad("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE ITEM_TYPE NAME'");
+      if (prop.list) {
+        prop.count_size = size_of(f[1]);
+        if (f[1].find("float") != std::string::npos || f[1] == "double") bad("a list count of type " + f[1]);
+        prop.size = size_of(f[2]);
       } else {
-        per_item += ascii ? 2 : size_of(t);
+        prop.size = size_of(f[0]);
       }
+      elements.back().properties.push_back(prop);
+    } else {
+      bad("unknown keyword '" + kw + "' (format, element, property, comment, obj_info or end_header expected)");
     }
   }
   if (!ended) throw InputError(name + ": PLY header has no end_header line (truncated?)");
   if (!format) throw InputError(name + ": PLY header has no format line");
-  min_bytes += count * per_item;
-  items += count;
-  const auto header_end = static_cast<double>(in.tellg());
-  std::error_code ec;
-  const double size = static_cast<double>(fs::file_size(path, ec));
-  if (!ec && size - header_end < min_bytes - (ascii ? 1 : 0))
-    throw InputError(name + ": the PLY header announces at least " + std::to_string(static_cast<long long>(min_bytes)) +
-                     " bytes of data, the file holds " + std::to_string(static_cast<long long>(size - header_end)) +
-                     " (truncated?)");
-  if (ascii) {  // one item per line: fewer lines than items is a truncated file
-    double lines = 0;
-    while (lines < items && std::getline(in, line))
-      if (line.find_first_not_of(" \t\r") != std::string::npos) ++lines;
-    if (lines < items)
-      throw InputError(name + ": the PLY header announces " + std::to_string(static_cast<long long>(items)) +
-                       " items (one per line), the file holds " + std::to_string(static_cast<long long>(lines)) +
-                       " (truncated?)");
+
+  const auto truncated = [&](const Element& e, long long item, const std::string& what) {
+    throw InputError(name + ": PLY " + e.name + " " + std::to_string(item) + ": " + what);
+  };
+  if (ascii) {
+    long long lineno = lines;
+    for (const Element& e : elements)
+      for (long long item = 0; item < e.count; ++item) {
+        do {
+          if (!std::getline(in, line))
+            truncated(e, item, "missing: the header announces " + std::to_string(e.count) + " (truncated?)");
+          ++lineno;
+        } while (line.find_first_not_of(" \t\r") == std::string::npos);
+        std::istringstream ss(line);
+        std::vector<std::string> tok;
+        for (std::string t; ss >> t;) tok.push_back(t);
+        size_t at = 0;
+        for (const Property& prop : e.properties) {
+          if (at >= tok.size()) truncated(e, item, "line " + std::to_string(lineno) + " has too few values (corrupt or truncated?)");
+          if (!prop.list) {
+            ++at;
+            continue;
+          }
+          char* end = nullptr;
+          const double n = std::strtod(tok[at].c_str(), &end);
+          if (*end || !(n >= 0) || n != std::floor(n) || n > static_cast<double>(tok.size() - at - 1))
+            truncated(e, item, "line " + std::to_string(lineno) + ": list count '" + tok[at] + "' is not the number of values after it (corrupt or truncated?)");
+          at += 1 + static_cast<size_t>(n);
+        }
+      }
+    return;
   }
+  // Binary: the body in memory (the file was read whole by assimp anyway).
+  const std::streamoff header_end = in.tellg();
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (ec) throw InputError(name + ": cannot read its size");
+  std::vector<unsigned char> body(static_cast<size_t>(size) - static_cast<size_t>(header_end));
+  in.read(reinterpret_cast<char*>(body.data()), static_cast<std::streamsize>(body.size()));
+  size_t at = 0;
+  const auto count_at = [&](size_t pos, int bytes) -> unsigned long long {
+    unsigned long long v = 0;
+    for (int b = 0; b < bytes; ++b) {
+      const unsigned long long byte = body[pos + static_cast<size_t>(big_endian ? b : bytes - 1 - b)];
+      v = (v << 8) | byte;
+    }
+    return v;
+  };
+  for (const Element& e : elements)
+    for (long long item = 0; item < e.count; ++item)
+      for (const Property& prop : e.properties) {
+        if (!prop.list) {
+          if (body.size() - at < static_cast<size_t>(prop.size)) truncated(e, item, "past the end of the file (truncated?)");
+          at += static_cast<size_t>(prop.size);
+          continue;
+        }
+        if (body.size() - at < static_cast<size_t>(prop.count_size)) truncated(e, item, "past the end of the file (truncated?)");
+        unsigned long long n = count_at(at, prop.count_size);
+        // A negative count of a signed type reads as a huge one here, and is refused below.
+        at += static_cast<size_t>(prop.count_size);
+        if (n > (body.size() - at) / static_cast<size_t>(prop.size))
+          truncated(e, item, "list of " + std::to_string(n) + " values past the end of the file (corrupt or truncated?)");
+        at += static_cast<size_t>(n) * static_cast<size_t>(prop.size);
+      }
 }
 
 // OFF in file order and full double precision (assimp parses OFF in single precision): header
