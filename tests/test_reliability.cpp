@@ -10,6 +10,7 @@
 #include <functional>
 #include <sstream>
 
+#include "../fuzz/fuzz_surface_input.h"
 #include "meshing_test_util.h"
 #include "squeeze/common/error.h"
 #include "squeeze/meshing/surface_io.h"
@@ -283,12 +284,11 @@ TEST(Reliability, SurfaceFuzzerFindingsLoadOrFailWithInputError) {
     std::ifstream in(e.path(), std::ios::binary);
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     ASSERT_FALSE(bytes.empty());
-    static const char* kExt[] = {".off", ".obj", ".ply", ".stl"};
-    const unsigned char mode = static_cast<unsigned char>(bytes[0]);
-    const fs::path file = dir.path() / (std::string("in") + kExt[mode % 4]);
+    const squeeze::fuzz::SurfaceInput input = squeeze::fuzz::surface_input(static_cast<std::uint8_t>(bytes[0]));
+    const fs::path file = dir.path() / (std::string("in") + input.extension);
     std::ofstream(file, std::ios::binary) << bytes.substr(1);
     squeeze::meshing::LoadOptions o;
-    o.keep_order = (mode >> 2) & 1;
+    o.keep_order = input.keep_order;
     SCOPED_TRACE(e.path().filename().string());
     try {
       squeeze::meshing::load_surface(file, o);
