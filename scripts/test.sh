@@ -18,6 +18,7 @@ if [ "${1:-}" = "--sanitize" ]; then
   supp="$here/scripts/sanitize"
   export ASAN_OPTIONS="halt_on_error=1:abort_on_error=0:detect_leaks=1:strict_init_order=1:detect_stack_use_after_return=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
   export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$supp/ubsan.supp${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
+  export SQUEEZE_TEST_TIMEOUT_SCALE="${SQUEEZE_TEST_TIMEOUT_SCALE:-4}"  # tests' own limits on a squeeze run
   export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
   ctest --test-dir "$build" --output-on-failure --parallel "$(nproc)" "$@"
   exit

@@ -77,9 +77,19 @@ struct RunResult {
   bool timed_out() const { return code == 124; }
 };
 
-/// Runs `squeeze ARGS` under `timeout SECONDS` in directory `cwd`; captures stdout and stderr.
+/// The factor on every run_squeeze time limit: $SQUEEZE_TEST_TIMEOUT_SCALE (scripts/test.sh
+/// --sanitize sets 4: AddressSanitizer runs the meshing 3–5× slower), else 1.
+inline double timeout_scale() {
+  const char* s = std::getenv("SQUEEZE_TEST_TIMEOUT_SCALE");
+  const double f = s ? std::atof(s) : 1.0;
+  return f >= 1.0 ? f : 1.0;
+}
+
+/// Runs `squeeze ARGS` under `timeout SECONDS` (× timeout_scale()) in directory `cwd`; captures
+/// stdout and stderr.
 inline RunResult run_squeeze(const std::vector<std::string>& args, const fs::path& cwd, int seconds = 60) {
   const fs::path err = cwd / ".stderr.txt", out = cwd / ".stdout.txt";
+  seconds = static_cast<int>(seconds * timeout_scale());
   std::string cmd = "cd " + quote(cwd.string()) + " && timeout -k 10 " + std::to_string(seconds) + " " +
                     quote(SQUEEZE_BINARY);
   for (const auto& a : args) cmd += " " + quote(a);
