@@ -36,8 +36,9 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       "Tetrahedralize a surface into a coarse mesh of its own shape: each closed part's boundary,\n"
       "simplified within --max-deviation, is tetrahedralized; inputs whose components are not closed\n"
       "parts (open scans, welded or self-intersecting segments) fall back to their convex shells\n"
-      "meshed with CGAL Mesh_3, or with --wrap to their alpha wrap (CGAL, a closed surface just outside\n"
-      "them) meshed like a boundary (the report's method and fallback_because say which and why).\n"
+      "meshed with CGAL Mesh_3; with --winding to the solid their winding number encloses (Mesh_3, tight\n"
+      "to the input), or with --wrap to their alpha wrap (CGAL, a closed surface just outside them)\n"
+      "meshed like a boundary (the report's method and fallback_because say which and why).\n"
       "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
       "non-manifold scans are fine. OUT: " + meshing::tet_format_list(true) + ".\n"
       "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");
@@ -58,6 +59,11 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                   "Largest distance of the tetrahedral mesh's boundary from the input surface, as a fraction of the "
                   "bounding-box diagonal; input surface points may lie outside the mesh by at most 0.45 of it")
       ->capture_default_str();
+  cmd->add_flag("--winding", args->options.winding,
+                "Inputs that are not closed parts: mesh the solid their generalized winding number encloses "
+                "(welded segments as their union, small holes closed) with CGAL Mesh_3, within --max-deviation, "
+                "instead of their convex shells; tight (volume within about 10 %), but often several thousand "
+                "tetrahedra whatever --target-tets (the report says why)");
   cmd->add_flag("--wrap", args->options.wrap,
                 "Inputs that are not closed parts: mesh their alpha wrap (closed, just outside them) instead of "
                 "their convex shells; tighter (volume, deviation) but more tetrahedra and seconds");

@@ -2,7 +2,7 @@
 """Runs `squeeze mesh` over surfaces and targets and checks issue 16's criteria on each report.
 
 Usage: scripts/mesh_matrix.py [--squeeze build/squeeze] [--targets 150,300,1000,default]
-                              [--out DIR] [--markdown] FILE...
+                              [--out DIR] [--markdown] [--mesh-args "--winding"] FILE...
 Prints one row per (file, target): tets, volume ratio, deviation_out / deviation_in (percent of the
 bounding-box diagonal), min dihedral, seconds, and pass/fail with the failed criteria named:
   exit 0; volume ratio in [0.9, 1.2] for closed inputs ([0.95, 1.1] at 1000 tets and above);
@@ -50,6 +50,7 @@ def main():
     ap.add_argument("--targets", default="150,300,1000,default")
     ap.add_argument("--out", default=None, help="keep reports and meshes here")
     ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--mesh-args", default="", help="extra `squeeze mesh` arguments, e.g. \"--winding\"")
     ap.add_argument("files", nargs="+")
     a = ap.parse_args()
     out = a.out or tempfile.mkdtemp(prefix="mesh_matrix_")
@@ -66,6 +67,7 @@ def main():
             cmd = [a.squeeze, "-q", "mesh", f, "-o", os.path.join(out, stem + ".mesh"), "--report", rep]
             if target is not None:
                 cmd += ["--target-tets", str(target)]
+            cmd += a.mesh_args.split()
             t0 = time.time()
             p = subprocess.run(cmd, capture_output=True, text=True)
             sec = time.time() - t0

@@ -19,6 +19,7 @@
 #include "squeeze/meshing/tet_faces.h"
 #include "squeeze/meshing/tet_geometry.h"
 #include "squeeze/meshing/tet_locator.h"
+#include "squeeze/meshing/tet_quality.h"
 #include "squeeze/meshing/winding_number.h"
 
 namespace {
@@ -336,6 +337,36 @@ TEST(MeshingPipeline, HullBudgetFollowsTheTarget) {
   EXPECT_EQ(budget(150), 32);
   o.tets_per_hull = -1;
   EXPECT_THROW(squeeze::meshing::mesh_surface(box({0, 0, 0}, {1, 1, 1}), o), InputError);
+}
+
+TEST(MeshingQuality, RelocateSliverVerticesLiftsAFlatTetrahedronAndKeepsTheShape) {
+  // The cube [0,1]³ as 12 tetrahedra around one interior vertex, pushed down to 2 % of the height
+  // above the bottom face: the two bottom tetrahedra are slivers.
+  TetMesh m;
+  m.V.resize(9, 3);
+  for (int i = 0; i < 8; ++i) m.V.row(i) << (i & 1), ((i >> 1) & 1), ((i >> 2) & 1);
+  m.V.row(8) << 0.5, 0.5, 0.02;
+  // The cube's faces, two triangles each (corners by bit index).
+  const int quads[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+  m.T.resize(12, 4);
+  for (int q = 0; q < 6; ++q) {
+    m.T.row(2 * q) << quads[q][0], quads[q][1], quads[q][2], 8;
+    m.T.row(2 * q + 1) << quads[q][0], quads[q][2], quads[q][3], 8;
+  }
+  squeeze::meshing::orient_positively(m);
+  const Eigen::MatrixX3d corners = m.V.topRows(8);
+  const double before = squeeze::meshing::tet_quality(m).min_dihedral;
+  ASSERT_LT(before, 5.0);
+  const int moves = squeeze::meshing::relocate_sliver_vertices(m, 5.0, 10);
+  EXPECT_GT(moves, 0);
+  EXPECT_GE(squeeze::meshing::tet_quality(m).min_dihedral, 5.0);
+  EXPECT_GT(squeeze::meshing::tet_volumes(m).minCoeff(), 0);
+  EXPECT_NEAR(squeeze::meshing::tet_volumes(m).sum(), 1.0, 1e-12);  // the cube, whole
+  EXPECT_TRUE(m.V.topRows(8) == corners) << "corners are not smooth boundary: they stay";
+  // Nothing below the bound: nothing moves.
+  const Eigen::MatrixX3d V = m.V;
+  EXPECT_EQ(squeeze::meshing::relocate_sliver_vertices(m, 1.0), 0);
+  EXPECT_TRUE(m.V == V);
 }
 
 TEST(MeshingQuality, InflateToCoverMovesTheBoundaryOutLocally) {

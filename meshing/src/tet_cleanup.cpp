@@ -172,4 +172,91 @@ int inflate_to_cover(TetMesh& m, const Eigen::MatrixX3d& P, double tolerance, do
   return moves;
 }
 
+int relocate_sliver_vertices(TetMesh& m, double min_degrees, int passes) {
+  const Eigen::Index nv = m.V.rows(), nt = m.T.rows();
+  if (nt == 0) return 0;
+  // Vertex → tetrahedra.
+  std::vector<std::vector<int>> around(static_cast<size_t>(nv));
+  for (int t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) around[static_cast<size_t>(m.T(t, k))].push_back(t);
+  // Boundary vertices and their area-weighted normals (moves stay in the tangent plane).
+  const Eigen::MatrixX3i B = boundary_faces(m.T);
+  Eigen::MatrixX3d N = Eigen::MatrixX3d::Zero(nv, 3);
+  std::vector<char> on_boundary(static_cast<size_t>(nv), 0);
+  for (Eigen::Index f = 0; f < B.rows(); ++f) {
+    const Vec3 n = (m.V.row(B(f, 1)) - m.V.row(B(f, 0))).cross(m.V.row(B(f, 2)) - m.V.row(B(f, 0))).transpose();
+    for (int k = 0; k < 3; ++k) {
+      N.row(B(f, k)) += n.transpose();
+      on_boundary[static_cast<size_t>(B(f, k))] = 1;
+    }
+  }
+  // A boundary vertex moves only where its boundary faces are nearly coplanar (all within 20
+  // degrees of their mean normal): a corner or a crease stays where it is.
+  std::vector<char> smooth(static_cast<size_t>(nv), 1);
+  for (Eigen::Index f = 0; f < B.rows(); ++f) {
+    const Vec3 n = (m.V.row(B(f, 1)) - m.V.row(B(f, 0))).cross(m.V.row(B(f, 2)) - m.V.row(B(f, 0))).transpose();
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 mean = N.row(B(f, k)).transpose();
+      if (!(n.normalized().dot(mean.normalized()) > std::cos(20.0 * M_PI / 180.0))) smooth[static_cast<size_t>(B(f, k))] = 0;
+    }
+  }
+  auto volume = [&](int t) {
+    const Vec3 a = m.V.row(m.T(t, 0)), b = m.V.row(m.T(t, 1)), c = m.V.row(m.T(t, 2)), d = m.V.row(m.T(t, 3));
+    return (b - a).dot((c - a).cross(d - a));
+  };
+  // The worst dihedral angle around v (−1 if a tetrahedron is inverted or flat).
+  auto local_min = [&](int v) {
+    double w = 180.0;
+    for (int t : around[static_cast<size_t>(v)]) {
+      if (!(volume(t) > 0)) return -1.0;
+      w = std::min(w, min_dihedral_of(m, t));
+    }
+    return w;
+  };
+  int moves = 0;
+  for (int pass = 0; pass < passes; ++pass) {
+    int moved = 0;
+    for (int t = 0; t < nt; ++t) {
+      if (!(min_dihedral_of(m, t) < min_degrees)) continue;
+      for (int k = 0; k < 4 && min_dihedral_of(m, t) < min_degrees; ++k) {
+        const int v = m.T(t, k);
+        const bool surface = on_boundary[static_cast<size_t>(v)];
+        if (surface && !smooth[static_cast<size_t>(v)]) continue;
+        const Vec3 p0 = m.V.row(v);
+        double shortest = INFINITY;
+        for (int s : around[static_cast<size_t>(v)])
+          for (int j = 0; j < 4; ++j)
+            if (m.T(s, j) != v) shortest = std::min(shortest, (m.V.row(m.T(s, j)).transpose() - p0).norm());
+        // Directions: the axes and the sliver's height at v (away from its opposite face), in the
+        // tangent plane for a boundary vertex.
+        const Vec3 a = m.V.row(m.T(t, (k + 1) % 4)), b = m.V.row(m.T(t, (k + 2) % 4)), c = m.V.row(m.T(t, (k + 3) % 4));
+        Vec3 dirs[8] = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ(), (b - a).cross(c - a), Vec3::Zero(), Vec3::Zero(),
+                        Vec3::Zero(), Vec3::Zero()};
+        const Vec3 n = surface ? Vec3(N.row(v).transpose().normalized()) : Vec3::Zero();
+        for (int i = 0; i < 4; ++i) {
+          if (surface) dirs[i] -= dirs[i].dot(n) * n;
+          const double len = dirs[i].norm();
+          dirs[i] = len > 1e-12 ? Vec3(dirs[i] / len) : Vec3::Zero();
+          dirs[i + 4] = -dirs[i];
+        }
+        const double before = local_min(v);
+        double best = before;
+        Vec3 best_p = p0;
+        for (double step : {0.05, 0.1, 0.2})
+          for (const Vec3& d : dirs) {
+            if (d.isZero()) continue;
+            m.V.row(v) = (p0 + step * shortest * d).transpose();
+            const double w = local_min(v);
+            if (w > best + 1e-9) best = w, best_p = m.V.row(v).transpose();
+          }
+        m.V.row(v) = best_p.transpose();
+        if (best > before) ++moved;
+      }
+    }
+    moves += moved;
+    if (moved == 0) break;
+  }
+  return moves;
+}
+
 }  // namespace squeeze::meshing

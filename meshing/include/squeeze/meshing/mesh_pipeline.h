@@ -16,6 +16,7 @@
 #include "squeeze/meshing/tet_quality.h"
 #include "squeeze/meshing/shell_tetrahedralize.h"
 #include "squeeze/meshing/tetrahedralize.h"
+#include "squeeze/meshing/winding_tetrahedralize.h"
 
 namespace squeeze {
 class Progress;
@@ -41,15 +42,29 @@ struct MeshOptions {
   double inner_deviation = 0.45;        // how far input surface points may lie outside the tet mesh
                                         // (deviation_in), as a share of max_deviation
   double coverage_tolerance = 0.005;    // fraction of the bbox diagonal for the coverage figure
-  bool wrap = false;                    // inputs that are not closed parts (open, non-manifold,
-                                        // welded or self-intersecting segments): mesh their alpha
-                                        // wrap (alpha_wrap.h) by the boundary route, the convex
-                                        // shells only where that fails (true); or their convex
-                                        // shells (false: tighter but far more tetrahedra and seconds
-                                        // on the organs; docs/meshing.md)
+  WindingTetrahedralizeOptions winding_mesh;  // with `winding`: the winding-number
+                                        // solid meshed with Mesh_3 (winding_tetrahedralize.h); its
+                                        // target_tets and seed are taken from tetrahedralize, its
+                                        // facet_distance and dilation from max_deviation (below)
+  bool winding = false;                 // inputs that are not closed parts (open, non-manifold,
+                                        // welded or self-intersecting segments): mesh their
+                                        // winding-number solid with Mesh_3 (true: tight, but 3–20k
+                                        // tetrahedra on the organs, docs/meshing.md); or their convex
+                                        // shells (false, the default until the scenes that mesh the
+                                        // organs are measured with it)
+  bool wrap = false;                    // the same inputs: mesh their alpha wrap (alpha_wrap.h) by
+                                        // the boundary route (true; before `winding`); the convex
+                                        // shells only where either fails
   double wrap_alpha = 1.0;              // the alpha wrap's alpha, as a multiple of max_deviation
                                         // (gaps, holes, cavities narrower than this are filled)
   double wrap_offset = 0.2;             // its offset outside the input, as a multiple of max_deviation
+  double winding_facet_distance = 0.5;  // the winding-number route's Mesh_3 facet distance, as a
+                                        // multiple of max_deviation (boundary facets are chords: they
+                                        // sag about this far below the solid's surface)
+  double winding_dilation = 0.45;       // its dilation of the solid, as a multiple of max_deviation
+                                        // (chords sag up to about twice the facet distance: the
+                                        // dilation keeps them within inner_deviation of the input;
+                                        // deviation_out is then about dilation + facet distance)
 };
 
 /// The alpha wrap the pipeline made (inputs that are not closed parts).
@@ -82,10 +97,13 @@ struct MeshResult {
   TetrahedralizeStats tet_stats;
   std::string method = "boundary";  // "boundary": the parts' simplified boundaries tetrahedralized;
                                     // "alpha_wrap": the same of the input's alpha wrap, where the
-                                    // input is not closed parts; "convex_shells": the last fallback
+                                    // input is not closed parts and wrap is asked for;
+                                    // "winding_number": the input's winding-number solid meshed
+                                    // by Mesh_3 (with `winding`); "convex_shells": the fallback
                                     // (see fallback_because)
   std::string fallback_because;     // empty, or why the boundary route was not taken
-  ShellTetrahedralizeStats shell_stats;  // the fallback's
+  ShellTetrahedralizeStats shell_stats;  // method "convex_shells"
+  WindingTetrahedralizeStats winding_stats;  // method "winding_number"
   WrapStats wrap;                   // method "alpha_wrap" (or the shells after it failed)
   int target_tets = 0;
   std::string target_exceeded_because;  // empty: the count is within ±35% of the target

@@ -20,6 +20,17 @@ void remove_unused_vertices(TetMesh& mesh);
 /// Returns how many tetrahedra were removed.
 int peel_boundary_slivers(TetMesh& mesh, double min_degrees);
 
+/// Moves vertices of tetrahedra with a dihedral angle below `min_degrees` (the interior slivers
+/// Mesh_3's exuder leaves, whose four vertices all lie on the boundary) to the best of a few nearby
+/// positions (±axes and ± the sliver's height at the vertex, 5–20 % of its shortest edge; in the
+/// tangent plane of the boundary for boundary vertices where the boundary is smooth, all its faces
+/// there within 20° of their mean normal; corners and creases stay), keeping a move only if it raises the
+/// smallest dihedral angle of the vertex's tetrahedra and inverts none. Deterministic; in up to
+/// `passes` sweeps over the mesh.
+///   mesh  V #V by 3 (units, modified in place), T #T by 4 positively oriented
+/// Returns how many vertex moves were made.
+int relocate_sliver_vertices(TetMesh& mesh, double min_degrees, int passes = 3);
+
 /// Moves boundary vertices outward (along their area-weighted normals) until the points P lie
 /// inside the mesh or within `tolerance` of it: every point farther out pushes the three vertices of
 /// its nearest boundary face by a share of its distance. A move is halved, then dropped, where a

@@ -1,0 +1,62 @@
+// squeeze::meshing — one tetrahedral mesh of the solid a triangle soup encloses, by its generalized
+// winding number: the route for inputs whose own boundary cannot be meshed as it is (open scans,
+// welded, non-manifold or self-intersecting segments; meshing version 6, issue 16).
+#pragma once
+#include <Eigen/Core>
+
+#include "squeeze/meshing/tet_mesh.h"
+
+namespace squeeze {
+class Progress;
+}
+
+namespace squeeze::meshing {
+
+struct WindingTetrahedralizeOptions {
+  int target_tets = 1000;        // wanted tetrahedra: sets Mesh_3's cell and facet size; the facet
+                                 // distance may need more on the boundary (the caller reports it)
+  double facet_distance = 0.005; // fraction of the input's bounding-box diagonal: Mesh_3's bound on
+                                 // the distance of a boundary facet from the solid's surface (measured
+                                 // at one point per facet: the largest sag is about twice as deep)
+  double dilation = 0.0045;      // fraction of the diagonal: the solid is {winding number ≥ ½} with
+                                 // every point this close to the input surface added, so that boundary
+                                 // facets (chords of that surface) sag less below the input
+  int max_tets = 40000;          // a safety net: the refinement stops at twice this many vertices
+  double min_dihedral = 5.0;     // degrees; boundary tetrahedra below it are peeled off
+  double sliver_bound = 10.0;    // degrees; what Mesh_3's sliver exuder works on
+  double optimize_seconds = 4.0; // time limit of the exuder (0: none); reaching it is warned
+
+  unsigned seed = 1;             // CGAL's random generator: same input, same mesh
+};
+
+/// What tetrahedralize_winding_number() reports beside the mesh.
+struct WindingTetrahedralizeStats {
+  int attempts = 0;              // Mesh_3 runs (the cell size is corrected toward target_tets)
+  double cell_size = 0;          // model units, of the mesh returned
+  double facet_distance = 0;     // model units
+  double dilation = 0;           // model units
+  int seeds = 0;                 // surface points Mesh_3 started from
+  int peeled_slivers = 0;        // boundary tetrahedra removed for a dihedral angle < min_dihedral
+  int relocated = 0;             // vertex moves that raised the angles of an interior sliver
+                                 // (relocate_sliver_vertices, tet_cleanup.h)
+  bool time_limit_reached = false;  // the exuder stopped at optimize_seconds
+};
+
+/// Meshes the solid of (V, F) — the points whose generalized winding number (winding_number.h) is
+/// at least ½, dilated by `dilation` — with CGAL Mesh_3 (Delaunay refinement of a labeled implicit
+/// domain, then sliver exudation, boundary slivers peeled and interior ones' vertices relocated,
+/// tet_cleanup.h; Jamin, Alliez, Yvinec, Boissonnat, "CGALmesh",
+/// ACM TOMS 41(4), 2015, doi:10.1145/2699463). The winding number takes welded or overlapping
+/// segments as their union and closes small holes (Jacobson et al. 2013), so the mesh follows the
+/// input's shape where its convex shells would inflate it. Mesh_3 starts from points on the
+/// surface near the input's vertices (so that no part is missed), and the result, a subcomplex of
+/// one Delaunay triangulation, is conforming. Tetrahedra come out positively oriented, labels 1.
+///   V  #V by 3 input positions (units), F  #F by 3 triangles, oriented outward where they can be
+///   volume  the solid's volume (units³), for the first cell-size guess
+/// Throws InputError on an empty input or options out of range; returns an empty mesh when
+/// Mesh_3 produced no tetrahedron (the caller reports it).
+TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double volume,
+                                      const WindingTetrahedralizeOptions& options = {},
+                                      WindingTetrahedralizeStats* stats = nullptr, Progress* progress = nullptr);
+
+}  // namespace squeeze::meshing
