@@ -64,6 +64,14 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                 "(welded segments as their union, small holes closed) with CGAL Mesh_3, within --max-deviation, "
                 "instead of their convex shells; tight (volume within about 10 %), but often several thousand "
                 "tetrahedra whatever --target-tets (the report says why)");
+  cmd->add_option("--winding-facet-distance", args->options.winding_facet_distance,
+                  "With --winding: Mesh_3's facet distance, as a multiple of --max-deviation (smaller: closer to the "
+                  "input inside, more tetrahedra)")
+      ->capture_default_str();
+  cmd->add_option("--winding-dilation", args->options.winding_dilation,
+                  "With --winding: how far the solid is grown around the input surface, as a multiple of "
+                  "--max-deviation (larger: boundary chords stay outside the input, deviation_out grows by as much)")
+      ->capture_default_str();
   cmd->add_flag("--wrap", args->options.wrap,
                 "Inputs that are not closed parts: mesh their alpha wrap (closed, just outside them) instead of "
                 "their convex shells; tighter (volume, deviation) but more tetrahedra and seconds");

@@ -290,6 +290,10 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     throw InputError("--wrap-alpha must be positive and, times --max-deviation, below 1");
   if (!(opt.wrap_offset > 0 && opt.wrap_offset * opt.max_deviation < 1))
     throw InputError("--wrap-offset must be positive and, times --max-deviation, below 1");
+  if (!(opt.winding_facet_distance > 0 && opt.winding_facet_distance * opt.max_deviation < 1))
+    throw InputError("--winding-facet-distance must be positive and, times --max-deviation, below 1");
+  if (!(opt.winding_dilation >= 0 && opt.winding_dilation * opt.max_deviation < 1))
+    throw InputError("--winding-dilation must be at least 0 and, times --max-deviation, below 1");
   MeshResult r;
   r.target_tets = opt.tetrahedralize.target_tets;
   StageTimer timer(r, progress);

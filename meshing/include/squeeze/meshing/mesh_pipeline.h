@@ -58,7 +58,7 @@ struct MeshOptions {
   double wrap_alpha = 1.0;              // the alpha wrap's alpha, as a multiple of max_deviation
                                         // (gaps, holes, cavities narrower than this are filled)
   double wrap_offset = 0.2;             // its offset outside the input, as a multiple of max_deviation
-  double winding_facet_distance = 0.5;  // the winding-number route's Mesh_3 facet distance, as a
+  double winding_facet_distance = 0.4;  // the winding-number route's Mesh_3 facet distance, as a
                                         // multiple of max_deviation (boundary facets are chords: they
                                         // sag about this far below the solid's surface)
   double winding_dilation = 0.45;       // its dilation of the solid, as a multiple of max_deviation

@@ -15,7 +15,7 @@ namespace squeeze::meshing {
 struct WindingTetrahedralizeOptions {
   int target_tets = 1000;        // wanted tetrahedra: sets Mesh_3's cell and facet size; the facet
                                  // distance may need more on the boundary (the caller reports it)
-  double facet_distance = 0.005; // fraction of the input's bounding-box diagonal: Mesh_3's bound on
+  double facet_distance = 0.004; // fraction of the input's bounding-box diagonal: Mesh_3's bound on
                                  // the distance of a boundary facet from the solid's surface (measured
                                  // at one point per facet: the largest sag is about twice as deep)
   double dilation = 0.0045;      // fraction of the diagonal: the solid is {winding number ≥ ½} with
