@@ -317,16 +317,21 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
 
   // The fallback (meshing version 3): the union of the convex shells tetrahedralized with Mesh_3,
   // for the whole input, with the reason in the report.
-  auto shells_route = [&](const std::string& why) {
-    spdlog::info("meshing the convex shells instead of the input's boundary: {}", why);
-    r.method = "convex_shells";
+  // A route other than the input's boundary: its method and reason, and nothing left of the
+  // boundary route's figures (it may have run first).
+  auto leave_boundary_route = [&](const char* method, const std::string& why, int parts) {
+    r.method = method;
     r.fallback_because = why;
-    r.parts = components;
+    r.parts = parts;
     r.boundary_from_input = false;
     r.boundary = SurfaceMesh{};
     r.envelope = EnvelopeStats{};
     r.boundary_target_faces = 0;
     r.tet_stats = TetrahedralizeStats{};
+  };
+  auto shells_route = [&](const std::string& why) {
+    spdlog::info("meshing the convex shells instead of the input's boundary: {}", why);
+    leave_boundary_route("convex_shells", why, components);
     r.input_volume_from_winding_number = !r.info.closed;
     r.input_volume = r.info.closed ? r.info.volume : r.decomposition.solid_volume;
     r.info.volume = r.input_volume;
@@ -375,14 +380,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   // nothing: the convex shells.
   auto winding_route = [&](const std::string& why) -> MeshResult {
     spdlog::info("meshing the input's winding-number solid instead of its own boundary: {}", why);
-    r.method = "winding_number";
-    r.fallback_because = why;
-    r.parts = r.decomposition.parts;
-    r.boundary_from_input = false;
-    r.boundary = SurfaceMesh{};
-    r.envelope = EnvelopeStats{};
-    r.boundary_target_faces = 0;
-    r.tet_stats = TetrahedralizeStats{};
+    leave_boundary_route("winding_number", why, r.decomposition.parts);
     timer.start("tetrahedralizing");
     r.input_volume_from_winding_number = true;
     r.input_volume = winding_volume(r.input);

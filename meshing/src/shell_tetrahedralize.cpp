@@ -110,6 +110,28 @@ TetMesh to_tet_mesh(const C3t3& c3t3) {
   return mesh;
 }
 
+// Mesh_3's Delaunay refinement of `domain` (its surface patch (0, 1)) started from `seeds`,
+// points on that surface inserted as surface vertices; no optimiser (the callers choose theirs).
+// CGAL's random generator is reset to `seed`; at most 2 × max_tets vertices (a safety net
+// against runaway refinement: memory).
+void refine_from_seeds(C3t3& c3t3, const Domain& domain, const std::vector<Eigen::Vector3d>& seeds, double size,
+                       double facet_distance, unsigned seed, int max_tets) {
+  const auto surface_index = domain.index_from_surface_patch_index(Domain::Surface_patch_index(0, 1));
+  CGAL::get_default_random() = CGAL::Random(seed);
+  Tr& tr = c3t3.triangulation();
+  for (const Eigen::Vector3d& p : seeds) {
+    auto v = tr.insert(Tr::Point(Point(p(0), p(1), p(2))));
+    if (v == Tr::Vertex_handle()) continue;
+    c3t3.set_dimension(v, 2);
+    c3t3.set_index(v, surface_index);
+  }
+  Criteria criteria(params::facet_angle = 25, params::facet_size = size, params::facet_distance = facet_distance,
+                    params::cell_radius_edge_ratio = 3, params::cell_size = size);
+  CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(), params::no_perturb(),
+                      params::no_exude(),
+                      params::mesh_3_options(params::maximal_number_of_vertices = static_cast<std::size_t>(2 * max_tets)));
+}
+
 }  // namespace
 
 TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const ShellTetrahedralizeOptions& opt,
@@ -154,7 +176,6 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
     Domain domain = Domain::create_implicit_mesh_domain(
         fn, K::Sphere_3(Point(centre(0), centre(1), centre(2)), radius * radius),
         params::relative_error_bound = 1e-7);
-    const auto surface_index = domain.index_from_surface_patch_index(Domain::Surface_patch_index(0, 1));
     // Initial surface points: from each shell's centre, bisect along 14 directions to the union's
     // boundary, so that every part of the union is seeded (random rays could miss a part). Seeds
     // closer than seed_spacing × size to an earlier one are dropped: Delaunay refinement never
@@ -177,25 +198,10 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
         if (!near) seeds.push_back(p);
       }
     }
-    CGAL::get_default_random() = CGAL::Random(opt.seed);
     C3t3 c3t3;
-    Tr& tr = c3t3.triangulation();
-    for (const Eigen::Vector3d& p : seeds) {
-      auto v = tr.insert(Tr::Point(Point(p(0), p(1), p(2))));
-      if (v == Tr::Vertex_handle()) continue;
-      c3t3.set_dimension(v, 2);
-      c3t3.set_index(v, surface_index);
-    }
-    Criteria criteria(params::facet_angle = 25, params::facet_size = size, params::facet_distance = fd,
-                      params::cell_radius_edge_ratio = 3, params::cell_size = size);
+    refine_from_seeds(c3t3, domain, seeds, size, fd, opt.seed, opt.max_tets);
     // Perturbation and exudation run to completion in practice; their time limit is a bound for
     // pathological inputs (reaching it makes the result depend on the machine's load: warned).
-    const auto limits = params::mesh_3_options(params::maximal_number_of_vertices =
-                                                   static_cast<std::size_t>(2 * opt.max_tets));
-    CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(), params::no_perturb(),
-                        params::no_exude(),
-                        // A safety net against runaway refinement (memory): far above max_tets.
-                        limits);
     if (CGAL::perturb_mesh_3(c3t3, domain, params::time_limit = opt.optimize_seconds,
                              params::sliver_bound = opt.sliver_bound) == CGAL::TIME_LIMIT_REACHED)
       spdlog::warn("tetrahedralize: Mesh_3's sliver perturber stopped at its time limit ({} s): the mesh may differ "
@@ -440,23 +446,9 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
     const double radius = 0.5 * diag * 1.05 + 2 * dil + 1e-12;
     Domain domain = Domain::create_implicit_mesh_domain(
         fn, K::Sphere_3(Point(centre(0), centre(1), centre(2)), radius * radius), params::relative_error_bound = 1e-4);
-    const auto surface_index = domain.index_from_surface_patch_index(Domain::Surface_patch_index(0, 1));
-    CGAL::get_default_random() = CGAL::Random(opt.seed);
     C3t3 c3t3;
-    Tr& tr = c3t3.triangulation();
-    for (const Eigen::Vector3d& p : seeds) {
-      auto v = tr.insert(Tr::Point(Point(p(0), p(1), p(2))));
-      if (v == Tr::Vertex_handle()) continue;
-      c3t3.set_dimension(v, 2);
-      c3t3.set_index(v, surface_index);
-    }
-    Criteria criteria(params::facet_angle = 25, params::facet_size = size, params::facet_distance = fd,
-                      params::cell_radius_edge_ratio = 3, params::cell_size = size);
     const auto t0 = std::chrono::steady_clock::now();
-    CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(), params::no_perturb(),
-                        params::no_exude(),
-                        params::mesh_3_options(params::maximal_number_of_vertices =
-                                                   static_cast<std::size_t>(2 * opt.max_tets)));
+    refine_from_seeds(c3t3, domain, seeds, size, fd, opt.seed, opt.max_tets);
     const auto t1 = std::chrono::steady_clock::now();
     // No sliver perturbation: it moved boundary vertices enough to raise deviation_in from 0.41 to
     // 0.91 % of the diagonal on the heart, and took seconds; the exuder, then
@@ -464,9 +456,9 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
     if (CGAL::exude_mesh_3(c3t3, params::time_limit = opt.optimize_seconds, params::sliver_bound = opt.sliver_bound) ==
         CGAL::TIME_LIMIT_REACHED)
       st.time_limit_reached = true;
-    const auto t3 = std::chrono::steady_clock::now();
+    const auto t2 = std::chrono::steady_clock::now();
     auto sec = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
-    spdlog::debug("Mesh_3 (winding number): refine {:.2f} s, exude {:.2f} s", sec(t0, t1), sec(t1, t3));
+    spdlog::debug("Mesh_3 (winding number): refine {:.2f} s, exude {:.2f} s", sec(t0, t1), sec(t1, t2));
     return to_tet_mesh(c3t3);
   };
 

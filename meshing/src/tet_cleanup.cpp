@@ -181,25 +181,23 @@ int relocate_sliver_vertices(TetMesh& m, double min_degrees, int passes) {
     for (int k = 0; k < 4; ++k) around[static_cast<size_t>(m.T(t, k))].push_back(t);
   // Boundary vertices and their area-weighted normals (moves stay in the tangent plane).
   const Eigen::MatrixX3i B = boundary_faces(m.T);
+  Eigen::MatrixX3d FN(B.rows(), 3);  // per boundary face: its area-weighted normal (2 × area)
   Eigen::MatrixX3d N = Eigen::MatrixX3d::Zero(nv, 3);
   std::vector<char> on_boundary(static_cast<size_t>(nv), 0);
   for (Eigen::Index f = 0; f < B.rows(); ++f) {
-    const Vec3 n = (m.V.row(B(f, 1)) - m.V.row(B(f, 0))).cross(m.V.row(B(f, 2)) - m.V.row(B(f, 0))).transpose();
+    FN.row(f) = (m.V.row(B(f, 1)) - m.V.row(B(f, 0))).cross(m.V.row(B(f, 2)) - m.V.row(B(f, 0)));
     for (int k = 0; k < 3; ++k) {
-      N.row(B(f, k)) += n.transpose();
+      N.row(B(f, k)) += FN.row(f);
       on_boundary[static_cast<size_t>(B(f, k))] = 1;
     }
   }
   // A boundary vertex moves only where its boundary faces are nearly coplanar (all within 20
   // degrees of their mean normal): a corner or a crease stays where it is.
   std::vector<char> smooth(static_cast<size_t>(nv), 1);
-  for (Eigen::Index f = 0; f < B.rows(); ++f) {
-    const Vec3 n = (m.V.row(B(f, 1)) - m.V.row(B(f, 0))).cross(m.V.row(B(f, 2)) - m.V.row(B(f, 0))).transpose();
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 mean = N.row(B(f, k)).transpose();
-      if (!(n.normalized().dot(mean.normalized()) > std::cos(20.0 * M_PI / 180.0))) smooth[static_cast<size_t>(B(f, k))] = 0;
-    }
-  }
+  for (Eigen::Index f = 0; f < B.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (!(FN.row(f).normalized().dot(N.row(B(f, k)).normalized()) > std::cos(20.0 * M_PI / 180.0)))
+        smooth[static_cast<size_t>(B(f, k))] = 0;
   auto volume = [&](int t) {
     const Vec3 a = m.V.row(m.T(t, 0)), b = m.V.row(m.T(t, 1)), c = m.V.row(m.T(t, 2)), d = m.V.row(m.T(t, 3));
     return (b - a).dot((c - a).cross(d - a));

@@ -26,9 +26,13 @@ int peel_boundary_slivers(TetMesh& mesh, double min_degrees);
 /// tangent plane of the boundary for boundary vertices where the boundary is smooth, all its faces
 /// there within 20° of their mean normal; corners and creases stay), keeping a move only if it raises the
 /// smallest dihedral angle of the vertex's tetrahedra and inverts none. Deterministic; in up to
-/// `passes` sweeps over the mesh.
-///   mesh  V #V by 3 (units, modified in place), T #T by 4 positively oriented
-/// Returns how many vertex moves were made.
+/// `passes` sweeps over the mesh. Source: squeeze's own local search, a greedy and deterministic
+/// cousin of Mesh_3's sliver perturber (Tournois, Srinivasan, Alliez, "Perturbing slivers in 3D
+/// Delaunay meshes", IMR 2009), which on these meshes moved the boundary too far (docs/meshing.md).
+///   mesh         V #V by 3 (units, modified in place), T #T by 4 positively oriented
+///   min_degrees  dihedral-angle threshold (degrees)
+/// Throws nothing; returns how many vertex moves were made (0 where no tetrahedron is below the
+/// threshold or no move helps).
 int relocate_sliver_vertices(TetMesh& mesh, double min_degrees, int passes = 3);
 
 /// Moves boundary vertices outward (along their area-weighted normals) until the points P lie
