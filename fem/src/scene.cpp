@@ -427,7 +427,12 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
       << options.shells.offset << ',' << options.shells.max_tets << ',' << options.shells.coverage_tolerance << ','
       << options.shells.min_dihedral << ',' << options.shells.sliver_bound << '|' << options.tetrahedralize.target_tets << ','
       << options.tetrahedralize.refine_dihedral << ',' << options.tetrahedralize.sliver_bound << ','
-      << options.tetrahedralize.max_tets << ',' << options.tetrahedralize.seed << '|' << bytes.size() << '|';
+      << options.tetrahedralize.max_tets << ',' << options.tetrahedralize.seed << '|'
+      // The routes for inputs that are not closed parts: a changed default re-meshes.
+      << options.winding << ',' << options.winding_facet_distance << ',' << options.winding_dilation << ','
+      << options.winding_mesh.max_tets << ',' << options.winding_mesh.min_dihedral << ','
+      << options.winding_mesh.sliver_bound << ',' << options.winding_mesh.optimize_seconds << ',' << options.wrap
+      << ',' << options.wrap_alpha << ',' << options.wrap_offset << '|' << bytes.size() << '|';
   Hash128 h;
   h.add(opt.str());
   h.add(bytes);
