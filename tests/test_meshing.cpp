@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <set>
@@ -367,6 +368,73 @@ TEST(MeshingQuality, RelocateSliverVerticesLiftsAFlatTetrahedronAndKeepsTheShape
   const Eigen::MatrixX3d V = m.V;
   EXPECT_EQ(squeeze::meshing::relocate_sliver_vertices(m, 1.0), 0);
   EXPECT_TRUE(m.V == V);
+}
+
+// The boundary faces of a tet mesh as sorted vertex triples (orientation aside).
+std::set<std::array<int, 3>> boundary_set(const TetMesh& m) {
+  std::set<std::array<int, 3>> out;
+  const Eigen::MatrixX3i B = squeeze::meshing::boundary_faces(m.T);
+  for (Eigen::Index f = 0; f < B.rows(); ++f) {
+    std::array<int, 3> k{B(f, 0), B(f, 1), B(f, 2)};
+    std::sort(k.begin(), k.end());
+    out.insert(k);
+  }
+  return out;
+}
+
+TEST(MeshingQuality, FlipSliversRemovesSliversAcrossAFaceAndAroundAnEdgeAndKeepsTheBoundary) {
+  // A triangle a b c, an apex d and an apex e on either side of it.
+  auto mesh = [](double dy, double dz, std::initializer_list<std::array<int, 4>> tets) {
+    TetMesh m;
+    m.V.resize(5, 3);
+    m.V << 0, 0, 0, 1, 0, 0, 0.5, 0.9, 0, 0.5, dy, dz, 0.5, dy, -1;
+    m.T.resize(static_cast<Eigen::Index>(tets.size()), 4);
+    int r = 0;
+    for (const auto& t : tets) m.T.row(r++) << t[0], t[1], t[2], t[3];
+    m.label = Eigen::VectorXi::Constant(m.T.rows(), 7);
+    squeeze::meshing::orient_positively(m);
+    return m;
+  };
+  struct Case {
+    const char* name;
+    TetMesh m;
+    Eigen::Index tets_after;
+  };
+  Case cases[] = {
+      // d 2 % above the face: (a, b, c, d) is flat; a 2-3 flip makes three around the edge d e.
+      {"2-3", mesh(0.3, 0.02, {{0, 1, 2, 3}, {0, 1, 2, 4}}), 3},
+      // The edge d e crosses the face 1 % from the edge a b: (d, e, a, b) is flat; a 3-2 flip makes
+      // (a, b, c, d) and (a, b, c, e).
+      {"3-2", mesh(0.01, 1.0, {{3, 4, 0, 1}, {3, 4, 1, 2}, {3, 4, 2, 0}}), 2},
+  };
+  for (Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const double before = squeeze::meshing::tet_quality(c.m).min_dihedral;
+    ASSERT_LT(before, 5.0);
+    const double volume = squeeze::meshing::tet_volumes(c.m).sum();
+    const auto boundary = boundary_set(c.m);
+    const Eigen::MatrixX3d V = c.m.V;
+    EXPECT_EQ(squeeze::meshing::flip_slivers(c.m, 5.0), 1);
+    EXPECT_EQ(c.m.T.rows(), c.tets_after);
+    EXPECT_EQ(c.m.label.size(), c.tets_after);
+    EXPECT_TRUE((c.m.label.array() == 7).all());
+    EXPECT_GT(squeeze::meshing::tet_quality(c.m).min_dihedral, 5.0);
+    EXPECT_GT(squeeze::meshing::tet_volumes(c.m).minCoeff(), 0);
+    EXPECT_NEAR(squeeze::meshing::tet_volumes(c.m).sum(), volume, 1e-12 * volume);
+    EXPECT_EQ(boundary_set(c.m), boundary);
+    EXPECT_TRUE(c.m.V == V);
+    // Nothing below the bound any more: nothing flips.
+    const Eigen::MatrixX4i T = c.m.T;
+    EXPECT_EQ(squeeze::meshing::flip_slivers(c.m, 5.0), 0);
+    EXPECT_TRUE(c.m.T == T);
+  }
+  // Tetrahedra of different labels are not flipped together.
+  TetMesh m = mesh(0.3, 0.02, {{0, 1, 2, 3}, {0, 1, 2, 4}});
+  m.label << 1, 2;
+  EXPECT_EQ(squeeze::meshing::flip_slivers(m, 5.0), 0);
+  // A lone sliver (its faces all on the boundary) has nothing to flip with.
+  TetMesh lone = mesh(0.3, 0.02, {{0, 1, 2, 3}});
+  EXPECT_EQ(squeeze::meshing::flip_slivers(lone, 5.0), 0);
 }
 
 TEST(MeshingQuality, InflateToCoverMovesTheBoundaryOutLocally) {

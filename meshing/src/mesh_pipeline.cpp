@@ -801,6 +801,8 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
                   {"facet_distance", frac(r.winding_stats.facet_distance)},
                   {"dilation", frac(r.winding_stats.dilation)},
                   {"seeds", r.winding_stats.seeds},
+                  {"relocated", r.winding_stats.relocated},
+                  {"flips", r.winding_stats.flips},
                   {"time_limit_reached", r.winding_stats.time_limit_reached}}
            : json(nullptr)},
       {"convex_shells",

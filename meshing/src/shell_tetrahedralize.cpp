@@ -500,6 +500,7 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
     st.peeled_slivers = peel_boundary_slivers(best, opt.min_dihedral);
     remove_unused_vertices(best);
     st.relocated = relocate_sliver_vertices(best, opt.min_dihedral);
+    st.flips = flip_slivers(best, opt.min_dihedral);
     best.label = Eigen::VectorXi::Ones(best.T.rows());
   }
   if (st.time_limit_reached)

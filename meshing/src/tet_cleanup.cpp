@@ -258,3 +258,126 @@ int relocate_sliver_vertices(TetMesh& m, double min_degrees, int passes) {
 }
 
 }  // namespace squeeze::meshing
+
+namespace squeeze::meshing {
+
+int flip_slivers(TetMesh& m, double min_degrees, int max_flips) {
+  const bool labelled = m.label.size() == m.T.rows();
+  // Signed volume (× 6) of four vertices, and the smallest dihedral angle of a positively
+  // oriented tetrahedron (−1 if it is not).
+  auto orient = [&](int a, int b, int c, int d) {
+    const Vec3 A = m.V.row(a), B = m.V.row(b), C = m.V.row(c), D = m.V.row(d);
+    return (B - A).dot((C - A).cross(D - A));
+  };
+  auto quality = [&](const Eigen::Vector4i& t) {
+    if (!(orient(t(0), t(1), t(2), t(3)) > 0)) return -1.0;
+    const auto a = dihedral_angles(m.V.row(t(0)), m.V.row(t(1)), m.V.row(t(2)), m.V.row(t(3)));
+    return *std::min_element(a.begin(), a.end());
+  };
+  // A tetrahedron of these vertices, positively oriented (two swapped if needed).
+  auto oriented = [&](int a, int b, int c, int d) {
+    return orient(a, b, c, d) > 0 ? Eigen::Vector4i(a, b, c, d) : Eigen::Vector4i(b, a, c, d);
+  };
+  auto has = [&](int t, int v) { return (m.T.row(t).array() == v).any(); };
+  int flips = 0;
+  while (flips < max_flips) {
+    const int nt = static_cast<int>(m.T.rows());
+    std::vector<double> q(static_cast<size_t>(nt));
+    std::vector<int> bad;
+    for (int t = 0; t < nt; ++t) {
+      q[static_cast<size_t>(t)] = quality(m.T.row(t).transpose());
+      if (q[static_cast<size_t>(t)] < min_degrees) bad.push_back(t);
+    }
+    if (bad.empty()) break;
+    std::stable_sort(bad.begin(), bad.end(), [&](int a, int b) { return q[static_cast<size_t>(a)] < q[static_cast<size_t>(b)]; });
+    std::vector<std::vector<int>> around(static_cast<size_t>(m.V.rows()));
+    for (int t = 0; t < nt; ++t)
+      for (int k = 0; k < 4; ++k) around[static_cast<size_t>(m.T(t, k))].push_back(t);
+    // The tetrahedra other than `t` that hold every vertex of `vs`.
+    auto sharing = [&](std::initializer_list<int> vs, int t) {
+      std::vector<int> out;
+      for (int s : around[static_cast<size_t>(*vs.begin())]) {
+        if (s == t) continue;
+        bool all = true;
+        for (int v : vs) all = all && has(s, v);
+        if (all) out.push_back(s);
+      }
+      return out;
+    };
+    bool flipped = false;
+    for (int t : bad) {
+      const double qt = q[static_cast<size_t>(t)];
+      // 2-3 flips: t and its neighbour u across face (a, b, c) become three tetrahedra around the
+      // edge between their apexes d and e, valid where that edge crosses the face.
+      for (int k = 0; k < 4 && !flipped; ++k) {
+        const int d = m.T(t, k), a = m.T(t, (k + 1) % 4), b = m.T(t, (k + 2) % 4), c = m.T(t, (k + 3) % 4);
+        const std::vector<int> nb = sharing({a, b, c}, t);
+        if (nb.size() != 1) continue;  // a boundary face
+        const int u = nb[0];
+        if (labelled && m.label(u) != m.label(t)) continue;
+        int e = -1;
+        for (int j = 0; j < 4; ++j)
+          if (m.T(u, j) != a && m.T(u, j) != b && m.T(u, j) != c) e = m.T(u, j);
+        const double s1 = orient(d, e, a, b), s2 = orient(d, e, b, c), s3 = orient(d, e, c, a);
+        if (!((s1 > 0 && s2 > 0 && s3 > 0) || (s1 < 0 && s2 < 0 && s3 < 0))) continue;
+        const Eigen::Vector4i n1 = oriented(d, e, a, b), n2 = oriented(d, e, b, c), n3 = oriented(d, e, c, a);
+        const double before = std::min(qt, q[static_cast<size_t>(u)]);
+        if (!(std::min({quality(n1), quality(n2), quality(n3)}) > before + 1e-9)) continue;
+        m.T.row(t) = n1.transpose();
+        m.T.row(u) = n2.transpose();
+        m.T.conservativeResize(nt + 1, 4);
+        m.T.row(nt) = n3.transpose();
+        if (labelled) {
+          m.label.conservativeResize(nt + 1);
+          m.label(nt) = m.label(t);
+        }
+        flipped = true;
+      }
+      // 3-2 flips: an interior edge (i, j) with exactly three tetrahedra around it, whose other
+      // vertices p, q, r make a triangle the edge crosses, becomes two tetrahedra on that triangle.
+      for (int k = 0; k < 4 && !flipped; ++k)
+        for (int l = k + 1; l < 4 && !flipped; ++l) {
+          const int i = m.T(t, k), j = m.T(t, l);
+          std::vector<int> ring = sharing({i, j}, t);
+          if (ring.size() != 2) continue;
+          ring.push_back(t);
+          std::vector<int> others;
+          for (int s : ring)
+            for (int x = 0; x < 4; ++x)
+              if (m.T(s, x) != i && m.T(s, x) != j) others.push_back(m.T(s, x));
+          std::sort(others.begin(), others.end());
+          // Closed ring: three vertices, each in two of the three tetrahedra.
+          if (!(others.size() == 6 && others[0] == others[1] && others[2] == others[3] && others[4] == others[5] &&
+                others[1] != others[2] && others[3] != others[4]))
+            continue;
+          if (labelled && !(m.label(ring[0]) == m.label(t) && m.label(ring[1]) == m.label(t))) continue;
+          const int p = others[0], pq = others[2], r = others[4];
+          const double si = orient(p, pq, r, i), sj = orient(p, pq, r, j);
+          if (!((si > 0 && sj < 0) || (si < 0 && sj > 0))) continue;
+          const Eigen::Vector4i n1 = oriented(p, pq, r, i), n2 = oriented(p, pq, r, j);
+          double before = qt;
+          for (int s : ring) before = std::min(before, q[static_cast<size_t>(s)]);
+          if (!(std::min(quality(n1), quality(n2)) > before + 1e-9)) continue;
+          // Two of the three rows take the new tetrahedra; the third is removed (the last row moves
+          // into its place).
+          std::sort(ring.begin(), ring.end());
+          m.T.row(ring[0]) = n1.transpose();
+          m.T.row(ring[1]) = n2.transpose();
+          const int last = nt - 1;
+          if (ring[2] != last) {
+            m.T.row(ring[2]) = m.T.row(last);
+            if (labelled) m.label(ring[2]) = m.label(last);
+          }
+          m.T.conservativeResize(last, 4);
+          if (labelled) m.label.conservativeResize(last);
+          flipped = true;
+        }
+      if (flipped) break;
+    }
+    if (!flipped) break;
+    ++flips;
+  }
+  return flips;
+}
+
+}  // namespace squeeze::meshing

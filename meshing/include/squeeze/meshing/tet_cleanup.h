@@ -35,6 +35,22 @@ int peel_boundary_slivers(TetMesh& mesh, double min_degrees);
 /// threshold or no move helps).
 int relocate_sliver_vertices(TetMesh& mesh, double min_degrees, int passes = 3);
 
+/// Removes tetrahedra with a dihedral angle below `min_degrees` by topological flips, worst
+/// first: a 2-3 flip (the tetrahedron and its neighbour across an interior face become three
+/// around the edge joining their apexes) or a 3-2 flip (the three tetrahedra around an interior
+/// edge of degree 3 become two), taken only where it is valid and raises the smallest dihedral
+/// angle of the tetrahedra it replaces. The boundary, the vertices and the volume do not change;
+/// tetrahedra of different labels are never flipped together. Such slivers are the ones whose
+/// four vertices lie on opposite sides of a thin part, which relocate_sliver_vertices cannot move
+/// without moving the boundary. Source: the flips of Joe (1995) as used by Klingner and Shewchuk,
+/// "Aggressive tetrahedral mesh improvement", IMR 2007; greedy and deterministic here.
+///   mesh         V #V by 3 (unchanged), T #T by 4 positively oriented, label #T or empty
+///                (T and label modified in place: rows change and #T changes by ±1 per flip)
+///   min_degrees  dihedral-angle threshold (degrees)
+///   max_flips    at most this many flips
+/// Throws nothing; returns how many flips were made.
+int flip_slivers(TetMesh& mesh, double min_degrees, int max_flips = 1000);
+
 /// Moves boundary vertices outward (along their area-weighted normals) until the points P lie
 /// inside the mesh or within `tolerance` of it: every point farther out pushes the three vertices of
 /// its nearest boundary face by a share of its distance. A move is halved, then dropped, where a
