@@ -678,17 +678,16 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       else ++unusable;
     }
   }
-  if (unusable > 0) {
-    const std::string why = std::to_string(unusable) + " of the input's " + std::to_string(components) +
-                        " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, "
-                        "or welded to other components)";
-    return opt.wrap ? wrap_route(why) : opt.winding ? winding_route(why) : shells_route(why);
-  }
-  if (parts.empty()) throw InputError("the surface encloses no volume (winding number above 1/2 nowhere)");
+  // The route for inputs that are not closed parts, and where the boundary route fails.
   const std::function<MeshResult(const std::string&)> fallback =
       opt.wrap      ? std::function<MeshResult(const std::string&)>(wrap_route)
       : opt.winding ? std::function<MeshResult(const std::string&)>(winding_route)
                     : std::function<MeshResult(const std::string&)>(shells_route);
+  if (unusable > 0)
+    return fallback(std::to_string(unusable) + " of the input's " + std::to_string(components) +
+                    " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, "
+                    "or welded to other components)");
+  if (parts.empty()) throw InputError("the surface encloses no volume (winding number above 1/2 nowhere)");
   return boundary_route(parts, eopt, false, fallback);
 
 }
