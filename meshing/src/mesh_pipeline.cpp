@@ -466,14 +466,20 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
           // floor (the simplification brought two sheets of a thin part close) is tried again,
           // simplified within half the bounds, then as the part's own surface (the input's
           // triangles, when not too many); the first that holds is kept, else the best of them.
+          // A part is one connected surface, so its mesh is one piece: tetrahedra joined by faces
+          // (a simplified boundary that pinches two sheets together can split it).
           auto holds = [&](const TetMesh& m, const TetrahedralizeStats& st) {
-            return m.T.rows() > 0 && st.conforming && tet_quality(m).min_dihedral >= opt.tetrahedralize.min_dihedral;
+            if (!(m.T.rows() > 0 && st.conforming)) return false;
+            const TetQuality q = tet_quality(m);
+            return q.min_dihedral >= opt.tetrahedralize.min_dihedral && q.components == 1;
           };
           auto better = [&](const TetMesh& m, const TetrahedralizeStats& st, const TetMesh& than,
                             const TetrahedralizeStats& than_st) {
             if ((m.T.rows() > 0) != (than.T.rows() > 0)) return m.T.rows() > 0;
             if (st.conforming != than_st.conforming) return st.conforming;
-            return tet_quality(m).min_dihedral > tet_quality(than).min_dihedral;
+            const TetQuality q = tet_quality(m), q_than = tet_quality(than);
+            if ((q.components == 1) != (q_than.components == 1)) return q.components == 1;
+            return q.min_dihedral > q_than.min_dihedral;
           };
           for (int retry = 1; retry <= 2 && !holds(p.tets, p.tet_stats); ++retry) {
             SurfaceMesh b;
@@ -551,6 +557,8 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
         s.boundary_splits += p.tet_stats.boundary_splits;
         s.steiner_points += p.tet_stats.steiner_points;
         s.peeled += p.tet_stats.peeled;
+        s.relocated += p.tet_stats.relocated;
+        s.flips += p.tet_stats.flips;
         s.conforming = s.conforming && p.tet_stats.conforming;
       }
       r.boundary = concatenate(b, &SurfaceMesh::F);
@@ -792,7 +800,9 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"boundary_splits", r.tet_stats.boundary_splits},
         {"steiner_points", r.tet_stats.steiner_points},
         {"conforming", r.tet_stats.conforming},
-        {"peeled_slivers", r.method == "convex_shells" ? r.shell_stats.peeled_slivers : r.tet_stats.peeled}}},
+        {"peeled_slivers", r.method == "convex_shells" ? r.shell_stats.peeled_slivers : r.tet_stats.peeled},
+        {"relocated_sliver_vertices", r.method == "boundary" ? r.tet_stats.relocated : 0},
+        {"flipped_slivers", r.method == "boundary" ? r.tet_stats.flips : 0}}},
       {"winding_number",
        r.method == "winding_number"
            ? json{{"attempts", r.winding_stats.attempts},

@@ -1008,6 +1008,12 @@ TetMesh tetrahedralize(const SurfaceMesh& boundary, const TetrahedralizeOptions&
     previous_L = L;
     L *= n > 0 ? std::clamp(std::cbrt(n / target), 0.5, 2.0) : 1.0;
   }
+  // Slivers left in the mesh kept (all four corners on the boundary across a thin part, where
+  // neither refinement nor exudation reaches them): their vertices are moved (boundary ones only
+  // within the tangent plane of a smooth boundary), then what is still below the floor is flipped
+  // away (boundary and volume unchanged), as in the winding-number route.
+  st.relocated = relocate_sliver_vertices(best.mesh, opt.min_dihedral);
+  st.flips = flip_slivers(best.mesh, opt.min_dihedral);
   if (stats) *stats = st;
   return std::move(best.mesh);
 }

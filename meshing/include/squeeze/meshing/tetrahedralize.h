@@ -39,6 +39,9 @@ struct TetrahedralizeStats {
   int boundary_splits = 0;       // boundary edges split (for conformity and quality) in the mesh kept
   int steiner_points = 0;        // interior points inserted in the mesh kept
   int peeled = 0;                // boundary tetrahedra under min_dihedral removed at the end
+  int relocated = 0;             // vertex moves of relocate_sliver_vertices at the end (tet_cleanup.h)
+  int flips = 0;                 // 2-3 and 3-2 flips of interior slivers under min_dihedral at the
+                                 // end (tet_cleanup.h: flip_slivers; boundary and volume unchanged)
   bool conforming = true;        // every boundary triangle (after splits) is a face of the mesh
 };
 
@@ -53,7 +56,12 @@ struct TetrahedralizeStats {
 /// large for the target gets its circumcentre, unless that would destroy a surface face, which
 /// is split instead; finally CGAL's sliver exudation (Cheng, Dey, Edelsbrunner, Facello, Teng,
 /// J. ACM 47(5), 2000, doi:10.1145/355483.355487), which changes weights only and never a surface
-/// face. Tetrahedra come out positively oriented, vertices without tetrahedron dropped; label
+/// face. Where tetrahedra below min_dihedral are left in the mesh kept (four corners on the boundary
+/// across a thin part), relocate_sliver_vertices then flip_slivers (tet_cleanup.h) follow: the
+/// first may move a sliver's boundary vertex within the tangent plane of a smooth boundary (all
+/// its faces within 20° of their mean normal; by 5–20 % of the sliver's shortest edge), so such a
+/// vertex can leave the surface by that much where the surface curves; the flips change no vertex.
+/// Tetrahedra come out positively oriented, vertices without tetrahedron dropped; label
 /// is empty. Deterministic (no threads, fixed seeds).
 /// Throws InputError if the surface has no face or target_tets < 1; returns an empty mesh when no
 /// tetrahedron is inside (the caller reports it).
