@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 5;
+constexpr int kMeshingAlgorithmVersion = 6;  // 6: sliver moves and flips on the boundary route
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
