@@ -382,6 +382,30 @@ std::set<std::array<int, 3>> boundary_set(const TetMesh& m) {
   return out;
 }
 
+// A flat boundary tetrahedron on a good one: peeled without a height limit, kept when peeling it
+// would move the boundary farther than the limit (its height over its boundary faces).
+TEST(MeshingQuality, PeelBoundarySliversRespectsTheHeightLimit) {
+  for (const double h : {0.003, 0.01}) {
+    TetMesh m;
+    m.V.resize(5, 3);
+    // a b c on z = 0, the good tet's apex below, the sliver's apex h above the middle of a b c.
+    m.V << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2, 0.2, -1, 0.3, 0.3, h;
+    m.T.resize(2, 4);
+    m.T << 0, 1, 2, 3, 0, 1, 2, 4;
+    squeeze::meshing::orient_positively(m);
+    ASSERT_LT(squeeze::meshing::tet_quality(m).min_dihedral, 5.0) << "the second tet must be a sliver";
+    // Its height over its boundary faces (the three through the apex): the distance of the corner
+    // of a b c opposite each, about h / 0.3 here, so between 0.05 h and 20 h.
+    TetMesh kept = m, thin = m, any = m;
+    EXPECT_EQ(squeeze::meshing::peel_boundary_slivers(kept, 5.0, 0.05 * h), 0) << "h " << h;
+    EXPECT_EQ(kept.T.rows(), 2);
+    EXPECT_EQ(squeeze::meshing::peel_boundary_slivers(thin, 5.0, 20 * h), 1) << "h " << h;
+    EXPECT_EQ(squeeze::meshing::peel_boundary_slivers(any, 5.0), 1) << "h " << h;
+    ASSERT_EQ(any.T.rows(), 1);
+    EXPECT_EQ(any.T.row(0).maxCoeff(), 3) << "the good tet stays";
+  }
+}
+
 TEST(MeshingQuality, FlipSliversRemovesSliversAcrossAFaceAndAroundAnEdgeAndKeepsTheBoundary) {
   // A triangle a b c, an apex d and an apex e on either side of it.
   auto mesh = [](double dy, double dz, std::initializer_list<std::array<int, 4>> tets) {

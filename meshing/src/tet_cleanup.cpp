@@ -39,14 +39,31 @@ void remove_unused_vertices(TetMesh& m) {
   m.V = std::move(V);
 }
 
-int peel_boundary_slivers(TetMesh& m, double min_degrees) {
+int peel_boundary_slivers(TetMesh& m, double min_degrees, double max_height) {
+  // How far peeling t moves the boundary: the largest height of t over one of its boundary faces
+  // (the distance of the opposite vertex from that face's plane, 3·volume / area).
+  auto height = [&](int t, const Eigen::MatrixX4i& boundary_face) {
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = m.V.row(m.T(t, k)).transpose();
+    const double six_v = std::abs((p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0])));
+    double h = 0;
+    for (int k = 0; k < 4; ++k) {
+      if (boundary_face(t, k) < 0) continue;
+      const Vec3 &a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &c = p[(k + 3) % 4];
+      const double twice_area = (b - a).cross(c - a).norm();
+      h = std::max(h, twice_area > 0 ? six_v / twice_area : INFINITY);
+    }
+    return h;
+  };
   int removed = 0;
   for (int pass = 0; pass < 16; ++pass) {
     const Eigen::MatrixX4i boundary_face = tet_faces(m.T).boundary_face;
     std::vector<int> keep;
     keep.reserve(static_cast<size_t>(m.T.rows()));
     for (int t = 0; t < m.T.rows(); ++t)
-      if (!(boundary_face.row(t).maxCoeff() >= 0 && min_dihedral_of(m, t) < min_degrees)) keep.push_back(t);
+      if (!(boundary_face.row(t).maxCoeff() >= 0 && min_dihedral_of(m, t) < min_degrees &&
+            !(height(t, boundary_face) > max_height)))
+        keep.push_back(t);
     if (keep.size() == static_cast<size_t>(m.T.rows()) || keep.empty()) break;
     removed += static_cast<int>(m.T.rows()) - static_cast<int>(keep.size());
     Eigen::MatrixX4i T(static_cast<Eigen::Index>(keep.size()), 4);

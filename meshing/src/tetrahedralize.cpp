@@ -174,8 +174,10 @@ class Mesher {
     exude();
     r.mesh = extract();
     // Boundary tetrahedra still below the floor (flat caps over the surface that refinement could
-    // not reach without splitting the surface below min_split_) are peeled off.
-    r.peeled = peel_boundary_slivers(r.mesh, opt_.min_dihedral);
+    // not reach without splitting the surface below min_split_) are peeled off where that moves the
+    // boundary by at most peel_max_height (a coarse mesh's 4° sliver can be 2 % of the diagonal
+    // thick: the lumbar spine at 150).
+    r.peeled = peel_boundary_slivers(r.mesh, opt_.min_dihedral, opt_.peel_max_height);
     if (r.peeled > 0) remove_unused_vertices(r.mesh);
     r.boundary_splits = splits_;
     r.steiner = steiner_;
@@ -1008,12 +1010,18 @@ TetMesh tetrahedralize(const SurfaceMesh& boundary, const TetrahedralizeOptions&
     previous_L = L;
     L *= n > 0 ? std::clamp(std::cbrt(n / target), 0.5, 2.0) : 1.0;
   }
-  // Slivers left in the mesh kept (all four corners on the boundary across a thin part, where
-  // neither refinement nor exudation reaches them): their vertices are moved (boundary ones only
-  // within the tangent plane of a smooth boundary), then what is still below the floor is flipped
-  // away (boundary and volume unchanged), as in the winding-number route.
+  // Slivers left in the mesh kept (four corners on the boundary, where neither refinement nor
+  // exudation reaches them, or boundary ones too thick to peel): their vertices are moved
+  // (boundary ones only within the tangent plane of a smooth boundary), then what is still below
+  // the floor is flipped away (boundary and volume unchanged), as in the winding-number route.
   st.relocated = relocate_sliver_vertices(best.mesh, opt.min_dihedral);
   st.flips = flip_slivers(best.mesh, opt.min_dihedral);
+  // Boundary slivers neither could mend (a corner or crease holds every vertex) are peeled off
+  // after all, whatever their height: a flat tetrahedron is worse than the boundary moving (the
+  // elephant at 150 kept a 0° one).
+  const int late = peel_boundary_slivers(best.mesh, opt.min_dihedral);
+  if (late > 0) remove_unused_vertices(best.mesh);
+  st.peeled += late;
   if (stats) *stats = st;
   return std::move(best.mesh);
 }

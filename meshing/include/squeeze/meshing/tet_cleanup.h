@@ -2,6 +2,7 @@
 // vertices, boundary slivers, points sticking out of the boundary.
 #pragma once
 #include <Eigen/Core>
+#include <cmath>
 
 #include "squeeze/meshing/tet_mesh.h"
 
@@ -17,8 +18,11 @@ void remove_unused_vertices(TetMesh& mesh);
 /// left alone. Vertices are kept (remove_unused_vertices drops the orphans).
 ///   mesh         V #V by 3, T #T by 4 positively oriented, label #T or empty (modified in place)
 ///   min_degrees  dihedral-angle threshold (degrees)
+///   max_height   units: a sliver is kept when peeling it would move the boundary farther than this
+///                (its largest height over one of its boundary faces: a coarse mesh's sliver 4°
+///                flat can still be 2 % of the diagonal thick); infinite by default
 /// Returns how many tetrahedra were removed.
-int peel_boundary_slivers(TetMesh& mesh, double min_degrees);
+int peel_boundary_slivers(TetMesh& mesh, double min_degrees, double max_height = INFINITY);
 
 /// Moves vertices of tetrahedra with a dihedral angle below `min_degrees` (the interior slivers
 /// Mesh_3's exuder leaves, whose four vertices all lie on the boundary) to the best of a few nearby

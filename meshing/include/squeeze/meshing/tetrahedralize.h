@@ -2,6 +2,7 @@
 // whose boundary is that surface exactly.
 #pragma once
 #include <Eigen/Core>
+#include <cmath>
 #include <string>
 
 #include "squeeze/meshing/surface.h"
@@ -26,6 +27,10 @@ struct TetrahedralizeOptions {
   double exude_seconds = 30.0;    // the exuder's time limit (0: none): a bound for pathological inputs,
                                   // far above what it takes on real meshes (reaching it is warned)
   double min_dihedral = 5.0;      // degrees: the floor the result is checked against (stats)
+  double peel_max_height = INFINITY;  // units: boundary slivers are peeled off only where that moves the
+                                  // boundary by at most this (peel_boundary_slivers); thicker ones
+                                  // are left to the sliver moves and flips (squeeze mesh: the
+                                  // inner deviation bound)
   int max_tets = 100000;          // a safety net: refinement stops when the mesh reaches this
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
 };
@@ -38,7 +43,7 @@ struct TetrahedralizeStats {
                                  // refinement only, no size bound); 0 when not measured
   int boundary_splits = 0;       // boundary edges split (for conformity and quality) in the mesh kept
   int steiner_points = 0;        // interior points inserted in the mesh kept
-  int peeled = 0;                // boundary tetrahedra under min_dihedral removed at the end
+  int peeled = 0;                // boundary tetrahedra under min_dihedral removed (peel_max_height)
   int relocated = 0;             // vertex moves of relocate_sliver_vertices at the end (tet_cleanup.h)
   int flips = 0;                 // 2-3 and 3-2 flips of interior slivers under min_dihedral at the
                                  // end (tet_cleanup.h: flip_slivers; boundary and volume unchanged)
@@ -61,6 +66,8 @@ struct TetrahedralizeStats {
 /// first may move a sliver's boundary vertex within the tangent plane of a smooth boundary (all
 /// its faces within 20° of their mean normal; by 5–20 % of the sliver's shortest edge), so such a
 /// vertex can leave the surface by that much where the surface curves; the flips change no vertex.
+/// (Before them, boundary slivers at most peel_max_height thick are peeled off; after them, the
+/// boundary slivers still below min_dihedral are, whatever their height.)
 /// Tetrahedra come out positively oriented, vertices without tetrahedron dropped; label
 /// is empty. Deterministic (no threads, fixed seeds).
 /// Throws InputError if the surface has no face or target_tets < 1; returns an empty mesh when no
