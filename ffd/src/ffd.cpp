@@ -14,6 +14,7 @@
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/surface.h"
+#include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/tet_locator.h"
 
 namespace squeeze::ffd {
@@ -155,18 +156,8 @@ Eigen::MatrixX3d replay(const Binding& b, const Eigen::MatrixX3d& X) {
 }
 
 Eigen::MatrixX3d vertex_normals(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
-  const Eigen::Index nf = F.rows();
-  Eigen::MatrixX3d FN(nf, 3);
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, nf, 8192), [&](const tbb::blocked_range<Eigen::Index>& r) {
-    for (Eigen::Index f = r.begin(); f != r.end(); ++f) {
-      const Eigen::RowVector3d a = V.row(F(f, 0));
-      FN.row(f) = (V.row(F(f, 1)) - a).cross(V.row(F(f, 2)) - a);
-    }
-  });
-  // Scatter in face order (serial: deterministic sums, and cheap next to the gathers).
-  Eigen::MatrixX3d N = Eigen::MatrixX3d::Zero(V.rows(), 3);
-  for (Eigen::Index f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) N.row(F(f, k)) += FN.row(f);
+  Eigen::MatrixX3d FN, N;
+  meshing::area_weighted_normals(V, F, FN, N);
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, N.rows(), 16384),
                     [&](const tbb::blocked_range<Eigen::Index>& r) {
                       for (Eigen::Index i = r.begin(); i != r.end(); ++i) {

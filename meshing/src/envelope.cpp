@@ -21,6 +21,7 @@
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/point_triangle_distance.h"
+#include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/triangle_bvh.h"
 
 namespace squeeze::meshing {
@@ -290,17 +291,13 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
   const double reach = 3.0 * (opt.max_inside + opt.max_outside);
   std::vector<double> gap(static_cast<size_t>(surface.V.rows()), INFINITY);
   {
-    std::vector<Vec3> normal(static_cast<size_t>(surface.V.rows()), Vec3::Zero());
-    for (Eigen::Index f = 0; f < surface.F.rows(); ++f) {
-      const Vec3 a = surface.V.row(surface.F(f, 0)).transpose(), b = surface.V.row(surface.F(f, 1)).transpose(),
-                 c = surface.V.row(surface.F(f, 2)).transpose();
-      const Vec3 n = (b - a).cross(c - a);
-      for (int k = 0; k < 3; ++k) normal[static_cast<size_t>(surface.F(f, k))] += n;
-    }
-    tbb::parallel_for(size_t(0), normal.size(), [&](size_t v) {
-      const double len = normal[v].norm();
+    Eigen::MatrixX3d face_normal, normal;
+    area_weighted_normals(surface.V, surface.F, face_normal, normal);
+    tbb::parallel_for(size_t(0), gap.size(), [&](size_t v) {
+      const Vec3 nv = normal.row(static_cast<Eigen::Index>(v)).transpose();
+      const double len = nv.norm();
       if (!(len > 0) || !(reach > 0)) return;
-      const Vec3 n = normal[v] / len, x = surface.V.row(static_cast<Eigen::Index>(v)).transpose();
+      const Vec3 n = nv / len, x = surface.V.row(static_cast<Eigen::Index>(v)).transpose();
       for (double dir : {-1.0, 1.0}) {
         double t;
         if (reference.first_crossing(x, x + dir * reach * n, 1e-3, &t)) gap[v] = std::min(gap[v], t * reach);

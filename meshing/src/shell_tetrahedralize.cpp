@@ -31,6 +31,7 @@
 
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
+#include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/tet_cleanup.h"
 #include "squeeze/meshing/tet_faces.h"
 #include "squeeze/meshing/tet_geometry.h"
@@ -395,11 +396,8 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
   };
 
   // Area-weighted vertex normals (outward where the faces are oriented so).
-  Eigen::MatrixX3d N = Eigen::MatrixX3d::Zero(V.rows(), 3);
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::RowVector3d n = (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0)));
-    for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n;
-  }
+  Eigen::MatrixX3d FN, N;
+  area_weighted_normals(V, F, FN, N);
   // Surface points to start from: at input vertices spaced `spacing` apart, the boundary point
   // along the vertex normal (bisected between a point inside and one outside; vertices of inner
   // walls, inside on both sides, give none). Every part of the solid with a vertex is seeded.

@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include "squeeze/meshing/point_triangle_distance.h"
+#include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/tet_faces.h"
 #include "squeeze/meshing/tet_geometry.h"
 #include "squeeze/meshing/tet_locator.h"
@@ -107,16 +108,16 @@ int inflate_to_cover(TetMesh& m, const Eigen::MatrixX3d& P, double tolerance, do
       if (dist[static_cast<size_t>(i)] > tolerance) out.push_back(i);
     if (out.empty()) break;
     // Boundary face normals and vertex normals (area weighted).
+    Eigen::MatrixX3d FN, N;
+    area_weighted_normals(m.V, faces.boundary, FN, N);
     std::vector<Vec3> fn(static_cast<size_t>(nb));
-    std::vector<Vec3> vn(static_cast<size_t>(nv), Vec3::Zero());
+    std::vector<Vec3> vn(static_cast<size_t>(nv));
     for (Eigen::Index f = 0; f < nb; ++f) {
-      const Vec3 a = m.V.row(faces.boundary(f, 0)).transpose(), b = m.V.row(faces.boundary(f, 1)).transpose(),
-                 c = m.V.row(faces.boundary(f, 2)).transpose();
-      const Vec3 n = (b - a).cross(c - a);
-      for (int k = 0; k < 3; ++k) vn[static_cast<size_t>(faces.boundary(f, k))] += n;
+      const Vec3 n = FN.row(f).transpose();
       const double len = n.norm();
       fn[static_cast<size_t>(f)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
     }
+    for (Eigen::Index v = 0; v < nv; ++v) vn[static_cast<size_t>(v)] = N.row(v).transpose();
     for (auto& n : vn)
       if (n.norm() > 0) n.normalize();
     // Nearest boundary face of every point outside (ties to the lowest index).
@@ -198,16 +199,11 @@ int relocate_sliver_vertices(TetMesh& m, double min_degrees, int passes) {
     for (int k = 0; k < 4; ++k) around[static_cast<size_t>(m.T(t, k))].push_back(t);
   // Boundary vertices and their area-weighted normals (moves stay in the tangent plane).
   const Eigen::MatrixX3i B = boundary_faces(m.T);
-  Eigen::MatrixX3d FN(B.rows(), 3);  // per boundary face: its area-weighted normal (2 × area)
-  Eigen::MatrixX3d N = Eigen::MatrixX3d::Zero(nv, 3);
+  Eigen::MatrixX3d FN, N;  // per boundary face: its area-weighted normal (2 × area); per vertex their sum
+  area_weighted_normals(m.V, B, FN, N);
   std::vector<char> on_boundary(static_cast<size_t>(nv), 0);
-  for (Eigen::Index f = 0; f < B.rows(); ++f) {
-    FN.row(f) = (m.V.row(B(f, 1)) - m.V.row(B(f, 0))).cross(m.V.row(B(f, 2)) - m.V.row(B(f, 0)));
-    for (int k = 0; k < 3; ++k) {
-      N.row(B(f, k)) += FN.row(f);
-      on_boundary[static_cast<size_t>(B(f, k))] = 1;
-    }
-  }
+  for (Eigen::Index f = 0; f < B.rows(); ++f)
+    for (int k = 0; k < 3; ++k) on_boundary[static_cast<size_t>(B(f, k))] = 1;
   // A boundary vertex moves only where its boundary faces are nearly coplanar (all within 20
   // degrees of their mean normal): a corner or a crease stays where it is.
   std::vector<char> smooth(static_cast<size_t>(nv), 1);
