@@ -806,8 +806,8 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"steiner_points", r.tet_stats.steiner_points},
         {"conforming", r.tet_stats.conforming},
         {"peeled_slivers", r.method == "convex_shells" ? r.shell_stats.peeled_slivers : r.tet_stats.peeled},
-        {"relocated_sliver_vertices", r.method == "boundary" || r.method == "alpha_wrap" ? r.tet_stats.relocated : 0},
-        {"flipped_slivers", r.method == "boundary" || r.method == "alpha_wrap" ? r.tet_stats.flips : 0}}},
+        {"relocated_sliver_vertices", r.tet_stats.relocated},  // 0 unless tetrahedralize() meshed it
+        {"flipped_slivers", r.tet_stats.flips}}},
       {"winding_number",
        r.method == "winding_number"
            ? json{{"attempts", r.winding_stats.attempts},

@@ -44,13 +44,13 @@ int peel_boundary_slivers(TetMesh& m, double min_degrees, double max_height) {
   // How far peeling t moves the boundary: the largest height of t over one of its boundary faces
   // (the distance of the opposite vertex from that face's plane, 3·volume / area).
   auto height = [&](int t, const Eigen::MatrixX4i& boundary_face) {
-    Vec3 p[4];
-    for (int k = 0; k < 4; ++k) p[k] = m.V.row(m.T(t, k)).transpose();
-    const double six_v = std::abs((p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0])));
+    Eigen::RowVector3d p[4];
+    for (int k = 0; k < 4; ++k) p[k] = m.V.row(m.T(t, k));
+    const double six_v = 6.0 * std::abs(tet_volume(p[0], p[1], p[2], p[3]));
     double h = 0;
     for (int k = 0; k < 4; ++k) {
       if (boundary_face(t, k) < 0) continue;
-      const Vec3 &a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &c = p[(k + 3) % 4];
+      const Eigen::RowVector3d &a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &c = p[(k + 3) % 4];
       const double twice_area = (b - a).cross(c - a).norm();
       h = std::max(h, twice_area > 0 ? six_v / twice_area : INFINITY);
     }
@@ -117,9 +117,11 @@ int inflate_to_cover(TetMesh& m, const Eigen::MatrixX3d& P, double tolerance, do
       const double len = n.norm();
       fn[static_cast<size_t>(f)] = len > 0 ? Vec3(n / len) : Vec3::Zero();
     }
-    for (Eigen::Index v = 0; v < nv; ++v) vn[static_cast<size_t>(v)] = N.row(v).transpose();
-    for (auto& n : vn)
+    for (Eigen::Index v = 0; v < nv; ++v) {
+      Vec3& n = vn[static_cast<size_t>(v)];
+      n = N.row(v).transpose();
       if (n.norm() > 0) n.normalize();
+    }
     // Nearest boundary face of every point outside (ties to the lowest index).
     std::vector<int> face(out.size(), 0);
     tbb::parallel_for(size_t(0), out.size(), [&](size_t i) {
@@ -211,10 +213,7 @@ int relocate_sliver_vertices(TetMesh& m, double min_degrees, int passes) {
     for (int k = 0; k < 3; ++k)
       if (!(FN.row(f).normalized().dot(N.row(B(f, k)).normalized()) > std::cos(20.0 * M_PI / 180.0)))
         smooth[static_cast<size_t>(B(f, k))] = 0;
-  auto volume = [&](int t) {
-    const Vec3 a = m.V.row(m.T(t, 0)), b = m.V.row(m.T(t, 1)), c = m.V.row(m.T(t, 2)), d = m.V.row(m.T(t, 3));
-    return (b - a).dot((c - a).cross(d - a));
-  };
+  auto volume = [&](int t) { return tet_volume(m.V.row(m.T(t, 0)), m.V.row(m.T(t, 1)), m.V.row(m.T(t, 2)), m.V.row(m.T(t, 3))); };
   // The worst dihedral angle around v (−1 if a tetrahedron is inverted or flat).
   auto local_min = [&](int v) {
     double w = 180.0;
@@ -270,18 +269,11 @@ int relocate_sliver_vertices(TetMesh& m, double min_degrees, int passes) {
   return moves;
 }
 
-}  // namespace squeeze::meshing
-
-namespace squeeze::meshing {
-
 int flip_slivers(TetMesh& m, double min_degrees, int max_flips) {
   const bool labelled = m.label.size() == m.T.rows();
-  // Signed volume (× 6) of four vertices, and the smallest dihedral angle of a positively
-  // oriented tetrahedron (−1 if it is not).
-  auto orient = [&](int a, int b, int c, int d) {
-    const Vec3 A = m.V.row(a), B = m.V.row(b), C = m.V.row(c), D = m.V.row(d);
-    return (B - A).dot((C - A).cross(D - A));
-  };
+  // Signed volume of four vertices, and the smallest dihedral angle of a positively oriented
+  // tetrahedron (−1 if it is not).
+  auto orient = [&](int a, int b, int c, int d) { return tet_volume(m.V.row(a), m.V.row(b), m.V.row(c), m.V.row(d)); };
   auto quality = [&](const Eigen::Vector4i& t) {
     if (!(orient(t(0), t(1), t(2), t(3)) > 0)) return -1.0;
     const auto a = dihedral_angles(m.V.row(t(0)), m.V.row(t(1)), m.V.row(t(2)), m.V.row(t(3)));

@@ -38,8 +38,8 @@ struct WindingTetrahedralizeStats {
   int seeds = 0;                 // surface points Mesh_3 started from
   int peeled_slivers = 0;        // boundary tetrahedra removed for a dihedral angle < min_dihedral
   int relocated = 0;             // vertex moves that raised the angles of an interior sliver
-  int flips = 0;                 // 2-3 and 3-2 flips that removed a sliver (tet_cleanup.h flip_slivers)
                                  // (relocate_sliver_vertices, tet_cleanup.h)
+  int flips = 0;                 // 2-3 and 3-2 flips that removed a sliver (tet_cleanup.h flip_slivers)
   bool time_limit_reached = false;  // the exuder stopped at optimize_seconds
 };
 
