@@ -76,12 +76,17 @@ std::optional<double> scene_volume_limit(const fem::SceneWorld& w) {
   return plan::planner_options(w).max_volume_change;
 }
 
-void print_scene_warnings(const fem::SceneWorld& w, std::optional<double> max_volume_change) {
+void print_scene_warnings(const fem::SceneWorld& w, std::optional<double> max_volume_change, double settle,
+                          Progress* progress) {
   if (verbosity() == Verbosity::quiet) return;  // nothing would be shown: skip the settle too
   plan::SceneCheckOptions o;
   o.details = false;
   o.max_volume_change = max_volume_change;
-  for (const std::string& line : plan::check_scene(w, o).warnings) spdlog::warn("{}: {}", w.scene.file.string(), line);
+  o.settle = settle;
+  if (progress && settle > 0) progress->stage("checking the scene (a " + format_g3(settle) + " s settle)");
+  const plan::SceneCheck c = plan::check_scene(w, o);
+  if (progress && settle > 0) progress->finish();
+  for (const std::string& line : c.warnings) spdlog::warn("{}: {}", w.scene.file.string(), line);
 }
 
 Runner add_check_command(CLI::App& app, const Global& global) {

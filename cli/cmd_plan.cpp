@@ -166,7 +166,7 @@ Runner add_plan_command(CLI::App& app, const Global& global) {
     const fem::Scene scene = load_scene_with(a.scene, a.integrator);
     const PreparedPlanning prep = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
     const plan::PlannerOptions& options = prep.options;
-    print_scene_warnings(prep.world, options.max_volume_change);  // squeeze check's warnings
+    print_scene_warnings(prep.world, options.max_volume_change, 0.1, &progress);  // squeeze check's warnings
     {
       const plan::MaxForceTerms t = plan::max_force_terms(prep.world);
       spdlog::info("{}: max_force {:.4g} N (default {:.4g} N = max of 2 m g {:.4g}, m d / t_max^2 {:.4g}, K d / 2 {:.4g}, "

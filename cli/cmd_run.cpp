@@ -97,7 +97,7 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     const long long builds_before = fem::scene_builds();
     const PreparedPlanning prep = prepare_planning(scene, {a.seed, a.iterations, a.time_limit}, progress);
     const plan::PlannerOptions& options = prep.options;
-    print_scene_warnings(prep.world, options.max_volume_change);  // squeeze check's warnings
+    print_scene_warnings(prep.world, options.max_volume_change, 0.1, &progress);  // squeeze check's warnings
     seconds.emplace_back("meshing", since(t));
     // Everything is written into a staging folder beside OUT and swapped in whole at the end, so a
     // kill at any moment leaves the complete old OUT or the complete new one.

@@ -70,7 +70,7 @@ Runner add_simulate_command(CLI::App& app, const Global& global) {
         limit = scene_volume_limit(w);
       } catch (const InputError&) {
       }
-      print_scene_warnings(w, limit);  // squeeze check's warnings
+      print_scene_warnings(w, limit, 0.0);  // squeeze check's warnings; the simulation is the settle
     }
     const double interval = 1.0 / a.fps;
     const double substeps_d = std::ceil(interval / w.time_step() - 1e-9);

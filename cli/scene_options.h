@@ -7,6 +7,10 @@
 
 #include "squeeze/fem/scene.h"
 
+namespace squeeze {
+class Progress;
+}
+
 namespace squeeze::cli {
 
 /// Adds `--integrator NAME` (the registered integrators; default: the scene's `integrator` key).
@@ -21,6 +25,10 @@ fem::Scene load_scene_with(const std::string& file, const std::string& integrato
 std::optional<double> scene_volume_limit(const fem::SceneWorld& w);
 /// `squeeze check`'s warnings on an already built scene, one spdlog::warn line each ("SCENE: …"),
 /// nothing (and no work) with -q. Used by simulate, plan and run before they start.
-void print_scene_warnings(const fem::SceneWorld& w, std::optional<double> max_volume_change);
+///   settle    seconds of the check's settle (plan::SceneCheckOptions::settle; 0: none — simulate,
+///             whose own run is that settle: it stops on divergence and metrics.csv has the volumes)
+///   progress  shows the settle as a stage (it costs as much as simulating that long), or null
+void print_scene_warnings(const fem::SceneWorld& w, std::optional<double> max_volume_change, double settle = 0.1,
+                          Progress* progress = nullptr);
 
 }  // namespace squeeze::cli
