@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <Eigen/Geometry>
 
@@ -30,6 +31,11 @@
 
 namespace squeeze::meshing {
 namespace {
+
+// Waits in `arena` for `group` (rethrows what one of its tasks threw).
+void arena_wait(tbb::task_arena& arena, tbb::task_group& group) {
+  arena.execute([&] { group.wait(); });
+}
 
 class StageTimer {
  public:
@@ -305,11 +311,43 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   const double diag = bounding_box_diagonal(r.input.V);
   if (!(diag > 0)) throw InputError("input has zero extent (all vertices coincide)");
 
-  timer.start("decomposing");
+  // The convex decomposition (the fallback's shells, every route's tetrahedron labels, the report)
+  // runs beside the route's own meshing, in an arena of its own (a thread waiting in the route's
+  // parallel loops takes none of its tasks, so the route's CGAL random state stays its own);
+  // decomposition() waits for it. Its seconds are its own run's, not the wait's.
+  timer.stop();
   DecompositionOptions dopt = opt.decomposition;
   if (dopt.max_hulls >= 1) dopt.max_hulls = hull_budget(opt);
   r.hull_budget = dopt.max_hulls;
-  r.decomposition = decompose(r.input, dopt, progress);
+  double decomposing_seconds = 0;
+  tbb::task_arena decomposing_arena;
+  tbb::task_group decomposing;
+  decomposing_arena.execute([&] {
+    decomposing.run([&] {
+      const auto t0 = std::chrono::steady_clock::now();
+      r.decomposition = decompose(r.input, dopt, nullptr);
+      decomposing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    });
+  });
+  struct Join {  // every way out of this function waits for the decomposition first
+    tbb::task_arena& arena;
+    tbb::task_group& group;
+    ~Join() {
+      try {
+        arena.execute([&] { group.wait(); });
+      } catch (...) {  // already leaving by an exception (or a result taken without it): dropped
+      }
+    }
+  } join{decomposing_arena, decomposing};
+  bool decomposed = false;
+  auto decomposition = [&]() -> const Decomposition& {
+    if (!decomposed) {
+      decomposed = true;
+      arena_wait(decomposing_arena, decomposing);  // rethrows the decomposition's exception
+      r.beside.emplace_back("decomposing", decomposing_seconds);
+    }
+    return r.decomposition;
+  };
 
   // The input's face-connected components: the candidate parts, and the fallback's part count.
   Eigen::VectorXi component_of;
@@ -333,7 +371,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     spdlog::info("meshing the convex shells instead of the input's boundary: {}", why);
     leave_boundary_route("convex_shells", why, components);
     r.input_volume_from_winding_number = !r.info.closed;
-    r.input_volume = r.info.closed ? r.info.volume : r.decomposition.solid_volume;
+    r.input_volume = r.info.closed ? r.info.volume : decomposition().solid_volume;
     r.info.volume = r.input_volume;
     timer.start("tetrahedralizing");
     ShellTetrahedralizeOptions so = opt.shells;
@@ -341,7 +379,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     // aims at the cap at once (instead of attempts that overshoot it) and the report says why.
     so.target_tets = std::min(opt.tetrahedralize.target_tets, so.max_tets);
     so.seed = opt.tetrahedralize.seed;
-    r.tets = tetrahedralize_shells(r.decomposition.shells, so, &r.shell_stats, progress, &r.input.V);
+    r.tets = tetrahedralize_shells(decomposition().shells, so, &r.shell_stats, progress, &r.input.V);
     if (r.tets.T.rows() == 0) throw InputError("tetrahedralization produced no tetrahedra");
     timer.start("measuring");
     measure(r, opt);
@@ -359,14 +397,15 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
 
   // Label: the convex shell that holds the tetrahedron's centroid (the most interior one).
   auto label_by_shells = [&](TetMesh& m) {
+    const std::vector<ConvexShell>& shells = decomposition().shells;
     m.label.resize(m.T.rows());
     for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
       const Eigen::RowVector3d c =
           (m.V.row(m.T(t, 0)) + m.V.row(m.T(t, 1)) + m.V.row(m.T(t, 2)) + m.V.row(m.T(t, 3))) / 4.0;
       int arg = 0;
       double v = INFINITY;
-      for (size_t s = 0; s < r.decomposition.shells.size(); ++s) {
-        const double sv = r.decomposition.shells[s].hull.signed_value(c);
+      for (size_t s = 0; s < shells.size(); ++s) {
+        const double sv = shells[s].hull.signed_value(c);
         if (sv < v) v = sv, arg = static_cast<int>(s);
       }
       m.label(t) = arg + 1;
@@ -380,7 +419,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   // nothing: the convex shells.
   auto winding_route = [&](const std::string& why) -> MeshResult {
     spdlog::info("meshing the input's winding-number solid instead of its own boundary: {}", why);
-    leave_boundary_route("winding_number", why, r.decomposition.parts);
+    leave_boundary_route("winding_number", why, 0);
     timer.start("tetrahedralizing");
     r.input_volume_from_winding_number = true;
     r.input_volume = winding_volume(r.input);
@@ -392,6 +431,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     wo.dilation = opt.winding_dilation * opt.max_deviation;
     r.tets = tetrahedralize_winding_number(r.input.V, r.input.F, r.input_volume, wo, &r.winding_stats, progress);
     if (r.tets.T.rows() == 0) return shells_route(why + "; Mesh_3 of its winding-number solid produced no tetrahedra");
+    r.parts = decomposition().parts;
     r.tet_stats.attempts = r.winding_stats.attempts;
     r.tet_stats.edge_length = r.winding_stats.cell_size;
     r.tet_stats.peeled = r.winding_stats.peeled_slivers;
@@ -744,6 +784,7 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
     total += s;
   }
   seconds["total"] = total;
+  for (const auto& [name, s] : r.beside) seconds[name] = seconds.value(name, 0.0) + s;
   const double diag = bounding_box_diagonal(r.input.V);
   auto frac = [&](double x) { return diag > 0 ? x / diag : 0.0; };
   return json{

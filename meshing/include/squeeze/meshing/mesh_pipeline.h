@@ -117,7 +117,8 @@ struct MeshResult {
   double inside_fraction = 0;   // input vertices inside the tet mesh
   double covered_fraction = 0;  // ... inside or within coverage_tolerance × diagonal of it
   double max_outside_distance = 0;  // worst distance of an input vertex outside the mesh (units)
-  std::vector<std::pair<std::string, double>> seconds;  // per stage
+  std::vector<std::pair<std::string, double>> seconds;  // per stage, one after the other (their sum: the total)
+  std::vector<std::pair<std::string, double>> beside;   // per stage run beside those ("decomposing"; not in the total)
 };
 
 /// The hull budget the pipeline uses: min(decomposition.max_hulls, max(1, round(target_tets /
