@@ -334,7 +334,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     tbb::task_group& group;
     ~Join() {
       try {
-        arena.execute([&] { group.wait(); });
+        arena_wait(arena, group);
       } catch (...) {  // already leaving by an exception (or a result taken without it): dropped
       }
     }
