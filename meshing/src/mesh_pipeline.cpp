@@ -314,19 +314,19 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   // The convex decomposition (the fallback's shells, every route's tetrahedron labels, the report)
   // runs beside the route's own meshing, in an arena of its own (a thread waiting in the route's
   // parallel loops takes none of its tasks, so the route's CGAL random state stays its own);
-  // decomposition() waits for it. Its seconds are its own run's, not the wait's.
+  // decomposition() waits for it. Its seconds (r.beside) are its own run's, not the wait's; the
+  // task writes only r.decomposition and r.beside, which nothing else touches before the wait.
   timer.stop();
   DecompositionOptions dopt = opt.decomposition;
   if (dopt.max_hulls >= 1) dopt.max_hulls = hull_budget(opt);
   r.hull_budget = dopt.max_hulls;
-  double decomposing_seconds = 0;
   tbb::task_arena decomposing_arena;
   tbb::task_group decomposing;
   decomposing_arena.execute([&] {
     decomposing.run([&] {
       const auto t0 = std::chrono::steady_clock::now();
       r.decomposition = decompose(r.input, dopt, nullptr);
-      decomposing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      r.beside.emplace_back("decomposing", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     });
   });
   struct Join {  // every way out of this function waits for the decomposition first
@@ -339,13 +339,8 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       }
     }
   } join{decomposing_arena, decomposing};
-  bool decomposed = false;
   auto decomposition = [&]() -> const Decomposition& {
-    if (!decomposed) {
-      decomposed = true;
-      arena_wait(decomposing_arena, decomposing);  // rethrows the decomposition's exception
-      r.beside.emplace_back("decomposing", decomposing_seconds);
-    }
+    arena_wait(decomposing_arena, decomposing);  // at once once done; rethrows the decomposition's exception
     return r.decomposition;
   };
 
