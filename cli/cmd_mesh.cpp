@@ -34,8 +34,10 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
   CLI::App* cmd = app.add_subcommand(
       "mesh",
       "Tetrahedralize a surface into a coarse mesh of its own shape: each closed part's boundary,\n"
-      "simplified within --max-deviation, is tetrahedralized; inputs whose components are not closed\n"
-      "parts (open scans, welded or self-intersecting segments) fall back to their convex shells\n"
+      "simplified within --max-deviation, is tetrahedralized; open sheets (one layer of triangles: a\n"
+      "curtain, a cloth) become thin slabs around them (--sheet-thickness), one layer of prisms; inputs\n"
+      "with other components that are not closed parts (open scans of solids, welded or\n"
+      "self-intersecting segments) fall back to their convex shells\n"
       "meshed with CGAL Mesh_3; with --winding to the solid their winding number encloses (Mesh_3, tight\n"
       "to the input), or with --wrap to their alpha wrap (CGAL, a closed surface just outside them)\n"
       "meshed like a boundary (the report's method and fallback_because say which and why).\n"
@@ -81,6 +83,11 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       ->capture_default_str();
   cmd->add_option("--wrap-offset", args->options.wrap_offset,
                   "With --wrap: how far outside the input the alpha wrap lies, as a multiple of --max-deviation")
+      ->capture_default_str();
+  cmd->add_option("--sheet-thickness", args->options.sheet_thickness,
+                  "Open sheets (one layer of triangles enclosing no volume: a curtain, a cloth) are meshed as slabs "
+                  "this thick, the sheet in the middle, as a multiple of --max-deviation times the bounding-box "
+                  "diagonal (the report's sheets.thickness)")
       ->capture_default_str();
   cmd->add_option("--tets-per-hull", args->options.tets_per_hull,
                   "The hull budget is at most target-tets / this (0: --max-hulls alone)")

@@ -432,7 +432,7 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
       << options.winding << ',' << options.winding_facet_distance << ',' << options.winding_dilation << ','
       << options.winding_mesh.max_tets << ',' << options.winding_mesh.min_dihedral << ','
       << options.winding_mesh.sliver_bound << ',' << options.winding_mesh.optimize_seconds << ',' << options.wrap
-      << ',' << options.wrap_alpha << ',' << options.wrap_offset << '|' << bytes.size() << '|';
+      << ',' << options.wrap_alpha << ',' << options.wrap_offset << ',' << options.sheet_thickness << '|' << bytes.size() << '|';
   Hash128 h;
   h.add(opt.str());
   h.add(bytes);

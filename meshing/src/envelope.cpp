@@ -1,7 +1,10 @@
-// CGAL translation unit: the envelope's edge collapses (Surface_mesh_simplification).
+// CGAL translation unit: the envelope's edge collapses (Surface_mesh_simplification), and the
+// isotropic remeshing of open sheets (sheet.h; Polygon_mesh_processing), on the same Surface_mesh.
 #include "squeeze/meshing/envelope.h"
+#include "squeeze/meshing/sheet.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/Surface_mesh_simplification/Edge_collapse_visitor_base.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_cost.h>
@@ -379,6 +382,44 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
     stats->faces = static_cast<int>(out.F.rows());
     stats->collapses = s.collapses;
     stats->bounded = out.F.rows() > std::max(4, opt.target_faces) + 2;
+  }
+  return out;
+}
+
+SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int iterations) {
+  if (!(edge_length > 0)) throw InputError("remesh_sheet: the edge length must be positive");
+  Mesh m;
+  std::vector<VD> vd;
+  vd.reserve(static_cast<size_t>(sheet.V.rows()));
+  for (Eigen::Index i = 0; i < sheet.V.rows(); ++i)
+    vd.push_back(m.add_vertex(Point(sheet.V(i, 0), sheet.V(i, 1), sheet.V(i, 2))));
+  for (Eigen::Index f = 0; f < sheet.F.rows(); ++f)
+    if (m.add_face(vd[sheet.F(f, 0)], vd[sheet.F(f, 1)], vd[sheet.F(f, 2)]) == Mesh::null_face())
+      throw InputError("remesh_sheet: the sheet is not an oriented 2-manifold (face " + std::to_string(f) + ")");
+  // Boundary edges are constraints by default: split and collapsed along the border polylines,
+  // their vertices kept on them; the others projected back onto the input sheet. The border's
+  // corners (where it turns by more than 20°) stay where they are, or the border would cut them.
+  auto corner = m.add_property_map<VD, bool>("v:corner", false).first;
+  const double cos_turn = std::cos(20.0 * M_PI / 180.0);
+  for (HD h : m.halfedges()) {
+    if (!m.is_border(h)) continue;
+    const HD next = m.next(h);  // the border continues from target(h)
+    const Vec3 a = vec(m.point(m.source(h))), b = vec(m.point(m.target(h))), c = vec(m.point(m.target(next)));
+    const Vec3 u = b - a, w = c - b;
+    if (!(u.norm() > 0 && w.norm() > 0) || u.dot(w) < cos_turn * u.norm() * w.norm()) corner[m.target(h)] = true;
+  }
+  CGAL::Polygon_mesh_processing::isotropic_remeshing(
+      faces(m), edge_length, m, CGAL::parameters::number_of_iterations(iterations).vertex_is_constrained_map(corner));
+  m.collect_garbage();
+  SurfaceMesh out;
+  out.V.resize(static_cast<Eigen::Index>(m.number_of_vertices()), 3);
+  for (VD v : m.vertices()) out.V.row(static_cast<Eigen::Index>(v.idx())) = vec(m.point(v)).transpose();
+  out.F.resize(static_cast<Eigen::Index>(m.number_of_faces()), 3);
+  Eigen::Index r = 0;
+  for (FD f : m.faces()) {
+    int k = 0;
+    for (VD v : CGAL::vertices_around_face(m.halfedge(f), m)) out.F(r, k++) = static_cast<int>(v.idx());
+    ++r;
   }
   return out;
 }

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <algorithm>
@@ -23,6 +24,7 @@
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/alpha_wrap.h"
 #include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/sheet.h"
 #include "squeeze/meshing/shell_tetrahedralize.h"
 #include "squeeze/meshing/tet_faces.h"
 #include "squeeze/meshing/tet_locator.h"
@@ -111,8 +113,9 @@ double area(const SurfaceMesh& m) {
   return a;
 }
 
-// The faces `faces` of m (sorted) with the vertices they use, renumbered in order of first use.
-SurfaceMesh sub_mesh(const SurfaceMesh& m, const std::vector<int>& faces) {
+// The faces `faces` of m (sorted) with the vertices they use, renumbered in order of first use;
+// `index` (optional): per vertex of the result, its index in m.
+SurfaceMesh sub_mesh(const SurfaceMesh& m, const std::vector<int>& faces, std::vector<int>* index = nullptr) {
   std::vector<int> map(static_cast<size_t>(m.V.rows()), -1);
   SurfaceMesh out;
   out.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
@@ -124,8 +127,12 @@ SurfaceMesh sub_mesh(const SurfaceMesh& m, const std::vector<int>& faces) {
       out.F(static_cast<Eigen::Index>(i), k) = v;
     }
   out.V.resize(n, 3);
+  if (index) index->assign(static_cast<size_t>(n), -1);
   for (Eigen::Index v = 0; v < m.V.rows(); ++v)
-    if (map[static_cast<size_t>(v)] >= 0) out.V.row(map[static_cast<size_t>(v)]) = m.V.row(v);
+    if (map[static_cast<size_t>(v)] >= 0) {
+      out.V.row(map[static_cast<size_t>(v)]) = m.V.row(v);
+      if (index) (*index)[static_cast<size_t>(map[static_cast<size_t>(v)])] = static_cast<int>(v);
+    }
   return out;
 }
 
@@ -181,7 +188,8 @@ Eigen::MatrixX3i without_duplicate_and_flat_faces(const Eigen::MatrixX3d& V, con
 
 // One part of the input and what becomes of it.
 struct Part {
-  SurfaceMesh surface;        // a component of the input: closed, outward, 2-manifold
+  SurfaceMesh surface;        // a component of the input: closed, outward, 2-manifold (or a sheet's slab)
+  int component = -1;         // which face-connected component of the input
   bool check = false;         // it intersects itself: check its simplified boundary
   bool failed = false;        // ... which still did
   double volume = 0;
@@ -191,6 +199,12 @@ struct Part {
   TetMesh tets;
   TetrahedralizeStats tet_stats;
   int retries = 0;            // boundaries tried after the first (see mesh_parts)
+  SurfaceMesh sheet;          // an open sheet (sheet.h), when `surface` is its slab: meshed as one
+                              // layer of prisms (sheet_tets) where it can be
+  bool sheet_capped = false;  // ... with more tetrahedra than its share of the target (thinness)
+  double offset = 0;          // how far `surface` lies outside the input (units): a sheet's slab, half
+                              // its thickness (sheet.h); taken off the outer bound, and the inner
+                              // bound kept below half of it so that the sheet stays inside
 };
 
 std::string percent(double x) {
@@ -294,6 +308,8 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   if (!(opt.inner_deviation > 0 && opt.inner_deviation <= 1)) throw InputError("inner_deviation must be in (0, 1]");
   if (!(opt.wrap_alpha > 0 && opt.wrap_alpha * opt.max_deviation < 1))
     throw InputError("--wrap-alpha must be positive and, times --max-deviation, below 1");
+  if (!(opt.sheet_thickness > 0 && opt.sheet_thickness * opt.max_deviation < 1))
+    throw InputError("--sheet-thickness must be positive and, times --max-deviation, below 1");
   if (!(opt.wrap_offset > 0 && opt.wrap_offset * opt.max_deviation < 1))
     throw InputError("--wrap-offset must be positive and, times --max-deviation, below 1");
   if (!(opt.winding_facet_distance > 0 && opt.winding_facet_distance * opt.max_deviation < 1))
@@ -469,6 +485,54 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     const double target = opt.tetrahedralize.target_tets;
     const double L = std::cbrt(6.0 * std::sqrt(2.0) * total_volume / (0.5 * target));
     timer.start("tetrahedralizing");  // (simplifying each part's boundary, then tetrahedralizing it)
+    // An open sheet: remeshed to near-equilateral triangles, then one layer of prisms, three
+    // tetrahedra each, between the two sides of its slab (sheet_tets). The edge length gives the
+    // part its share of the target (3 tetrahedra per triangle of area 0.433 L²), at most 5 times
+    // the slab's thickness (an equilateral prism that wide splits into tetrahedra of 12.9° and more;
+    // the floor is 5°), shortened while the remeshed sheet strays from the input by more than 0.4
+    // of the thickness (so that the input stays inside the slab, and the slab within
+    // max_deviation of the input). False where the slab folds over itself at every length tried: the
+    // slab then takes the boundary route like any part.
+    auto mesh_sheet = [&](Part& p) {
+      const double h = p.offset;
+      const int share = std::max(1, static_cast<int>(std::lround(target * p.volume / total_volume)));
+      const double wanted = std::sqrt(3.0 * area(p.sheet) / (0.433 * share));
+      double Ls = std::min(wanted, 10.0 * h);
+      const TriangleBvh input(p.sheet.V, p.sheet.F);
+      double apart = 0;
+      for (int attempt = 1; attempt <= 6; ++attempt) {
+        // After an attempt too far from the input: the chords' sag goes as the square of their
+        // length, so the length that should just meet the bound, and a tenth less.
+        if (attempt > 1) Ls *= std::clamp(0.9 * std::sqrt(0.8 * h / apart), 0.3, 0.9);
+        SurfaceMesh s = remesh_sheet(p.sheet, Ls);
+        if (s.F.rows() == 0) {
+          apart = 0.8 * h / 0.49;
+          continue;
+        }
+        const TriangleBvh remeshed(s.V, s.F);
+        const double spacing = std::max(0.25 * Ls, 1e-3 * bounding_box_diagonal(p.sheet.V));
+        apart = std::max(farthest_sample(s.V, s.F, input, spacing), farthest_sample(p.sheet.V, p.sheet.F, remeshed, spacing));
+        spdlog::debug("sheet (component {}): edge length {:.4g}, {} triangles, {:.3g} from the input (bound {:.3g})", p.component,
+                      Ls, s.F.rows(), apart, 0.8 * h);
+        TetMesh m;
+        if (!(apart <= 0.8 * h)) continue;
+        if (!sheet_tets(s, h, m)) {
+          apart = 0.8 * h / 0.49;  // folded: the next attempt 0.63 times as long
+          continue;
+        }
+        p.sheet_capped = Ls < wanted;
+        p.boundary = thicken_sheet(s, h);
+        p.tets = std::move(m);
+        p.tet_stats = TetrahedralizeStats{};
+        p.tet_stats.attempts = attempt;
+        p.tet_stats.edge_length = Ls;
+        p.tet_stats.conforming = true;
+        p.target_faces = 2 * static_cast<int>(std::lround(area(p.sheet) / (0.433 * wanted * wanted)));
+        return true;
+      }
+      spdlog::debug("sheet (component {}): its slab folds over itself; meshing it by the boundary route", p.component);
+      return false;
+    };
     // Once a part has failed, the whole input takes `fail`: the other parts' work is skipped.
     std::atomic<bool> abandoned{false};
     auto mesh_parts = [&](std::vector<Part>& ps, size_t first) {
@@ -479,7 +543,12 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
         tbb::this_task_arena::isolate([&] {
           Part& p = ps[i];
           if (abandoned) return;
+          if (p.sheet.F.rows() > 0 && mesh_sheet(p)) return;
           EnvelopeOptions e = bounds;
+          if (p.offset > 0) {
+            e.max_outside = std::max(0.25 * e.max_outside, e.max_outside - p.offset);
+            e.max_inside = std::min(e.max_inside, 0.5 * p.offset);
+          }
           e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
           p.target_faces = e.target_faces;
           p.boundary = simplify_envelope(p.surface, e, &p.envelope, progress_here ? progress : nullptr);
@@ -500,6 +569,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
           // the diagonal thick); the alpha wrap lies outside the input by its offset, and peeling
           // its slivers (up to 5 % thick on the welded boxes) moved it toward the input, so no limit.
           if (!wrapped) t.peel_max_height = std::min(t.peel_max_height, e.max_inside);
+          if (p.offset > 0) t.exude = false;  // a sheet's slab (TetrahedralizeOptions::exude)
           Progress* pr = progress_here ? progress : nullptr;
           p.tets = tetrahedralize(p.boundary, t, &p.tet_stats, pr);
           // A boundary whose tetrahedralization is not conforming or keeps a dihedral angle below the
@@ -621,7 +691,15 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     const std::string dihedral = std::to_string(static_cast<int>(opt.tetrahedralize.refine_dihedral));
     const std::string in_parts =
         r.parts > 1 ? " over the input's " + std::to_string(r.parts) + " parts (each meshed on its own)" : "";
-    if (tets > 1.35 * target) {
+    bool sheet_capped = false;
+    for (const Part& p : parts) sheet_capped = sheet_capped || p.sheet_capped;
+    if (tets > 1.35 * target && sheet_capped) {
+      r.target_exceeded_because = "open sheets are meshed as slabs " + percent(opt.sheet_thickness * opt.max_deviation) +
+                                  " of the bounding-box diagonal thick (--sheet-thickness): one layer of prisms whose "
+                                  "triangles are at most 5 times as wide as that (flatter tetrahedra would fall below the "
+                                  "5 degree floor) and short enough for the slab to hold the sheet where it curves, which "
+                                  "takes " + std::to_string(r.quality.tets) + " tetrahedra" + in_parts;
+    } else if (tets > 1.35 * target) {
       if (r.envelope.bounded)
         r.target_exceeded_because =
             "keeping the boundary within " + percent(opt.max_deviation) + " of the bounding-box diagonal outside and " +
@@ -722,8 +800,82 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       });
     });
     for (int c = 0; c < components; ++c) {
-      if (usable[static_cast<size_t>(c)]) parts.push_back(std::move(component[static_cast<size_t>(c)]));
+      if (usable[static_cast<size_t>(c)]) {
+        component[static_cast<size_t>(c)].component = c;
+        parts.push_back(std::move(component[static_cast<size_t>(c)]));
+      }
       else ++unusable;
+    }
+  }
+  // Open sheets (a curtain, a cloth given as one layer of triangles): components that are open
+  // oriented 2-manifolds, not welded to others, with a winding number of about ½ on both sides
+  // over most of their area (sheet.h). When every component that is not a part is such a sheet,
+  // each becomes a part: the slab of sheet_thickness around it (the sheet in its middle), meshed
+  // by the boundary route like any closed part. Otherwise (an open scan of a solid, welded or
+  // non-manifold segments) the fallback below, as before.
+  if (unusable > 0) {
+    const std::vector<std::vector<int>> faces = faces_by_component(component_of, components);
+    // Edges in three or more faces of the whole input (a sheet welded to something).
+    std::vector<std::uint64_t> keys;
+    keys.reserve(static_cast<size_t>(3 * r.input.F.rows()));
+    for (Eigen::Index f = 0; f < r.input.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint64_t a = static_cast<std::uint32_t>(r.input.F(f, k)), b = static_cast<std::uint32_t>(r.input.F(f, (k + 1) % 3));
+        keys.push_back(std::min(a, b) << 32 | std::max(a, b));
+      }
+    std::sort(keys.begin(), keys.end());
+    auto welded = [&](const SurfaceMesh& m, const std::vector<int>& index) {  // index: m's vertices in r.input
+      for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+        for (int k = 0; k < 3; ++k) {
+          const std::uint64_t a = static_cast<std::uint32_t>(index[static_cast<size_t>(m.F(f, k))]),
+                              b = static_cast<std::uint32_t>(index[static_cast<size_t>(m.F(f, (k + 1) % 3))]);
+          const std::uint64_t key = std::min(a, b) << 32 | std::max(a, b);
+          if (std::upper_bound(keys.begin(), keys.end(), key) - std::lower_bound(keys.begin(), keys.end(), key) > 2) return true;
+        }
+      return false;
+    };
+    std::vector<int> candidates;
+    for (int c = 0; c < components; ++c) {
+      bool part = false;
+      for (const Part& p : parts) part = part || p.component == c;
+      if (!part) candidates.push_back(c);
+    }
+    std::vector<Part> sheets(candidates.size());
+    std::atomic<bool> all_sheets{true};
+    const double h = 0.5 * opt.sheet_thickness * opt.max_deviation * diag;
+    tbb::parallel_for(size_t(0), candidates.size(), [&](size_t i) {
+      tbb::this_task_arena::isolate([&] {
+        if (!all_sheets) return;
+        std::vector<int> index;
+        const SurfaceMesh m = sub_mesh(r.input, faces[static_cast<size_t>(candidates[i])], &index);
+        const SheetEvidence ev = sheet_evidence(m.V, m.F);
+        spdlog::debug("component {}: open 2-manifold {}, sheet-like winding numbers over {:.1f}% of its area", candidates[i],
+                      ev.open_manifold, 100.0 * ev.sheet_area_fraction);
+        if (!is_sheet(ev) || welded(m, index)) {
+          all_sheets = false;
+          return;
+        }
+        Part& p = sheets[i];
+        p.component = candidates[i];
+        p.surface = thicken_sheet(m, h);
+        p.sheet = m;
+        p.volume = signed_volume(p.surface);
+        p.offset = h;
+        if (!(p.volume > 0)) {
+          all_sheets = false;
+          return;
+        }
+        p.check = does_self_intersect(p.surface);
+      });
+    });
+    if (all_sheets) {
+      spdlog::info("{} open sheet{} of the input {} meshed as slabs {:.3g} thick (--sheet-thickness)", sheets.size(),
+                   sheets.size() == 1 ? "" : "s", sheets.size() == 1 ? "is" : "are", 2 * h);
+      r.sheets = static_cast<int>(sheets.size());
+      r.sheet_thickness = 2 * h;
+      for (Part& p : sheets) parts.push_back(std::move(p));
+      std::sort(parts.begin(), parts.end(), [](const Part& a, const Part& b) { return a.component < b.component; });
+      unusable = 0;
     }
   }
   // The route for inputs that are not closed parts, and where the boundary route fails.
@@ -749,7 +901,14 @@ MeshResult mesh_file(const std::filesystem::path& path, const MeshOptions& opt, 
                      std::to_string(kMaxMeshTriangles) +
                      " (the simulation mesh is coarse anyway): decimate it first, e.g. Blender's Decimate modifier");
   const double load = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  MeshResult r = mesh_surface(s, opt, progress);
+  MeshResult r;
+  try {
+    r = mesh_surface(s, opt, progress);
+  } catch (const InputError& e) {  // what the surface is (no volume, ...): named by its file
+    const std::string what = e.what(), name = path.string();
+    if (what.compare(0, name.size(), name) == 0) throw;
+    throw InputError(name + ": " + what);
+  }
   r.seconds.insert(r.seconds.begin(), {"loading", load});
   return r;
 }
@@ -787,6 +946,7 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
       {"deviation_in", frac(r.deviation_in)},
       {"volume_ratio", r.volume_ratio ? json(*r.volume_ratio) : json(nullptr)},
       {"target_tets", r.target_tets},
+      {"sheets", r.sheets > 0 ? json{{"count", r.sheets}, {"thickness", frac(r.sheet_thickness)}} : json(nullptr)},
       {"method", r.method},
       {"fallback_because", r.fallback_because.empty() ? json(nullptr) : json(r.fallback_because)},
       {"alpha_wrap", r.wrap.used ? json{{"alpha", r.wrap.alpha},

@@ -171,7 +171,7 @@ class Mesher {
       spdlog::debug("tetrahedralize: some boundary faces are not faces of the triangulation; tetrahedra classified by "
                     "the winding number at their centroids");
     setup_complex();
-    exude();
+    if (opt_.exude) exude();
     r.mesh = extract();
     // Boundary tetrahedra still below the floor (flat caps over the surface that refinement could
     // not reach without splitting the surface below min_split_) are peeled off where that moves the

@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 6;  // 6: sliver moves and flips on the boundary route
+constexpr int kMeshingAlgorithmVersion = 7;  // 7: open sheets meshed as slabs (6: sliver moves and flips)
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
@@ -61,6 +61,10 @@ struct MeshOptions {
   double winding_facet_distance = 0.4;  // the winding-number route's Mesh_3 facet distance, as a
                                         // multiple of max_deviation (boundary facets are chords: they
                                         // sag about this far below the solid's surface)
+  double sheet_thickness = 1.0;         // open sheets (sheet.h: one layer of triangles, no volume)
+                                        // are meshed as slabs this thick, as a multiple of
+                                        // max_deviation × the bbox diagonal, the sheet in the middle
+                                        // (so their boundary lies half of max_deviation out)
   double winding_dilation = 0.45;       // its dilation of the solid, as a multiple of max_deviation
                                         // (chords sag up to about twice the facet distance: the
                                         // dilation keeps them within inner_deviation of the input;
@@ -106,6 +110,8 @@ struct MeshResult {
   WindingTetrahedralizeStats winding_stats;  // method "winding_number"
   WrapStats wrap;                   // method "alpha_wrap" (or the shells after it failed)
   int target_tets = 0;
+  int sheets = 0;                   // open sheets meshed as slabs (sheet.h; method "boundary")
+  double sheet_thickness = 0;       // ... their thickness (units)
   std::string target_exceeded_because;  // empty: the count is within ±35% of the target
   double input_volume = 0;      // the parts' enclosed volumes, summed (overlapping parts count twice,
                                 // as their tet meshes do)

@@ -24,6 +24,9 @@ struct TetrahedralizeOptions {
                                   // edge it would cut); where a part is thinner than the edge
                                   // length this decides how finely its faces are split
   double sliver_bound = 12.0;     // degrees: CGAL's sliver exuder then works on tetrahedra below this
+  bool exude = true;              // run the exuder (off for a sheet's slab: one layer of tetrahedra
+                                  // flatter than sliver_bound by its thinness, which exuding cannot
+                                  // improve and on which it ran into exude_seconds)
   double exude_seconds = 30.0;    // the exuder's time limit (0: none): a bound for pathological inputs,
                                   // far above what it takes on real meshes (reaching it is warned)
   double min_dihedral = 5.0;      // degrees: the floor the result is checked against (stats)

@@ -1,0 +1,71 @@
+// squeeze::meshing — open sheets (a curtain, a cloth, a leaf given as one layer of triangles): how
+// to tell them from open scans of solids, and the thin closed slab that stands for them in a
+// tetrahedral mesh.
+//
+// A surface without thickness encloses no volume, so no tetrahedral mesh can be its shape; the
+// nearest one is a slab of small thickness around it, with the sheet in its middle. The convex
+// shells the pipeline falls back to for other open inputs would be a blob (a 1 × 0.6 m quad: 38,045
+// tetrahedra, deviation 66 % of the diagonal); the slab is a plate (docs/meshing.md, "Open sheets").
+#pragma once
+#include <Eigen/Core>
+
+#include "squeeze/meshing/surface.h"
+#include "squeeze/meshing/tet_mesh.h"
+
+namespace squeeze::meshing {
+
+/// What sheet_evidence measures of one face-connected component.
+struct SheetEvidence {
+  bool open_manifold = false;  // it has boundary edges, no edge in three or more faces, and every
+                               // edge in two faces is traversed once each way (consistently
+                               // oriented): a 2-manifold with boundary, offsettable
+  double sheet_area_fraction = 0;  // the share of its area (0..1) where the component's own
+                               // winding number on both sides of the face, a ten-thousandth of the
+                               // diagonal away, is between 0.25 and 0.75 in magnitude: about ½ on
+                               // each side, as beside a sheet (beside a solid's wall it is about 0
+                               // on one side and 1 on the other; an open scan of a solid reads as
+                               // a solid except near its holes)
+};
+
+/// Measures the component (V, F) alone (other components do not count).
+///   V  #V by 3 positions (units), F  #F by 3 vertex indices, one face-connected component
+/// Cost: one fast winding-number tree and two evaluations per face. Throws nothing.
+SheetEvidence sheet_evidence(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F);
+
+/// Whether the evidence says sheet: open_manifold and sheet_area_fraction >= min_fraction.
+inline bool is_sheet(const SheetEvidence& e, double min_fraction = 0.75) {
+  return e.open_manifold && e.sheet_area_fraction >= min_fraction;
+}
+
+/// The closed slab around an open, consistently oriented sheet: the sheet moved by +half_thickness
+/// along its unit area-weighted vertex normals (faces as given), a copy moved by −half_thickness
+/// (faces reversed), and one strip of two triangles along each boundary edge joining them. Faces
+/// face outward (positive signed volume) when the sheet is oriented; where it folds more sharply
+/// than half_thickness allows, the slab intersects itself (the caller checks).
+///   sheet           V #V by 3, F #F by 3 (units)
+///   half_thickness  > 0 (units)
+/// Returns 2·#V vertices (the +side first) and 2·#F + 2·#boundary edges faces.
+/// Throws InputError if half_thickness is not positive or a vertex has no normal (all its faces
+/// have zero area).
+SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness);
+
+/// The sheet remeshed to triangles of about `edge_length` (near-equilateral), vertices on the input
+/// sheet, boundary vertices on its boundary polylines: CGAL's isotropic remeshing (Botsch and
+/// Kobbelt, "A remeshing approach to multiresolution modeling", SGP 2004), `iterations` rounds.
+///   sheet        an open, oriented 2-manifold (units); edge_length > 0 (units)
+/// Throws InputError if edge_length is not positive or the sheet is not an oriented 2-manifold.
+/// (Implemented in envelope.cpp, the CGAL surface-mesh translation unit.)
+SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int iterations = 3);
+
+/// One layer of tetrahedra between the two sides of the slab around `sheet`: thicken_sheet's
+/// vertices (the +side, then the −side), each triangle's prism split into three tetrahedra, every
+/// quadrilateral side split along the diagonal from its lower-numbered sheet vertex on the −side to
+/// the other on the +side, so that neighbouring prisms share their split (conforming); each
+/// tetrahedron positively oriented (Dompierre, Labbé, Vallet, Camarero, "How to subdivide pyramids,
+/// prisms and hexahedra into tetrahedra", IMR 1999).
+///   sheet           an open, consistently oriented sheet (units); half_thickness > 0 (units)
+/// Returns false (out untouched) where a prism is inverted or flat: the sheet folds more sharply
+/// than half_thickness allows.
+bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out);
+
+}  // namespace squeeze::meshing
