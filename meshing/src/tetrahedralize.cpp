@@ -159,7 +159,7 @@ class Mesher {
     // Refinement leans on the surface faces being faces of the triangulation; where they are not
     // (a failed recovery), it runs for a few rounds only.
     for (int round = 0; round < (r.conforming ? 200 : 8); ++round) {
-      if (progress) progress->update(round);
+      if (progress) progress->update(round, "refinement round " + std::to_string(round + 1));
       if (static_cast<int>(P_.size()) > max_vertices) break;
       if (!refine_round()) break;
       if (r.conforming) r.conforming = make_conforming();
@@ -982,6 +982,7 @@ TetMesh tetrahedralize(const SurfaceMesh& boundary, const TetrahedralizeOptions&
   double previous_n = INFINITY, previous_L = 0;
   for (int attempt = 0; attempt < 6; ++attempt) {
     const auto t0 = std::chrono::steady_clock::now();
+    if (progress) progress->stage("tetrahedralizing the boundary (attempt " + std::to_string(attempt + 1) + ")");
     Mesher mesher(boundary, wn, opt, L);
     RunResult r = mesher.run(progress);
     const double n = static_cast<double>(r.mesh.T.rows());
@@ -1023,6 +1024,7 @@ TetMesh tetrahedralize(const SurfaceMesh& boundary, const TetrahedralizeOptions&
   if (late > 0) remove_unused_vertices(best.mesh);
   st.peeled += late;
   if (stats) *stats = st;
+  if (progress) progress->finish();
   return std::move(best.mesh);
 }
 
