@@ -35,12 +35,12 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       "mesh",
       "Tetrahedralize a surface into a coarse mesh of its own shape: each closed part's boundary,\n"
       "simplified within --max-deviation, is tetrahedralized; open sheets (one layer of triangles: a\n"
-      "curtain, a cloth) become thin slabs around them (--sheet-thickness), one layer of prisms; inputs\n"
-      "with other components that are not closed parts (open scans of solids, welded or\n"
-      "self-intersecting segments) fall back to their convex shells\n"
-      "meshed with CGAL Mesh_3; with --winding to the solid their winding number encloses (Mesh_3, tight\n"
-      "to the input), or with --wrap to their alpha wrap (CGAL, a closed surface just outside them)\n"
-      "meshed like a boundary (the report's method and fallback_because say which and why).\n"
+      "curtain, a cloth) become thin slabs around them (--sheet-thickness), one layer of prisms; open\n"
+      "scans of solids (holes) become the solid their winding number encloses, meshed by CGAL Mesh_3;\n"
+      "inputs with welded, non-manifold or self-intersecting segments fall back to their convex shells\n"
+      "meshed with Mesh_3, or with --winding to their winding-number solid too, or with --wrap to their\n"
+      "alpha wrap (CGAL, a closed surface just outside them) meshed like a boundary (the report's\n"
+      "method and fallback_because say which and why).\n"
       "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
       "non-manifold scans are fine. OUT: " + meshing::tet_format_list(true) + ".\n"
       "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");
@@ -62,10 +62,11 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                   "bounding-box diagonal; input surface points may lie outside the mesh by at most 0.45 of it")
       ->capture_default_str();
   cmd->add_flag("--winding", args->options.winding,
-                "Inputs that are not closed parts: mesh the solid their generalized winding number encloses "
-                "(welded segments as their union, small holes closed) with CGAL Mesh_3, within --max-deviation, "
-                "instead of their convex shells; tight (volume within about 10 %), but often several thousand "
-                "tetrahedra whatever --target-tets (the report says why)");
+                "Inputs with welded, non-manifold or self-intersecting segments too (open scans of solids take "
+                "it by default): mesh the solid their generalized winding number encloses (welded segments as "
+                "their union, small holes closed) with CGAL Mesh_3, within --max-deviation, instead of their "
+                "convex shells; tight (volume within about 10 %), but often several thousand tetrahedra whatever "
+                "--target-tets (the report says why)");
   cmd->add_option("--winding-facet-distance", args->options.winding_facet_distance,
                   "With --winding: Mesh_3's facet distance, as a multiple of --max-deviation (smaller: closer to the "
                   "input inside, more tetrahedra)")

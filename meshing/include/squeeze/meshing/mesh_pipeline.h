@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 7;  // 7: open sheets meshed as slabs (6: sliver moves and flips)
+constexpr int kMeshingAlgorithmVersion = 7;  // 7: open sheets meshed as slabs, open scans by winding number (6: sliver moves and flips)
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
@@ -46,12 +46,13 @@ struct MeshOptions {
                                         // solid meshed with Mesh_3 (winding_tetrahedralize.h); its
                                         // target_tets and seed are taken from tetrahedralize, its
                                         // facet_distance and dilation from max_deviation (below)
-  bool winding = false;                 // inputs that are not closed parts (open, non-manifold,
-                                        // welded or self-intersecting segments): mesh their
-                                        // winding-number solid with Mesh_3 (true: tight, but 3–20k
-                                        // tetrahedra on the organs, docs/meshing.md); or their convex
-                                        // shells (false, the default until the scenes that mesh the
-                                        // organs are measured with it)
+  bool winding = false;                 // inputs with welded, non-manifold or self-intersecting
+                                        // segments: mesh their winding-number solid with Mesh_3
+                                        // (true: tight, but 3–20k tetrahedra on the organs,
+                                        // docs/meshing.md); or their convex shells (false, the
+                                        // default until the scenes that mesh the organs simulate
+                                        // fast enough with it). Open scans of solids (holes, not
+                                        // welded) take the winding-number route either way (version 7)
   bool wrap = false;                    // the same inputs: mesh their alpha wrap (alpha_wrap.h) by
                                         // the boundary route (true; before `winding`); the convex
                                         // shells only where either fails
