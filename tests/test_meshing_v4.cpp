@@ -225,7 +225,7 @@ TEST(MeshingV4, ManyPartsStayMany) {
 }
 
 // A scanned ball with holes (faces missing) is not a closed part: it takes the winding-number route
-// (by default since meshing version 7: an open scan of a solid, not welded; before, the convex
+// (by default since meshing version 8: an open scan of a solid, not welded; before, the convex
 // shells; also with `winding`)
 // (Mesh_3 of the solid its winding number encloses), says why, and comes out one closed mesh within
 // issue 16's volume band, with the input's surface inside it (to within 1.2 % of the diagonal: the
@@ -246,7 +246,7 @@ TEST(MeshingV4, ScanWithHolesTakesTheWindingNumberRouteAndIsClosed) {
   scan.F.resize(static_cast<Eigen::Index>(keep.size()), 3);
   for (size_t i = 0; i < keep.size(); ++i) scan.F.row(static_cast<Eigen::Index>(i)) = ball.F.row(keep[i]);
   const double diag = 0.2 * std::sqrt(3.0);
-  EXPECT_EQ(mesh(scan, 300).method, "winding_number");  // the default since meshing version 7
+  EXPECT_EQ(mesh(scan, 300).method, "winding_number");  // the default since meshing version 8
   for (int target : {150, 1000}) {
     MeshOptions o;
     o.tetrahedralize.target_tets = target;

@@ -882,7 +882,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       unusable = 0;
     } else if (others == 0 && scans == static_cast<int>(candidates.size()) && !opt.wrap) {
       // Open scans of solids (a scan with holes, not welded to anything): the solid their winding
-      // number encloses, holes closed, meshed by Mesh_3 tight to the input (meshing version 7;
+      // number encloses, holes closed, meshed by Mesh_3 tight to the input (meshing version 8;
       // before, the convex shells: the dragon 3.8-10.9 % of the diagonal out). Welded or
       // non-manifold segments (the organs) still take the fallback below.
       return winding_route(std::to_string(unusable) + " of the input's " + std::to_string(components) +

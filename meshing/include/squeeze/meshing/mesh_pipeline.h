@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 7;  // 7: open sheets meshed as slabs, open scans by winding number (6: sliver moves and flips)
+constexpr int kMeshingAlgorithmVersion = 8;  // 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
@@ -52,7 +52,7 @@ struct MeshOptions {
                                         // docs/meshing.md); or their convex shells (false, the
                                         // default until the scenes that mesh the organs simulate
                                         // fast enough with it). Open scans of solids (holes, not
-                                        // welded) take the winding-number route either way (version 7)
+                                        // welded) take the winding-number route either way (version 8)
   bool wrap = false;                    // the same inputs: mesh their alpha wrap (alpha_wrap.h) by
                                         // the boundary route (true; before `winding`); the convex
                                         // shells only where either fails
