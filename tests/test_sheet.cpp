@@ -126,6 +126,13 @@ TEST(Sheet, EvidenceTellsSheetsFromSolidsAndOpenScans) {
   EXPECT_TRUE(scan.open_manifold);  // two holes: the cap and the bottom
   EXPECT_LT(scan.sheet_area_fraction, 0.5);
   EXPECT_FALSE(squeeze::meshing::is_sheet(scan));
+  // Two triangles meeting at one vertex (a bow tie): not offsettable, not a sheet.
+  SurfaceMesh bow;
+  bow.V.resize(5, 3);
+  bow.V << 0, 0, 0, 1, 0, 0, 1, 1, 0, -1, 0, 0, -1, -1, 0;
+  bow.F.resize(2, 3);
+  bow.F << 0, 1, 2, 0, 3, 4;
+  EXPECT_FALSE(squeeze::meshing::sheet_evidence(bow.V, bow.F).open_manifold);
   // A closed surface: the slab of the quad.
   const SurfaceMesh slab = squeeze::meshing::thicken_sheet(quad(), 0.01);
   EXPECT_FALSE(squeeze::meshing::sheet_evidence(slab.V, slab.F).open_manifold);

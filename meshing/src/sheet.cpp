@@ -45,13 +45,22 @@ SheetEvidence sheet_evidence(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   const std::vector<Half> h = halves(F);
   bool manifold = true;
   int boundary = 0;
+  std::vector<int> rim_edges(static_cast<size_t>(V.rows()), 0);  // boundary edges at each vertex
   for (size_t i = 0; i < h.size();) {
     size_t j = i;
     while (j < h.size() && h[j].lo == h[i].lo && h[j].hi == h[i].hi) ++j;
-    if (j - i == 1) ++boundary;
-    else if (j - i > 2 || h[i].forward == h[i + 1].forward) manifold = false;
+    if (j - i == 1) {
+      ++boundary;
+      ++rim_edges[static_cast<size_t>(h[i].lo)];
+      ++rim_edges[static_cast<size_t>(h[i].hi)];
+    } else if (j - i > 2 || h[i].forward == h[i + 1].forward) {
+      manifold = false;
+    }
     i = j;
   }
+  // A vertex on the boundary has two boundary edges; four or more: two fans meeting at a point (a
+  // bow tie), which no offset or remeshing takes.
+  for (int n : rim_edges) manifold = manifold && (n == 0 || n == 2);
   e.open_manifold = manifold && boundary > 0;
   if (!e.open_manifold) return e;
   const FastWindingNumber w(V, F);

@@ -16,9 +16,10 @@ namespace squeeze::meshing {
 
 /// What sheet_evidence measures of one face-connected component.
 struct SheetEvidence {
-  bool open_manifold = false;  // it has boundary edges, no edge in three or more faces, and every
-                               // edge in two faces is traversed once each way (consistently
-                               // oriented): a 2-manifold with boundary, offsettable
+  bool open_manifold = false;  // it has boundary edges, no edge in three or more faces, every
+                               // edge in two faces traversed once each way (consistently
+                               // oriented), and every boundary vertex on two boundary edges (no
+                               // bow tie): a 2-manifold with boundary, offsettable
   double sheet_area_fraction = 0;  // the share of its area (0..1) where the component's own
                                // winding number on both sides of the face, a ten-thousandth of the
                                // diagonal away, is between 0.25 and 0.75 in magnitude: about ½ on
