@@ -91,15 +91,6 @@ SurfaceMesh box(Eigen::RowVector3d lo, Eigen::RowVector3d hi) {
   return m;
 }
 
-SurfaceMesh concat(const SurfaceMesh& a, const SurfaceMesh& b) {
-  SurfaceMesh m;
-  m.V.resize(a.V.rows() + b.V.rows(), 3);
-  m.V << a.V, b.V;
-  m.F.resize(a.F.rows() + b.F.rows(), 3);
-  m.F << a.F, (b.F.array() + static_cast<int>(a.V.rows())).matrix();
-  return m;
-}
-
 // The same shapes two cells thick, so the notch walls carry vertices halfway up (a minimal prism
 // has every vertex on its top and bottom faces, which are facets of its convex hull).
 std::vector<std::array<int, 3>> thicken(std::vector<std::array<int, 3>> cells) {
@@ -175,7 +166,7 @@ TEST(MeshingDecompose, SphereGivesOneHull) {
 }
 
 TEST(MeshingDecompose, TwoDisjointBoxesGiveTwoPartsAndTwoTetComponents) {
-  const SurfaceMesh m = concat(box({0, 0, 0}, {1, 1, 1}), box({3, 0.2, 0}, {4, 1.2, 1.5}));
+  const SurfaceMesh m = sqt::join({box({0, 0, 0}, {1, 1, 1}), box({3, 0.2, 0}, {4, 1.2, 1.5})});
   const auto r = squeeze::meshing::mesh_surface(m, fast_options());
   EXPECT_EQ(r.decomposition.parts, 2);
   EXPECT_EQ(r.decomposition.shells.size(), 2u);
@@ -975,7 +966,7 @@ TEST(MeshingOrientation, EachComponentOnItsOwn) {
   b.V.col(0).array() += 5;
   b.F.col(1).swap(b.F.col(2));  // b inside out
   for (Eigen::Index f = 1; f < a.F.rows(); f += 3) std::swap(a.F(f, 0), a.F(f, 1));  // a partly flipped
-  const SurfaceMesh m = concat(a, b);
+  const SurfaceMesh m = sqt::join({a, b});
   const SurfaceMesh fixed{m.V, squeeze::meshing::orient_outward(m.V, m.F)};
   EXPECT_EQ(inconsistent_edges(fixed.F), 0);
   EXPECT_NEAR(signed_volume(fixed), 1.0 + 5.0, 1e-9);
@@ -986,7 +977,7 @@ TEST(MeshingOrientation, EachComponentOnItsOwn) {
 TEST(MeshingAnalysis, ClosedOpenComponents) {
   SurfaceMesh l = l_shape();
   l.V.col(2).array() += 3;
-  const SurfaceMesh two = concat(box({0, 0, 0}, {1, 1, 1}), l);
+  const SurfaceMesh two = sqt::join({box({0, 0, 0}, {1, 1, 1}), l});
   auto info = squeeze::meshing::analyse_surface(two);
   EXPECT_EQ(info.components, 2);
   EXPECT_TRUE(info.closed);
@@ -998,7 +989,7 @@ TEST(MeshingAnalysis, ClosedOpenComponents) {
   EXPECT_FALSE(info.closed);
   EXPECT_EQ(info.boundary_edges, 32);
   // Two overlapping boxes intersect each other.
-  EXPECT_TRUE(squeeze::meshing::does_self_intersect(concat(box({0, 0, 0}, {1, 1, 1}), box({0.5, 0.5, 0.5}, {2, 2, 2}))));
+  EXPECT_TRUE(squeeze::meshing::does_self_intersect(sqt::join({box({0, 0, 0}, {1, 1, 1}), box({0.5, 0.5, 0.5}, {2, 2, 2})})));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "meshing_test_util.h"
 #include "squeeze/common/error.h"
 #include "squeeze/meshing/mesh_pipeline.h"
 #include "squeeze/meshing/sheet.h"
@@ -55,15 +56,6 @@ SurfaceMesh quad() {  // a 1 × 0.6 m curtain as two triangles
 
 double diagonal(const SurfaceMesh& m) { return (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm(); }
 
-SurfaceMesh join(const SurfaceMesh& a, const SurfaceMesh& b) {
-  SurfaceMesh m;
-  m.V.resize(a.V.rows() + b.V.rows(), 3);
-  m.V << a.V, b.V;
-  m.F.resize(a.F.rows() + b.F.rows(), 3);
-  m.F << a.F, (b.F.array() + static_cast<int>(a.V.rows())).matrix();
-  return m;
-}
-
 struct SheetCase {
   const char* name;
   SurfaceMesh surface;
@@ -100,7 +92,7 @@ std::vector<SheetCase> cases() {
     for (int i = 0; i < 8; ++i) box.V.row(i) << 0.3 * (i & 1), 0.3 * ((i >> 1) & 1), 0.2 + 0.3 * ((i >> 2) & 1);
     box.F.resize(12, 3);
     box.F << 0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4, 2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5;
-    c.push_back({"closed box beside a curtain", join(box, grid(21, 13, [](double u, double v) { return Vec3(u, 0.6 * v, 0); })), 2});
+    c.push_back({"closed box beside a curtain", sqt::join({box, grid(21, 13, [](double u, double v) { return Vec3(u, 0.6 * v, 0); })}), 2});
   }
   return c;
 }
@@ -248,7 +240,7 @@ TEST(Sheet, WeldedSheetsAndOpenScansBesideSheetsStillTakeTheFallback) {
   // An open box (no lid) beside a curtain: the open box is no sheet, so the whole input falls back.
   SurfaceMesh open = box;
   open.F.conservativeResize(10, 3);
-  const MeshResult s = squeeze::meshing::mesh_surface(join(open, quad()), small);
+  const MeshResult s = squeeze::meshing::mesh_surface(sqt::join({open, quad()}), small);
   EXPECT_EQ(s.sheets, 0);
   EXPECT_EQ(s.method, "convex_shells");
 }

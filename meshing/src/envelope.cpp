@@ -19,6 +19,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "squeeze/common/error.h"
@@ -262,10 +263,9 @@ struct Stop {
   }
 };
 
-}  // namespace
-
-SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions& opt, EnvelopeStats* stats,
-                              Progress* progress) {
+// `surface` as a CGAL Surface_mesh (same vertex order); InputError "`not_manifold` (face f)" where a
+// face cannot be added (a non-manifold edge or vertex, or inconsistent orientation).
+Mesh to_cgal(const SurfaceMesh& surface, const std::string& not_manifold) {
   Mesh m;
   std::vector<VD> vd;
   vd.reserve(static_cast<size_t>(surface.V.rows()));
@@ -273,7 +273,31 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
     vd.push_back(m.add_vertex(Point(surface.V(i, 0), surface.V(i, 1), surface.V(i, 2))));
   for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
     if (m.add_face(vd[surface.F(f, 0)], vd[surface.F(f, 1)], vd[surface.F(f, 2)]) == Mesh::null_face())
-      throw InputError("simplify_envelope: the surface is not a 2-manifold (face " + std::to_string(f) + ")");
+      throw InputError(not_manifold + " (face " + std::to_string(f) + ")");
+  return m;
+}
+
+// The Surface_mesh m (garbage collected first) as V, F.
+SurfaceMesh from_cgal(Mesh& m) {
+  m.collect_garbage();
+  SurfaceMesh out;
+  out.V.resize(static_cast<Eigen::Index>(m.number_of_vertices()), 3);
+  for (VD v : m.vertices()) out.V.row(static_cast<Eigen::Index>(v.idx())) = vec(m.point(v)).transpose();
+  out.F.resize(static_cast<Eigen::Index>(m.number_of_faces()), 3);
+  Eigen::Index r = 0;
+  for (FD f : m.faces()) {
+    int k = 0;
+    for (VD v : CGAL::vertices_around_face(m.halfedge(f), m)) out.F(r, k++) = static_cast<int>(v.idx());
+    ++r;
+  }
+  return out;
+}
+
+}  // namespace
+
+SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions& opt, EnvelopeStats* stats,
+                              Progress* progress) {
+  Mesh m = to_cgal(surface, "simplify_envelope: the surface is not a 2-manifold");
   for (HD h : m.halfedges())
     if (m.is_border(h)) throw InputError("simplify_envelope: the surface is not closed");
 
@@ -367,17 +391,7 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
                              .visitor(visitor));
   }
   if (progress) progress->finish();
-  m.collect_garbage();
-  SurfaceMesh out;
-  out.V.resize(static_cast<Eigen::Index>(m.number_of_vertices()), 3);
-  for (VD v : m.vertices()) out.V.row(static_cast<Eigen::Index>(v.idx())) = vec(m.point(v)).transpose();
-  out.F.resize(static_cast<Eigen::Index>(m.number_of_faces()), 3);
-  Eigen::Index r = 0;
-  for (FD f : m.faces()) {
-    int k = 0;
-    for (VD v : CGAL::vertices_around_face(m.halfedge(f), m)) out.F(r, k++) = static_cast<int>(v.idx());
-    ++r;
-  }
+  const SurfaceMesh out = from_cgal(m);
   if (stats) {
     stats->faces = static_cast<int>(out.F.rows());
     stats->collapses = s.collapses;
@@ -388,14 +402,7 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
 
 SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int iterations) {
   if (!(edge_length > 0)) throw InputError("remesh_sheet: the edge length must be positive");
-  Mesh m;
-  std::vector<VD> vd;
-  vd.reserve(static_cast<size_t>(sheet.V.rows()));
-  for (Eigen::Index i = 0; i < sheet.V.rows(); ++i)
-    vd.push_back(m.add_vertex(Point(sheet.V(i, 0), sheet.V(i, 1), sheet.V(i, 2))));
-  for (Eigen::Index f = 0; f < sheet.F.rows(); ++f)
-    if (m.add_face(vd[sheet.F(f, 0)], vd[sheet.F(f, 1)], vd[sheet.F(f, 2)]) == Mesh::null_face())
-      throw InputError("remesh_sheet: the sheet is not an oriented 2-manifold (face " + std::to_string(f) + ")");
+  Mesh m = to_cgal(sheet, "remesh_sheet: the sheet is not an oriented 2-manifold");
   // Boundary edges are constraints by default: split and collapsed along the border polylines,
   // their vertices kept on them; the others projected back onto the input sheet. The border's
   // corners (where it turns by more than 20°) stay where they are, or the border would cut them.
@@ -410,18 +417,7 @@ SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int itera
   }
   CGAL::Polygon_mesh_processing::isotropic_remeshing(
       faces(m), edge_length, m, CGAL::parameters::number_of_iterations(iterations).vertex_is_constrained_map(corner));
-  m.collect_garbage();
-  SurfaceMesh out;
-  out.V.resize(static_cast<Eigen::Index>(m.number_of_vertices()), 3);
-  for (VD v : m.vertices()) out.V.row(static_cast<Eigen::Index>(v.idx())) = vec(m.point(v)).transpose();
-  out.F.resize(static_cast<Eigen::Index>(m.number_of_faces()), 3);
-  Eigen::Index r = 0;
-  for (FD f : m.faces()) {
-    int k = 0;
-    for (VD v : CGAL::vertices_around_face(m.halfedge(f), m)) out.F(r, k++) = static_cast<int>(v.idx());
-    ++r;
-  }
-  return out;
+  return from_cgal(m);
 }
 
 }  // namespace squeeze::meshing

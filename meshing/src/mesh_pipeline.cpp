@@ -515,13 +515,14 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
         spdlog::debug("sheet (component {}): edge length {:.4g}, {} triangles, {:.3g} from the input (bound {:.3g})", p.component,
                       Ls, s.F.rows(), apart, 0.8 * h);
         TetMesh m;
+        SurfaceMesh slab;
         if (!(apart <= 0.8 * h)) continue;
-        if (!sheet_tets(s, h, m)) {
+        if (!sheet_tets(s, h, m, &slab)) {
           apart = 0.8 * h / 0.49;  // folded: the next attempt 0.63 times as long
           continue;
         }
         p.sheet_capped = Ls < wanted;
-        p.boundary = thicken_sheet(s, h);
+        p.boundary = std::move(slab);
         p.tets = std::move(m);
         p.tet_stats = TetrahedralizeStats{};
         p.tet_stats.attempts = attempt;
@@ -543,7 +544,10 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
         tbb::this_task_arena::isolate([&] {
           Part& p = ps[i];
           if (abandoned) return;
-          if (p.sheet.F.rows() > 0 && mesh_sheet(p)) return;
+          if (p.sheet.F.rows() > 0) {
+            if (mesh_sheet(p)) return;
+            p.check = does_self_intersect(p.surface);  // its slab, on the boundary route after all
+          }
           EnvelopeOptions e = bounds;
           if (p.offset > 0) {
             e.max_outside = std::max(0.25 * e.max_outside, e.max_outside - p.offset);
@@ -779,9 +783,9 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   // fallback: its convex shells meshed with Mesh_3 (shells_route above).
   timer.start("boundary");
   std::vector<Part> parts;
-  int unusable = 0;  // components that are not parts (then: the fallback)
+  std::vector<int> candidates;  // components that are not parts (sheets, open scans, or the fallback)
+  const std::vector<std::vector<int>> faces = faces_by_component(component_of, components);
   {
-    const std::vector<std::vector<int>> faces = faces_by_component(component_of, components);
     std::vector<Part> component(static_cast<size_t>(components));
     std::vector<char> usable(static_cast<size_t>(components), 0);
     tbb::parallel_for(0, components, [&](int c) {
@@ -803,10 +807,12 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       if (usable[static_cast<size_t>(c)]) {
         component[static_cast<size_t>(c)].component = c;
         parts.push_back(std::move(component[static_cast<size_t>(c)]));
+      } else {
+        candidates.push_back(c);
       }
-      else ++unusable;
     }
   }
+  int unusable = static_cast<int>(candidates.size());
   // Open sheets (a curtain, a cloth given as one layer of triangles): components that are open
   // oriented 2-manifolds, not welded to others, with a winding number of about ½ on both sides
   // over most of their area (sheet.h). When every component that is not a part is such a sheet,
@@ -814,7 +820,6 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   // by the boundary route like any closed part. Otherwise (an open scan of a solid, welded or
   // non-manifold segments) the fallback below, as before.
   if (unusable > 0) {
-    const std::vector<std::vector<int>> faces = faces_by_component(component_of, components);
     // Edges in three or more faces of the whole input (a sheet welded to something).
     std::vector<std::uint64_t> keys;
     keys.reserve(static_cast<size_t>(3 * r.input.F.rows()));
@@ -834,12 +839,6 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
         }
       return false;
     };
-    std::vector<int> candidates;
-    for (int c = 0; c < components; ++c) {
-      bool part = false;
-      for (const Part& p : parts) part = part || p.component == c;
-      if (!part) candidates.push_back(c);
-    }
     std::vector<Part> sheets(candidates.size());
     std::atomic<int> others{0}, scans{0};  // components neither closed parts nor sheets; open scans among them
     const double h = 0.5 * opt.sheet_thickness * opt.max_deviation * diag;
@@ -865,11 +864,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
         p.sheet = m;
         p.volume = signed_volume(p.surface);
         p.offset = h;
-        if (!(p.volume > 0)) {
-          ++others;
-          return;
-        }
-        p.check = does_self_intersect(p.surface);
+        if (!(p.volume > 0)) ++others;
       });
     });
     if (others == 0 && scans == 0) {

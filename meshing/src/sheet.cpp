@@ -148,8 +148,8 @@ SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness) {
   return s;
 }
 
-bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out) {
-  const SurfaceMesh slab = thicken_sheet(sheet, half_thickness);
+bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab_out) {
+  SurfaceMesh slab = thicken_sheet(sheet, half_thickness);
   const int nv = static_cast<int>(sheet.V.rows());
   Eigen::MatrixX4i T(3 * sheet.F.rows(), 4);
   auto volume = [&](const Eigen::Vector4i& t) {
@@ -181,6 +181,7 @@ bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out) {
   out.V = slab.V;
   out.T = std::move(T);
   out.label.resize(0);
+  if (slab_out) *slab_out = std::move(slab);
   return true;
 }
 

@@ -65,8 +65,9 @@ SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int itera
 /// tetrahedron positively oriented (Dompierre, Labbé, Vallet, Camarero, "How to subdivide pyramids,
 /// prisms and hexahedra into tetrahedra", IMR 1999).
 ///   sheet           an open, consistently oriented sheet (units); half_thickness > 0 (units)
-/// Returns false (out untouched) where a prism is inverted or flat: the sheet folds more sharply
-/// than half_thickness allows.
-bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out);
+///   slab            optional: also the slab (thicken_sheet), whose faces are the mesh's boundary
+/// Returns false (out and slab untouched) where a prism is inverted or flat: the sheet folds more
+/// sharply than half_thickness allows. Throws as thicken_sheet.
+bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab = nullptr);
 
 }  // namespace squeeze::meshing
