@@ -414,6 +414,9 @@ TEST(FemImplicit, BadOptionsAreRefused) {
   o = ImplicitOptions{};
   o.cg_tolerance = 1;
   EXPECT_THROW(make_implicit_integrator(o), InputError);
+  o = ImplicitOptions{};
+  o.inexact_cg_tolerance = -0.1;
+  EXPECT_THROW(make_implicit_integrator(o), InputError);
 }
 
 namespace {
@@ -486,6 +489,8 @@ TEST(FemWorld, RestOverlapRelaxesAsObjectsSeparate) {
     State t = s;
     t.overlap.resize(0);
     const RowMatrixX3d push = -pull;
+    w.integrator().reset();  // what the integrator carries from step to step (its last factorisation, its
+                             // last contacts) is not the overlap's doing: both start afresh
     double deepest = 0;
     for (double time = 0; time < 1.0; time += h) {
       w.step(s, &push);  // pushed back into each other
@@ -516,4 +521,67 @@ TEST(FemImplicit, SoftAttachmentsSettleAtWeightOverStiffness) {
   EXPECT_NEAR(sag, expected, 1e-3 * expected);
   EXPECT_LT(s.v.cwiseAbs().maxCoeff(), 1e-5);
   EXPECT_EQ(w.integrator().stats().not_converged, 0);
+}
+
+namespace {
+
+// A soft 10 cm cube of 10 × 10 × 10 cells (mean edge about 1.3 cm: gravity alone moves a free
+// vertex ½ g h² = 12 mm in a step, more than half an edge) under gravity at h = 1/20 s:
+// resting on a rigid slab (`support` "slab": penalty contacts), hanging from its pinned top face
+// ("pins"), or free ("none").
+World soft_cube(const std::string& support) {
+  WorldOptions o;
+  o.integrator = "implicit";
+  o.h = 1.0 / 20;
+  o.contact_stiffness = 2e4;
+  o.contact_damping = 2;
+  World w(o);
+  Material m;
+  m.k_distance = m.k_volume = 50;
+  m.damping_distance = m.damping_volume = 0.01;
+  m.deformation_damping = 20;
+  w.add_body(Body(box_tet_mesh(Vector3d(-0.05, 0, -0.05), Vector3d(0.05, 0.1, 0.05), Eigen::Vector3i(10, 10, 10)), m));
+  if (support == "slab")
+    w.add_body(Body(box_tet_mesh(Vector3d(-0.2, -0.05, -0.2), Vector3d(0.2, -0.001, 0.2), Eigen::Vector3i(1, 1, 1)),
+                    Material{}, true));
+  if (support == "pins") w.pin(Eigen::AlignedBox3d(Vector3d(-1, 0.099, -1), Vector3d(1, 1, 1)));
+  w.prepare();
+  return w;
+}
+
+}  // namespace
+
+// Issue 17 (cost on fine meshes): a body at rest on another or hanging from its pins takes whole
+// frame-sized steps (the substep prediction counts every force at x_n, not gravity alone), and a
+// body resting on a contact keeps it from step to step (no contact round re-finding it, few
+// Newton iterations); a body in free fall is still split into substeps.
+TEST(FemImplicit, BodiesAtRestTakeWholeStepsAndKeepTheirContacts) {
+  for (const char* support : {"slab", "pins"}) {
+    SCOPED_TRACE(support);
+    World w = soft_cube(support);
+    State s = w.initial_state();
+    for (int k = 0; k < 40; ++k) w.step(s);  // 2 s: settled
+    const IntegratorStats a = w.integrator().stats();
+    for (int k = 0; k < 15; ++k) w.step(s);
+    const IntegratorStats b = w.integrator().stats();
+    const double per_step = static_cast<double>(b.iterations - a.iterations) / 15;
+    std::printf("%s, settled: %lld substeps, %lld contact rounds, %.2f Newton iterations and %.2f factorisations "
+                "per step, largest |v_y| %.2g m/s, colliding vertices %d\n",
+                support, b.substeps - a.substeps, b.contact_rounds - a.contact_rounds, per_step,
+                static_cast<double>(b.factorizations - a.factorizations) / 15, s.v.col(1).cwiseAbs().maxCoeff(),
+                w.last_stats().colliding_vertices);
+    EXPECT_LT(s.v.col(1).cwiseAbs().maxCoeff(), 1e-3);  // at rest (on the frictionless slab it may turn slowly)
+    EXPECT_EQ(b.substeps - a.substeps, 15);            // whole steps
+    EXPECT_EQ(b.contact_rounds - a.contact_rounds, 0);
+    EXPECT_LE(per_step, 2.0);
+    EXPECT_EQ(b.not_converged, 0);
+    if (std::string(support) == "slab") {
+      EXPECT_GT(w.last_stats().colliding_vertices, 50);  // it does rest on the slab
+      EXPECT_GT(s.x.col(1).minCoeff(), -0.01);           // and not in it
+    }
+  }
+  World w = soft_cube("none");
+  State s = w.initial_state();
+  w.step(s);
+  EXPECT_GE(w.integrator().stats().substeps, 2);  // free fall: ½ g h² is more than half an edge
 }

@@ -67,7 +67,11 @@ void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs) {
       }
   }
   Lp_.assign(static_cast<size_t>(n) + 1, 0);
-  for (int k = 0; k < n; ++k) Lp_[k + 1] = Lp_[k] + count_[k];
+  updates_ = 0;
+  for (int k = 0; k < n; ++k) {
+    Lp_[k + 1] = Lp_[k] + count_[k];
+    updates_ += static_cast<long long>(count_[k]) * (count_[k] + 1) / 2;
+  }
   Li_.resize(static_cast<size_t>(Lp_[n]));
   Lx_.resize(Li_.size());
   Dinv_.resize(static_cast<size_t>(n));

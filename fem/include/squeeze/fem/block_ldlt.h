@@ -45,9 +45,13 @@ class BlockLDLT {
   int blocks() const { return n_; }
   /// Off-diagonal 3×3 blocks of L (its fill).
   long long factor_blocks() const { return static_cast<long long>(Li_.size()); }
+  /// 3×3 block products of one factorisation (Σ over the columns of L of c (c + 1) / 2, c the
+  /// column's blocks): its cost, against 2 · factor_blocks() block-vector products of a solve.
+  long long factor_updates() const { return updates_; }
 
  private:
   int n_ = 0;
+  long long updates_ = 0;    // factor_updates()
   std::vector<int> perm_;    // new block index -> old
   std::vector<int> iperm_;   // old -> new
   // The permuted upper triangle by column k: entries (row i <= k, source) where source >= 0 is

@@ -46,6 +46,9 @@ struct ImplicitOptions {
   double cg_tolerance = 1e-2;      // relative residual of the conjugate-gradient solve of a Newton step
   int max_cg_iterations = 8;       // CG iterations with the last factorisation as preconditioner before the
                                    // Hessian is factorised anew (0: factorise every Newton iteration)
+  double inexact_cg_tolerance = 0.1;  // ... unless they reduced the relative residual to this: an inexact
+                                      // Newton direction, taken (the line search keeps it safe) instead of
+                                      // a new factorisation (0: always factorise after max_cg_iterations)
   double motion_fraction = 0.5;    // largest predicted motion per substep, in mean edge lengths of the object
   int max_substeps = 1024;         // substeps of one step at most
   int contact_rounds = 3;          // re-detections of contacts after a converged solve (0: detect at x_n only)

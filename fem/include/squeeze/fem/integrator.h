@@ -49,7 +49,7 @@ class TimeIntegrator {
   /// keep their positions with zero velocity.
   virtual void step(const World& world, State& s, const RowMatrixX3d* external, ForceWorkspace& ws) = 0;
   /// Forgets what earlier steps left to speed up later ones (the implicit integrator's lagged
-  /// preconditioner). A step's result depends on the state and on the steps since the last
+  /// preconditioner and the contacts it carries from one substep to the next). A step's result depends on the state and on the steps since the last
   /// reset(), so whoever must reproduce a run bit for bit from a stored state (the planner's
   /// propagators, the replay) resets before it. Counters are kept.
   virtual void reset() {}
