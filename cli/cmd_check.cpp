@@ -83,9 +83,8 @@ void print_scene_warnings(const fem::SceneWorld& w, std::optional<double> max_vo
   o.details = false;
   o.max_volume_change = max_volume_change;
   o.settle = settle;
-  if (progress && settle > 0) progress->stage("checking the scene (a " + format_g3(settle) + " s settle)");
+  o.progress = progress;
   const plan::SceneCheck c = plan::check_scene(w, o);
-  if (progress && settle > 0) progress->finish();
   for (const std::string& line : c.warnings) spdlog::warn("{}: {}", w.scene.file.string(), line);
 }
 

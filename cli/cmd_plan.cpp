@@ -75,7 +75,7 @@ ReplayOutput write_replay(const fem::SceneWorld& world, const plan::PlanFile& f,
   if (at_h.time_step() != f.time_step) at_h.set_time_step(f.time_step);
   // The plan's start: the scene settled without control for its start_settle_steps; volume changes
   // are measured against it, as the planner measured them.
-  const fem::State start = plan::settle_start_state(at_h, 0, nullptr, f.start_settle_steps);
+  const fem::State start = plan::settle_start_state(at_h, 0, nullptr, f.start_settle_steps, &progress);
   if (fem::diverged(start))
     throw InputError(plan_name + ": start_settle_steps: the scene diverges while settling before the path at time_step " +
                      format_number(h) + " s");

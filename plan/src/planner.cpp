@@ -8,6 +8,7 @@
 
 #include "squeeze/common/error.h"
 #include "squeeze/common/json_check.h"
+#include "squeeze/common/progress.h"
 #include "squeeze/fem/integrator.h"
 
 namespace squeeze::plan {
@@ -182,7 +183,8 @@ void check_planning_inputs(const fem::SceneWorld& w) {
   check_robot_start(w);
 }
 
-fem::State settle_start_state(const fem::SceneWorld& w, double seconds, int* steps, int settle_steps) {
+fem::State settle_start_state(const fem::SceneWorld& w, double seconds, int* steps, int settle_steps,
+                              Progress* progress) {
   fem::SceneWorld copy = w;  // its own scratch and integrator
   copy.world.integrator().reset();
   fem::State s = copy.initial_state();
@@ -195,17 +197,20 @@ fem::State settle_start_state(const fem::SceneWorld& w, double seconds, int* ste
     if (!copy.world.pinned(i)) movable += copy.world.masses()(i);
   constexpr double kRestSpeed = 1e-3;  // m/s: the scene is at rest when its RMS speed is below it
   long long n = 0;
+  if (progress) progress->stage(automatic ? "settling the start (until at rest)" : "settling the start", static_cast<double>(limit));
   for (; n < limit; ++n) {
     if (automatic && n > 0 && !(copy.world.kinetic_energy(s) > 0.5 * movable * kRestSpeed * kRestSpeed)) break;
     copy.step(s);
+    if (progress) progress->update(static_cast<double>(n + 1));
     if (!s.x.allFinite()) break;
   }
+  if (progress) progress->finish();
   if (steps) *steps = static_cast<int>(n);
   return s;
 }
 
 PlanningProblem planning_problem(const fem::SceneWorld& w, const PlannerOptions& options,
-                                 PropagatorFactory make_propagator) {
+                                 PropagatorFactory make_propagator, Progress* progress) {
   check_planning_inputs(w);
   PlanningProblem p;
   p.world = &w;
@@ -213,7 +218,7 @@ PlanningProblem planning_problem(const fem::SceneWorld& w, const PlannerOptions&
   p.goal_object = Robot(w.world, goal_object_index(w.scene));
   p.goal = w.scene.goal->position;
   p.tolerance = w.scene.goal->tolerance;
-  p.start = settle_start_state(w, options.settle_start, &p.start_settle_steps);
+  p.start = settle_start_state(w, options.settle_start, &p.start_settle_steps, -1, progress);
   if (!p.start.x.allFinite())
     throw InputError(w.scene.file.string() + ": planner.settle_start: the scene diverged while settling before planning "
                      "(see squeeze check)");
@@ -234,7 +239,7 @@ PlanResult plan(const fem::SceneWorld& world, const PlannerOptions& options, Pro
                 PropagatorFactory make_propagator) {
   check_options(options, world.scene.file.string());
   const std::unique_ptr<Planner> planner = make_planner(options.algorithm);
-  const PlanningProblem problem = planning_problem(world, options, std::move(make_propagator));
+  const PlanningProblem problem = planning_problem(world, options, std::move(make_propagator), progress);
   PlanResult r = planner->solve(problem, options, progress);
   r.start_settle_steps = problem.start_settle_steps;
   r.settle = settle_control(world, options);

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "squeeze/common/format.h"
+#include "squeeze/common/progress.h"
 #include "squeeze/fem/forces.h"
 #include "squeeze/meshing/point_triangle_distance.h"
 #include "squeeze/meshing/surface_io.h"
@@ -220,8 +221,11 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
     fem::State s = sim.initial_state();
     const double h = sim.time_step();
     const long long steps = std::min<long long>(20000, std::max<long long>(1, std::llround(std::ceil(options.settle / h - 1e-9))));
+    if (options.progress)
+      options.progress->stage("checking the scene (a " + format_g3(options.settle) + " s settle)", static_cast<double>(steps));
     for (long long k = 0; k < steps && !out.settle_diverged; ++k) {
       sim.step(s);
+      if (options.progress) options.progress->update(static_cast<double>(k + 1));
       out.settle_diverged = fem::diverged(s);
       if (out.settle_diverged) break;
       for (int b = 0; b < nb; ++b) {
@@ -231,6 +235,7 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
       }
     }
     out.settle = steps * h;
+    if (options.progress) options.progress->finish();
   }
 
   // --- warnings, in a fixed order: objects, pairs, robot and goal, settle ---

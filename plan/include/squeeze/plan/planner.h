@@ -176,14 +176,16 @@ constexpr double kSettleStartMax = 2.0;
 /// `seconds` (≥ 0), or, with seconds < 0 ("auto"), until every deformable object's kinetic energy
 /// per kilogram stays below ½ (1 mm/s)² — the scene is at rest — at most kSettleStartMax. `steps`
 /// receives the number of steps taken. Deterministic: replay calls it with the plan's step count
-/// (settle_steps ≥ 0 overrides seconds) and gets the same state bit for bit.
-fem::State settle_start_state(const fem::SceneWorld& world, double seconds, int* steps, int settle_steps = -1);
+/// (settle_steps ≥ 0 overrides seconds) and gets the same state bit for bit. `progress` (optional)
+/// shows the steps as a stage "settling the start".
+fem::State settle_start_state(const fem::SceneWorld& world, double seconds, int* steps, int settle_steps = -1,
+                              Progress* progress = nullptr);
 
 /// The problem of a built scene: its settled start (options.settle_start). make_propagator: null
 /// for copies of the world (SimulationPropagator with max_volume_change from options and the
-/// settled start's volumes as reference).
+/// settled start's volumes as reference). `progress` (optional) shows the settle.
 PlanningProblem planning_problem(const fem::SceneWorld& world, const PlannerOptions& options,
-                                 PropagatorFactory make_propagator = {});
+                                 PropagatorFactory make_propagator = {}, Progress* progress = nullptr);
 
 /// FNV-1a 64 of the bytes of s.x, s.v and s.overlap (to check a replay against the tree).
 std::uint64_t state_hash(const fem::State& s);

@@ -30,6 +30,7 @@ struct SceneCheckOptions {
   // The expansion volume limit (planner.max_volume_change, a fraction) the settle is held against;
   // empty: none (a scene without a robot is not planned).
   std::optional<double> max_volume_change;
+  Progress* progress = nullptr;  // the settle's steps as a stage "checking the scene (a … s settle)"; null: silent
 };
 
 /// One object at rest.
