@@ -172,6 +172,8 @@ class ImplicitIntegrator : public TimeIntegrator {
   Eigen::VectorXd r_, z_, p_, Hp_;  // PCG scratch
   RowMatrixX3d Gr_;                 // gradient scratch (per state row)
   std::vector<Vec3> body_accel_;    // substeps_for scratch (per body)
+  std::vector<char> far_;           // per body: in free flight this step (substeps_for)
+  std::vector<Eigen::AlignedBox3d> rigid_box_;  // per body: a rigid object's bounding box (empty for deformables)
 };
 
 void ImplicitIntegrator::fit(const World& w) {
@@ -198,6 +200,11 @@ void ImplicitIntegrator::fit(const World& w) {
       row_gravity_.row(i) = g.transpose();
     }
   }
+  rigid_box_.assign(d.bodies.size(), Eigen::AlignedBox3d());
+  for (size_t b = 0; b < d.bodies.size(); ++b)
+    if (d.state_row[b] < 0)
+      for (int k = 0; k < d.bodies[b].vertices(); ++k)
+        rigid_box_[b].extend(Vec3(d.X_rest_all.row(d.scene.first_vertex[b] + k).transpose()));
   vertex_stiffness_.setZero(d.rows);
   for (const auto& E : d.edges) {
     const double K = E.k / (E.D0 * E.D0);
@@ -228,35 +235,81 @@ void ImplicitIntegrator::fit(const World& w) {
 // object's centre of mass (what moves the body as a whole, such as gravity in free fall).
 int ImplicitIntegrator::substeps_for(const World& w, const State& s, const RowMatrixX3d* ext, double h) {
   const WorldData& d = w.data();
+  const WorldOptions& o = w.options();
   energy_gradient(w, s.x, h, false, Gr_);
-  // Per state row: its force (N); per object: the acceleration of its free vertices' centre of mass.
+  // Per state row: its force (N); per object: the velocity and acceleration of its free vertices'
+  // centre of mass.
   RowMatrixX3d& F = Gr_;
   for (int i : free_rows_) {
     Vec3 f = d.mass(i) * Vec3(row_gravity_.row(i).transpose()) - Vec3(F.row(i).transpose());
     if (ext) f += Vec3(ext->row(i).transpose());
     F.row(i) = f.transpose();
   }
-  body_accel_.assign(d.bodies.size(), Vec3::Zero());
-  for (size_t b = 0; b < d.bodies.size(); ++b) {
+  const size_t nb = d.bodies.size();
+  body_accel_.assign(nb, Vec3::Zero());
+  std::vector<Vec3> body_velocity(nb, Vec3::Zero());
+  for (size_t b = 0; b < nb; ++b) {
     const int r0 = d.state_row[b];
     if (r0 < 0) continue;
-    Vec3 sum = Vec3::Zero();
+    Vec3 force = Vec3::Zero(), momentum = Vec3::Zero();
     double mass = 0;
     for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i)
-      if (free_[i] >= 0) sum += F.row(i).transpose(), mass += d.mass(i);
-    if (mass > 0) body_accel_[b] = sum / mass;
+      if (free_[i] >= 0) force += F.row(i).transpose(), momentum += d.mass(i) * s.v.row(i).transpose(), mass += d.mass(i);
+    if (mass > 0) body_accel_[b] = force / mass, body_velocity[b] = momentum / mass;
   }
-  double need = 1;
-  for (size_t b = 0; b < d.bodies.size(); ++b) {
+  // Per vertex: its predicted motion, and the part of it relative to its object's centre of mass.
+  auto forced = [&](int i, const Vec3& f, double whole) {
+    const double K = vertex_stiffness_(i);
+    const double a = 0.5 * d.inv_mass(i) * f.norm() * h * h;
+    return K > 0 ? std::min(a, f.norm() / K + whole) : a;
+  };
+  // Per object: how far any of its vertices may move (m), how far relative to its centre of mass,
+  // and its bounding box at x_n.
+  std::vector<double> reach(nb, 0.0), own(nb, 0.0);
+  std::vector<Eigen::AlignedBox3d> box(nb);
+  for (size_t b = 0; b < nb; ++b) {
     const int r0 = d.state_row[b];
-    if (r0 < 0) continue;
+    if (r0 < 0) {
+      box[b] = rigid_box_[b];
+      continue;
+    }
+    const double whole = 0.5 * body_accel_[b].norm() * h * h;
+    for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i) {
+      box[b].extend(Vec3(s.x.row(i).transpose()));
+      if (free_[i] < 0) continue;
+      const Vec3 f = F.row(i).transpose();
+      reach[b] = std::max(reach[b], s.v.row(i).norm() * h + forced(i, f, whole));
+      own[b] = std::max(own[b], (s.v.row(i) - body_velocity[b].transpose()).norm() * h +
+                                    forced(i, f - d.mass(i) * body_accel_[b], 0.0));
+    }
+  }
+  // An object is in free flight when nothing can reach it within the step: its box stays apart from
+  // every other object's box by more than twice their relative motion (of their centres of mass,
+  // plus each one's motion about its own) and half its mean edge length, and from the floor by
+  // twice its reach and that. Its motion as a whole then needs no substeps (no contact to resolve;
+  // backward Euler integrates the flight); only its vertices' motion relative to its centre of
+  // mass counts (its deformation, self-contact). Two objects falling side by side stay in flight.
+  double need = 1;
+  far_.assign(nb, 0);
+  for (size_t b = 0; b < nb; ++b) {
+    const int r0 = d.state_row[b];
+    if (r0 < 0 || box[b].isEmpty()) continue;
+    const double margin = 0.5 * d.bodies[b].mean_edge_length();
+    bool far = !o.floor || box[b].min().y() - 2 * reach[b] - margin > o.floor_height;
+    for (size_t c = 0; c < nb && far; ++c) {
+      if (c == b || box[c].isEmpty()) continue;
+      const double relative = (body_velocity[b] - body_velocity[c]).norm() * h +
+                              0.5 * (body_accel_[b] - body_accel_[c]).norm() * h * h + own[b] + own[c];
+      far = box[b].exteriorDistance(box[c]) > 2 * relative + margin;
+    }
+    far_[b] = far;
     const double whole = 0.5 * body_accel_[b].norm() * h * h;
     for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i) {
       if (free_[i] < 0) continue;
-      const double f = F.row(i).norm(), K = vertex_stiffness_(i);
-      double forced = 0.5 * d.inv_mass(i) * f * h * h;
-      if (K > 0) forced = std::min(forced, f / K + whole);
-      const double motion = s.v.row(i).norm() * h + forced;
+      const Vec3 f = F.row(i).transpose();
+      const double motion = far ? (s.v.row(i) - body_velocity[b].transpose()).norm() * h +
+                                      forced(i, f - d.mass(i) * body_accel_[b], 0.0)
+                                : s.v.row(i).norm() * h + forced(i, f, whole);
       need = std::max(need, motion / (o_.motion_fraction * edge_scale_(i)));
     }
   }
@@ -330,8 +383,21 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
   }
   // Motion check: a substep that moved a vertex more than twice the allowed fraction is redone as
   // two halves (a contact or an elastic snap that the prediction did not see).
+  // (An object in free flight, far_, is judged by its vertices' motion relative to its centre of mass.)
   double worst = 0;
-  for (int i : free_rows_) worst = std::max(worst, (x.row(i) - xn_.row(i)).norm() / edge_scale_(i));
+  for (size_t b = 0; b < d.bodies.size(); ++b) {
+    const int r0 = d.state_row[b];
+    if (r0 < 0) continue;
+    Vec3 shift = Vec3::Zero();
+    if (b < far_.size() && far_[b]) {
+      double mass = 0;
+      for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i)
+        if (free_[i] >= 0) shift += d.mass(i) * (x.row(i) - xn_.row(i)).transpose(), mass += d.mass(i);
+      if (mass > 0) shift /= mass;
+    }
+    for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i)
+      if (free_[i] >= 0) worst = std::max(worst, (Vec3((x.row(i) - xn_.row(i)).transpose()) - shift).norm() / edge_scale_(i));
+  }
   if (!(worst <= 2 * o_.motion_fraction) && depth < 8) {
     s = before;
     substep(w, s, ext, ws, h / 2, depth + 1);
