@@ -28,8 +28,10 @@
 //
 // Substeps (accuracy): a step of h is split into k equal substeps so that no free vertex is
 // predicted to move more than motion_fraction of its object's mean edge length per substep
-// (|v| h + ½ |g + f_ext / m| h²); a substep whose solution moved a vertex more than twice that is
-// redone as two halves. This keeps contacts resolved at any h: the nominal time step (the scene's
+// (|v| h + ½ |a| h² with every force at the start, capped where the vertex's own edges resist it;
+// an object in free flight, out of reach of everything else, by its motion about its centre of
+// mass only: docs/fem.md); a substep whose solution moved a vertex more than twice that is
+// redone as two halves. Resting contacts are carried from one substep to the next. This keeps contacts resolved at any h: the nominal time step (the scene's
 // "auto": one frame interval, scene.h) is chosen for the motion one wants to see, not for stability.
 #pragma once
 #include <memory>
