@@ -113,7 +113,8 @@ struct LinearContact {
   double c0 = 0;        // m
   double k = 0, c = 0;  // N/m, N·s/m
   int vertex = -1;      // collision index of p (a vertex is in the set once)
-  double band = 0;      // m: the penalty's curvature k r rᵀ is kept while d > −band (assemble)
+  double scale = 0;     // m: mean edge length of the object of its first free row (the curvature band
+                        // of assemble, the carry limits of carry_contacts)
   Vec3 at[5];           // positions of the stencil's free rows where the contact was linearised
 };
 
@@ -178,7 +179,6 @@ class ImplicitIntegrator : public TimeIntegrator {
   double factor_h_ = 0;       // the substep length of ldlt_'s factorisation (0: none): a preconditioner while h is the same
   Eigen::VectorXd r_, z_, p_, Hp_;  // PCG scratch
   RowMatrixX3d Gr_;                 // gradient scratch (per state row)
-  std::vector<Vec3> body_accel_;    // substeps_for scratch (per body)
   std::vector<char> far_;           // per body: in free flight this step (substeps_for)
   std::vector<Eigen::AlignedBox3d> rigid_box_;  // per body: a rigid object's bounding box (empty for deformables)
 };
@@ -245,8 +245,7 @@ int ImplicitIntegrator::substeps_for(const World& w, const State& s, const RowMa
     F.row(i) = f.transpose();
   }
   const size_t nb = d.bodies.size();
-  body_accel_.assign(nb, Vec3::Zero());
-  std::vector<Vec3> body_velocity(nb, Vec3::Zero());
+  std::vector<Vec3> body_accel(nb, Vec3::Zero()), body_velocity(nb, Vec3::Zero());
   for (size_t b = 0; b < nb; ++b) {
     const int r0 = d.state_row[b];
     if (r0 < 0) continue;
@@ -254,7 +253,7 @@ int ImplicitIntegrator::substeps_for(const World& w, const State& s, const RowMa
     double mass = 0;
     for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i)
       if (free_[i] >= 0) force += F.row(i).transpose(), momentum += d.mass(i) * s.v.row(i).transpose(), mass += d.mass(i);
-    if (mass > 0) body_accel_[b] = force / mass, body_velocity[b] = momentum / mass;
+    if (mass > 0) body_accel[b] = force / mass, body_velocity[b] = momentum / mass;
   }
   // Per vertex: its predicted motion, and the part of it relative to its object's centre of mass.
   auto forced = [&](int i, const Vec3& f, double whole) {
@@ -262,8 +261,9 @@ int ImplicitIntegrator::substeps_for(const World& w, const State& s, const RowMa
     const double a = 0.5 * d.inv_mass(i) * f.norm() * h * h;
     return K > 0 ? std::min(a, f.norm() / K + whole) : a;
   };
-  // Per object: how far any of its vertices may move (m), how far relative to its centre of mass,
-  // and its bounding box at x_n.
+  // Per state row: its predicted motion and its motion about its object's centre of mass (m); per
+  // object: the largest of each, and its bounding box at x_n.
+  Eigen::VectorXd motion = Eigen::VectorXd::Zero(d.rows), about = Eigen::VectorXd::Zero(d.rows);
   std::vector<double> reach(nb, 0.0), own(nb, 0.0);
   std::vector<Eigen::AlignedBox3d> box(nb);
   for (size_t b = 0; b < nb; ++b) {
@@ -272,14 +272,15 @@ int ImplicitIntegrator::substeps_for(const World& w, const State& s, const RowMa
       box[b] = rigid_box_[b];
       continue;
     }
-    const double whole = 0.5 * body_accel_[b].norm() * h * h;
+    const double whole = 0.5 * body_accel[b].norm() * h * h;
     for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i) {
       box[b].extend(Vec3(s.x.row(i).transpose()));
       if (free_[i] < 0) continue;
       const Vec3 f = F.row(i).transpose();
-      reach[b] = std::max(reach[b], s.v.row(i).norm() * h + forced(i, f, whole));
-      own[b] = std::max(own[b], (s.v.row(i) - body_velocity[b].transpose()).norm() * h +
-                                    forced(i, f - d.mass(i) * body_accel_[b], 0.0));
+      motion(i) = s.v.row(i).norm() * h + forced(i, f, whole);
+      about(i) = (s.v.row(i) - body_velocity[b].transpose()).norm() * h + forced(i, f - d.mass(i) * body_accel[b], 0.0);
+      reach[b] = std::max(reach[b], motion(i));
+      own[b] = std::max(own[b], about(i));
     }
   }
   // An object is in free flight when nothing can reach it within the step: its box stays apart from
@@ -298,19 +299,13 @@ int ImplicitIntegrator::substeps_for(const World& w, const State& s, const RowMa
     for (size_t c = 0; c < nb && far; ++c) {
       if (c == b || box[c].isEmpty()) continue;
       const double relative = (body_velocity[b] - body_velocity[c]).norm() * h +
-                              0.5 * (body_accel_[b] - body_accel_[c]).norm() * h * h + own[b] + own[c];
+                              0.5 * (body_accel[b] - body_accel[c]).norm() * h * h + own[b] + own[c];
       far = box[b].exteriorDistance(box[c]) > 2 * relative + margin;
     }
     far_[b] = far;
-    const double whole = 0.5 * body_accel_[b].norm() * h * h;
-    for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i) {
-      if (free_[i] < 0) continue;
-      const Vec3 f = F.row(i).transpose();
-      const double motion = far ? (s.v.row(i) - body_velocity[b].transpose()).norm() * h +
-                                      forced(i, f - d.mass(i) * body_accel_[b], 0.0)
-                                : s.v.row(i).norm() * h + forced(i, f, whole);
-      need = std::max(need, motion / (o_.motion_fraction * edge_scale_(i)));
-    }
+    const Eigen::VectorXd& m = far ? about : motion;
+    for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i)
+      if (free_[i] >= 0) need = std::max(need, m(i) / (o_.motion_fraction * edge_scale_(i)));
   }
   if (!std::isfinite(need)) return o_.max_substeps;
   return static_cast<int>(std::min<double>(o_.max_substeps, std::ceil(need - 1e-9)));
@@ -431,9 +426,7 @@ void ImplicitIntegrator::carry_contacts() {
   std::sort(fresh.begin(), fresh.end());
   for (LinearContact c : carried_) {
     if (std::binary_search(fresh.begin(), fresh.end(), c.vertex)) continue;
-    double scale = 0;
-    for (int k = 0; k < 5 && scale == 0; ++k)
-      if (c.row[k] >= 0) scale = edge_scale_(c.row[k]);
+    const double scale = c.scale;
     const double depth = c.c0 - stencil_dot(c, xn_);
     if (!(depth > -kCarryMargin * scale)) continue;
     Vec3 drift = Vec3::Zero();  // Σ_s w_s (x_s − at_s): the vertex's motion relative to the tet's point
@@ -483,7 +476,7 @@ void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetrat
     if (!any_free) continue;
     for (int s = 0; s < 5; ++s)
       if (c.row[s] >= 0) {
-        c.band = kCurvatureBand * edge_scale_(c.row[s]);
+        c.scale = edge_scale_(c.row[s]);
         break;
       }
     c.c0 = p.depth + q;
@@ -714,7 +707,7 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const LinearContact& c = contacts_[k];
     const double depth = c.c0 - stencil_dot(c, x);
-    const double kc = (depth > -c.band ? c.k : 0.0) + c.c / h;
+    const double kc = (depth > -kCurvatureBand * c.scale ? c.k : 0.0) + c.c / h;
     if (!(kc > 0)) continue;
     const Mat3 rr = c.r * c.r.transpose();
     scatter(5, c.row, contact_block_[k].data(), [&](int a, int b) -> Mat3 { return (kc * c.w[a] * c.w[b]) * rr; });
