@@ -4,13 +4,18 @@
 #include <Eigen/LU>
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCore>
+#include <tbb/global_control.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 
 namespace squeeze::fem {
 
-void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs) {
+void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs, int parts) {
   assert(n >= 0);
   n_ = n;
   // Approximate minimum degree on the vertex graph (Eigen's AMD symmetrises the lower pattern).
@@ -53,16 +58,18 @@ void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs) {
     // Block (row, col) of the permuted matrix: (I, J) itself when I's new index is the row.
     Asrc_[at] = 2 * static_cast<int>(q) + (a > b ? 1 : 0);
   }
-  // Elimination tree and column counts (Davis 2005, ldl_symbolic).
+  // Elimination tree and column counts (Davis 2005, ldl_symbolic), and each row's cost in
+  // factorize: a block product per block already in each column of its pattern, and one more.
   parent_.assign(static_cast<size_t>(n), -1);
   flag_.assign(static_cast<size_t>(n), -1);
   count_.assign(static_cast<size_t>(n), 0);
+  std::vector<long long> row_cost(static_cast<size_t>(n), 0);
   for (int k = 0; k < n; ++k) {
     flag_[k] = k;
     for (int p = Ap_[k]; p < Ap_[k + 1]; ++p)
       for (int i = Ai_[p]; i < k && flag_[i] != k; i = parent_[i]) {
         if (parent_[i] == -1) parent_[i] = k;
-        ++count_[i];
+        row_cost[k] += ++count_[i];
         flag_[i] = k;
       }
   }
@@ -77,6 +84,109 @@ void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs) {
   Dinv_.resize(static_cast<size_t>(n));
   y_.assign(static_cast<size_t>(n), Mat3::Zero());
   pattern_.resize(static_cast<size_t>(n));
+  cut(parts, row_cost);
+}
+
+// The parallel cut of the elimination tree: greedily cut the subtree of most work (its root goes
+// to the top, its children become subtrees) while the estimated critical path, the top's work plus
+// max(largest subtree, subtrees' work / parts), falls; keep the best; deal the subtrees to the
+// bins largest first, each to the least loaded bin (Graham's LPT rule). Ties go to the lower index:
+// the cut is a function of the pattern and the number of parts.
+void BlockLDLT::cut(int parts, const std::vector<long long>& row_cost) {
+  const int n = n_;
+  if (parts <= 0) parts = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  bin_rows_.clear();
+  bin_pattern_.clear();
+  top_rows_.clear();
+  top_updates_ = updates_;
+  bin_updates_ = 0;
+  std::vector<char> top(static_cast<size_t>(n), 1);
+  std::vector<int> bin_of(static_cast<size_t>(n), -1);
+  if (parts > 1 && updates_ >= kParallelUpdates) {
+    std::vector<long long> work(row_cost);  // of each subtree
+    for (int k = 0; k < n; ++k)
+      if (parent_[k] >= 0) work[parent_[k]] += work[k];
+    std::vector<int> head(static_cast<size_t>(n), -1), next(static_cast<size_t>(n), -1);
+    for (int k = n - 1; k >= 0; --k)
+      if (parent_[k] >= 0) {
+        next[k] = head[parent_[k]];
+        head[parent_[k]] = k;
+      }
+    // Max-heap of subtrees by work, the lower index first among equals.
+    auto less = [&](int a, int b) { return work[a] < work[b] || (work[a] == work[b] && a > b); };
+    std::vector<int> heap, cuts;
+    for (int k = 0; k < n; ++k)
+      if (parent_[k] < 0) heap.push_back(k);
+    std::make_heap(heap.begin(), heap.end(), less);
+    long long top_work = 0, rest = updates_, best = updates_;
+    size_t best_cuts = 0;
+    while (!heap.empty()) {
+      const long long path = top_work + std::max(work[heap.front()], (rest + parts - 1) / parts);
+      if (path < best) {
+        best = path;
+        best_cuts = cuts.size();
+      }
+      if (top_work >= best) break;
+      std::pop_heap(heap.begin(), heap.end(), less);
+      const int c = heap.back();
+      heap.pop_back();
+      cuts.push_back(c);
+      top_work += row_cost[c];
+      rest -= row_cost[c];
+      for (int ch = head[c]; ch >= 0; ch = next[ch]) {
+        heap.push_back(ch);
+        std::push_heap(heap.begin(), heap.end(), less);
+      }
+    }
+    if (best <= updates_ - updates_ / 10) {
+      std::fill(top.begin(), top.end(), 0);
+      for (size_t q = 0; q < best_cuts; ++q) top[cuts[q]] = 1;
+      std::vector<int> roots;  // subtrees: not in the top, parent in the top or none
+      for (int k = 0; k < n; ++k)
+        if (!top[k] && (parent_[k] < 0 || top[parent_[k]])) roots.push_back(k);
+      std::sort(roots.begin(), roots.end(), [&](int a, int b) { return less(b, a); });
+      std::vector<long long> load(static_cast<size_t>(parts), 0);
+      for (int r : roots) {
+        const int b = static_cast<int>(std::min_element(load.begin(), load.end()) - load.begin());
+        bin_of[r] = b;
+        load[b] += work[r];
+      }
+      for (int k = n - 1; k >= 0; --k)
+        if (!top[k] && bin_of[k] < 0) bin_of[k] = bin_of[parent_[k]];
+      bin_rows_.resize(static_cast<size_t>(parts));
+      for (int k = 0; k < n; ++k)
+        if (!top[k]) bin_rows_[bin_of[k]].push_back(k);
+      bin_rows_.erase(std::remove_if(bin_rows_.begin(), bin_rows_.end(), [](const std::vector<int>& r) { return r.empty(); }),
+                      bin_rows_.end());
+      top_updates_ = 0;
+      for (int k = 0; k < n; ++k)
+        if (top[k]) top_updates_ += row_cost[k];
+      bin_updates_ = *std::max_element(load.begin(), load.end());
+      bin_pattern_.assign(bin_rows_.size(), std::vector<int>(static_cast<size_t>(n)));
+    }
+  }
+  for (int k = 0; k < n; ++k)
+    if (top[k]) top_rows_.push_back(k);
+  // Each column's blocks in top rows: the rows of a column are ancestors of it, in ascending order,
+  // and the top holds every ancestor of its nodes, so these blocks are the column's last.
+  std::vector<int> in_top(static_cast<size_t>(n), 0);
+  if (!bin_rows_.empty()) {
+    std::fill(flag_.begin(), flag_.end(), -1);
+    for (int k : top_rows_) {
+      flag_[k] = k;
+      for (int p = Ap_[k]; p < Ap_[k + 1]; ++p)
+        for (int i = Ai_[p]; i < k && flag_[i] != k; i = parent_[i]) {
+          if (!top[i]) ++in_top[i];
+          flag_[i] = k;
+        }
+    }
+  }
+  split_.resize(static_cast<size_t>(n));
+  split_cols_.clear();
+  for (int j = 0; j < n; ++j) {
+    split_[j] = top[j] ? Lp_[j] : Lp_[j + 1] - in_top[j];
+    if (split_[j] < Lp_[j + 1]) split_cols_.push_back(j);
+  }
 }
 
 bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>& off) {
@@ -85,8 +195,9 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
   std::fill(count_.begin(), count_.end(), 0);
   std::fill(flag_.begin(), flag_.end(), -1);
   // Davis 2005, ldl_numeric, on blocks: row k of L solves L(0:k,0:k) D Y = A(0:k, k) over the
-  // pattern of row k (its reach in the elimination tree), Y(i) = block (i, k).
-  for (int k = 0; k < n; ++k) {
+  // pattern of row k (its reach in the elimination tree), Y(i) = block (i, k). A row of a bin
+  // reaches only its own subtree: the bins touch disjoint entries of y_, flag_, count_ and L.
+  auto row = [&](int k, int* pattern) {
     int top = n;
     flag_[k] = k;
     for (int p = Ap_[k]; p < Ap_[k + 1]; ++p) {
@@ -100,15 +211,15 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
         y_[i] += off[static_cast<size_t>(s >> 1)];
       int len = 0;
       for (; flag_[i] != k; i = parent_[i]) {
-        pattern_[len++] = i;
+        pattern[len++] = i;
         flag_[i] = k;
       }
-      while (len > 0) pattern_[--top] = pattern_[--len];
+      while (len > 0) pattern[--top] = pattern[--len];
     }
     Mat3 d = y_[k];
     y_[k].setZero();
     for (; top < n; ++top) {
-      const int i = pattern_[top];
+      const int i = pattern[top];
       const Mat3 yi = y_[i];
       y_[i].setZero();
       const int p2 = Lp_[i] + count_[i];
@@ -121,36 +232,76 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
     }
     d = 0.5 * (d + d.transpose());  // symmetric in exact arithmetic
     const double det = d.determinant();
-    if (!std::isfinite(det) || det == 0) {
-      for (Mat3& y : y_) y.setZero();
-      return false;
-    }
+    if (!std::isfinite(det) || det == 0) return false;
     Dinv_[k] = d.inverse();
-    if (!Dinv_[k].allFinite()) {
-      for (Mat3& y : y_) y.setZero();
-      return false;
-    }
+    return Dinv_[k].allFinite();
+  };
+  std::atomic<bool> ok{true};
+  if (!bin_rows_.empty())
+    tbb::parallel_for(0, static_cast<int>(bin_rows_.size()), [&](int b) {
+      for (int k : bin_rows_[b])
+        if (!ok.load(std::memory_order_relaxed) || !row(k, bin_pattern_[b].data())) {
+          ok = false;
+          return;
+        }
+    });
+  if (ok)
+    for (int k : top_rows_)
+      if (!row(k, pattern_.data())) {
+        ok = false;
+        break;
+      }
+  if (!ok) {
+    for (Mat3& y : y_) y.setZero();
+    return false;
   }
+  // L rounded to single precision for precondition(): half the bytes per substitution.
+  Lf_.resize(Lx_.size());
+  auto round = [&](size_t begin, size_t end) {
+    for (size_t p = begin; p < end; ++p) Lf_[p] = Lx_[p].cast<float>();
+  };
+  if (bin_rows_.empty())
+    round(0, Lx_.size());
+  else
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, Lx_.size(), 16384), [&](const tbb::blocked_range<size_t>& r) { round(r.begin(), r.end()); });
   return true;
 }
 
-void BlockLDLT::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+template <class Block>
+void BlockLDLT::substitute(const std::vector<Block>& Lx, const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
   const int n = n_;
   assert(b.size() == 3 * static_cast<Eigen::Index>(n));
   w_.resize(b.size());
   for (int k = 0; k < n; ++k) w_.segment<3>(3 * k) = b.segment<3>(3 * static_cast<Eigen::Index>(perm_[k]));
-  for (int j = 0; j < n; ++j) {  // L w = b
+  // L w = b by columns: the bins' columns into their own rows, then every column into the top's
+  // rows in ascending column order (each entry of w receives its terms in the sequential order).
+  auto forward = [&](int j, int begin, int end) {
     const Eigen::Vector3d wj = w_.segment<3>(3 * j);
-    for (int p = Lp_[j]; p < Lp_[j + 1]; ++p) w_.segment<3>(3 * static_cast<Eigen::Index>(Li_[p])).noalias() -= Lx_[p] * wj;
-  }
-  for (int j = 0; j < n; ++j) w_.segment<3>(3 * j) = Dinv_[j] * Eigen::Vector3d(w_.segment<3>(3 * j));  // D
-  for (int j = n - 1; j >= 0; --j) {  // Lᵀ w = w
+    for (int p = begin; p < end; ++p) w_.segment<3>(3 * static_cast<Eigen::Index>(Li_[p])).noalias() -= Lx[p].template cast<double>() * wj;
+  };
+  // Lᵀ w = w by columns, each reading its ancestors (done before it: the top before the bins).
+  auto backward = [&](int j) {
     Eigen::Vector3d wj = w_.segment<3>(3 * j);
-    for (int p = Lp_[j]; p < Lp_[j + 1]; ++p) wj.noalias() -= Lx_[p].transpose() * w_.segment<3>(3 * static_cast<Eigen::Index>(Li_[p]));
+    for (int p = Lp_[j]; p < Lp_[j + 1]; ++p) wj.noalias() -= Lx[p].template cast<double>().transpose() * w_.segment<3>(3 * static_cast<Eigen::Index>(Li_[p]));
     w_.segment<3>(3 * j) = wj;
-  }
+  };
+  if (!bin_rows_.empty())
+    tbb::parallel_for(0, static_cast<int>(bin_rows_.size()), [&](int bin) {
+      for (int j : bin_rows_[bin]) forward(j, Lp_[j], split_[j]);
+    });
+  for (int j : split_cols_) forward(j, split_[j], Lp_[j + 1]);
+  for (int j = 0; j < n; ++j) w_.segment<3>(3 * j) = Dinv_[j] * Eigen::Vector3d(w_.segment<3>(3 * j));  // D
+  for (auto j = top_rows_.rbegin(); j != top_rows_.rend(); ++j) backward(*j);
+  if (!bin_rows_.empty())
+    tbb::parallel_for(0, static_cast<int>(bin_rows_.size()), [&](int bin) {
+      for (auto j = bin_rows_[bin].rbegin(); j != bin_rows_[bin].rend(); ++j) backward(*j);
+    });
   x.resize(b.size());
   for (int k = 0; k < n; ++k) x.segment<3>(3 * static_cast<Eigen::Index>(perm_[k])) = w_.segment<3>(3 * k);
 }
+
+void BlockLDLT::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const { substitute(Lx_, b, x); }
+
+void BlockLDLT::precondition(const Eigen::VectorXd& b, Eigen::VectorXd& x) const { substitute(Lf_, b, x); }
 
 }  // namespace squeeze::fem

@@ -745,7 +745,7 @@ bool ImplicitIntegrator::newton_direction(const World& w, const RowMatrixX3d& x,
       const int n = static_cast<int>(g.size());
       dx.setZero(n);
       r_ = -g;
-      ldlt_.solve(r_, z_);
+      ldlt_.precondition(r_, z_);
       p_ = z_;
       double rz = r_.dot(z_);
       const double stop = kCgTolerance * g.norm();
@@ -765,7 +765,7 @@ bool ImplicitIntegrator::newton_direction(const World& w, const RowMatrixX3d& x,
           done = true;
           break;
         }
-        ldlt_.solve(r_, z_);
+        ldlt_.precondition(r_, z_);
         const double rz1 = r_.dot(z_);
         p_ = z_ + (rz1 / rz) * p_;
         rz = rz1;

@@ -9,7 +9,15 @@
 // approximate minimum degree (Amestoy, Davis, Duff 1996; Eigen's AMDOrdering) on the vertex graph.
 // One index per 9 numbers instead of one per number: on the Hessians of the implicit step it
 // factorises and solves faster than Eigen's scalar SimplicialLDLT (bench/README.md,
-// "bench_integrators"). Deterministic: a fixed sequential order.
+// "bench_integrators").
+//
+// Parallel and deterministic: analyze() cuts the elimination tree into disjoint subtrees, dealt to
+// `parts` bins of about equal work, and a top (the rest: the ancestors of the cuts, the densest
+// rows). factorize() and solve() run the bins in parallel (TBB) and the top after them (before them
+// in the backward substitution). A row of a subtree reads only its own subtree, and every row and
+// every entry of x is summed in the same order as by the sequential algorithm, so the factors and
+// solutions are bit for bit those of one part, whatever the number of parts or threads
+// (FemBlockLDLT.PartsGiveBitIdenticalFactorsAndSolutions).
 //
 //   BlockLDLT f;
 //   f.analyze(n, pairs);                  // once per pattern
@@ -29,7 +37,11 @@ class BlockLDLT {
   ///   n      block rows (and columns), >= 0
   ///   pairs  the off-diagonal blocks of the lower triangle, (I, J) with n > I > J >= 0, each once,
   ///          in any order; every diagonal block is present
-  void analyze(int n, const std::vector<std::pair<int, int>>& pairs);
+  ///   parts  bins of subtrees run in parallel; 0: as many as TBB may run at once (its
+  ///          global_control), 1: sequential. Patterns whose factorisation is too small to gain
+  ///          (under kParallelUpdates block products), or whose elimination tree has no cut that
+  ///          would take at least a tenth off the critical path, get one part.
+  void analyze(int n, const std::vector<std::pair<int, int>>& pairs, int parts = 0);
 
   /// Numeric factorisation A = P⁻¹ L D Lᵀ P⁻ᵀ of a matrix of the analysed pattern.
   ///   diag  n symmetric 3×3 diagonal blocks
@@ -41,6 +53,9 @@ class BlockLDLT {
 
   /// x = A⁻¹ b with the last factorisation. b, x  3n (may not alias).
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
+  /// x ≈ A⁻¹ b with L rounded to single precision (D and the arithmetic in double): about half the
+  /// memory traffic of solve(), for preconditioning (relative error about 1e-7 × cond(L)).
+  void precondition(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
 
   int blocks() const { return n_; }
   /// Off-diagonal 3×3 blocks of L (its fill).
@@ -48,8 +63,21 @@ class BlockLDLT {
   /// 3×3 block products of one factorisation (Σ over the columns of L of c (c + 1) / 2, c the
   /// column's blocks): its cost, against 2 · factor_blocks() block-vector products of a solve.
   long long factor_updates() const { return updates_; }
+  /// Bins of subtrees of the last analyze() (1: sequential).
+  int parts() const { return static_cast<int>(bin_rows_.size()) + (bin_rows_.empty() ? 1 : 0); }
+  /// Block products of the factorisation's rows run after the bins (its sequential part), and the
+  /// largest bin's: the critical path is their sum, against factor_updates() in sequence.
+  long long top_updates() const { return top_updates_; }
+  long long largest_bin_updates() const { return bin_updates_; }
+
+  /// Below this many block products per factorisation analyze() keeps one part.
+  static constexpr long long kParallelUpdates = 200000;
 
  private:
+  void cut(int parts, const std::vector<long long>& row_cost);
+  template <class Block>
+  void substitute(const std::vector<Block>& Lx, const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
+
   int n_ = 0;
   long long updates_ = 0;    // factor_updates()
   std::vector<int> perm_;    // new block index -> old
@@ -61,11 +89,19 @@ class BlockLDLT {
   std::vector<int> Lp_;      // column starts of L (block CSC, strictly lower)
   std::vector<int> Li_;      // row of each block of L
   std::vector<Mat3> Lx_;     // blocks of L: L(Li_[p], column)
+  std::vector<Eigen::Matrix3f> Lf_;  // Lx_ in single precision (precondition)
   std::vector<Mat3> Dinv_;   // inverses of the pivot blocks
   // Workspace of factorize (mutable scratch of solve).
   std::vector<Mat3> y_;
   std::vector<int> flag_, pattern_, count_;
   mutable Eigen::VectorXd w_;
+  // The parallel cut (analyze): the rows of each bin (ascending), the top rows (ascending), each
+  // column's first block whose row is in the top (Lp_[j] for a top column), and the columns with
+  // such blocks (ascending).
+  std::vector<std::vector<int>> bin_rows_;
+  std::vector<int> top_rows_, split_, split_cols_;
+  std::vector<std::vector<int>> bin_pattern_;  // per-bin workspace of factorize
+  long long top_updates_ = 0, bin_updates_ = 0;
 };
 
 }  // namespace squeeze::fem
