@@ -689,6 +689,36 @@ TEST(FemImplicit, BodiesAtRestTakeWholeStepsAndKeepTheirContacts) {
   EXPECT_LT(strain, 1e-6);
 }
 
+// A motion that a shorter substep does not shorten is a jump, not a missed event: a cube whose
+// bottom starts 2 cm (two edge lengths) inside a rigid slab, with no rest-overlap tolerance, is
+// pushed out by the same 2 cm at any substep length. The motion check halves such a substep once,
+// sees the halves move as far, and keeps them, instead of halving down to its depth limit.
+TEST(FemImplicit, AJumpIsNotHalvedAgainAndAgain) {
+  WorldOptions o;
+  o.integrator = "implicit";
+  o.h = 1.0 / 20;
+  o.contact_stiffness = 2e4;
+  o.contact_damping = 2;
+  o.rest_overlap = false;
+  o.gravity.setZero();
+  World w(o);
+  Material m;
+  m.k_distance = m.k_volume = 50;
+  m.damping_distance = m.damping_volume = 0.01;
+  w.add_body(Body(box_tet_mesh(Vector3d(-0.05, -0.02, -0.05), Vector3d(0.05, 0.08, 0.05), Eigen::Vector3i(10, 10, 10)), m));
+  w.add_body(Body(box_tet_mesh(Vector3d(-0.2, -0.05, -0.2), Vector3d(0.2, -0.001, 0.2), Eigen::Vector3i(1, 1, 1)),
+                  Material{}, true));
+  w.prepare();
+  State s = w.initial_state();
+  w.step(s);
+  const IntegratorStats st = w.integrator().stats();
+  std::printf("a 2 cm jump: %lld substeps, %lld Newton iterations, lowest y %.4f m\n", st.substeps, st.iterations,
+              s.x.col(1).minCoeff());
+  EXPECT_TRUE(s.x.allFinite());
+  EXPECT_GT(s.x.col(1).minCoeff(), -0.012);  // mostly out
+  EXPECT_LE(st.substeps, 8);                  // not 2^8 halvings of a substep
+}
+
 // A carried contact (the last substep's, kept while its vertex stays near the plane it was found
 // on) must not outlive the surface: a cube sliding at 1 m/s on a frictionless slab falls off its
 // edge as it would without any carried contact.

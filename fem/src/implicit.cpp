@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -30,6 +31,8 @@ constexpr double kCarryMargin = 0.1;
 // beyond the edge; FemImplicit.ABodySlidingOffASlabFallsOffIt). 0.5 dropped most of the organs'
 // resting contacts as they sagged (221 factorisations in 2 s instead of 106); 2 keeps them.
 constexpr double kCarryDrift = 2.0;
+// A substep that halves one and moves at least this fraction of its motion is kept (substep).
+constexpr double kJumpRatio = 0.8;
 // A contact's penalty curvature is kept in the Newton matrix while its depth is above −kCurvatureBand
 // × the mean edge length, not only while it is positive (assemble).
 constexpr double kCurvatureBand = 0.01;
@@ -141,7 +144,9 @@ class ImplicitIntegrator : public TimeIntegrator {
  private:
   void fit(const World& w);
   int substeps_for(const World& w, const State& s, const RowMatrixX3d* external, double h);
-  void substep(const World& w, State& s, const RowMatrixX3d* external, ForceWorkspace& ws, double h, int depth);
+  // parent_worst: the largest motion (edge lengths) of the substep this one halves (motion check).
+  void substep(const World& w, State& s, const RowMatrixX3d* external, ForceWorkspace& ws, double h, int depth,
+               double parent_worst = std::numeric_limits<double>::infinity());
   void carry_contacts();
   void add_contacts(const World& w, const std::vector<Penetration>& pens, const RowMatrixX3d& x);
   void solve(const World& w, double h, RowMatrixX3d& x);
@@ -321,7 +326,7 @@ void ImplicitIntegrator::step(const World& w, State& s, const RowMatrixX3d* ext,
 }
 
 void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* ext, ForceWorkspace& ws, double h,
-                                 int depth) {
+                                 int depth, double parent_worst) {
   const WorldData& d = w.data();
   const WorldOptions& o = w.options();
   const State before = s;
@@ -376,7 +381,10 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
     solve(w, h, x);
   }
   // Motion check: a substep that moved a vertex more than twice the allowed fraction is redone as
-  // two halves (a contact or an elastic snap that the prediction did not see).
+  // two halves (a contact or an elastic snap that the prediction did not see), unless it halves a
+  // substep that moved as far (more than kJumpRatio of its motion): a motion that a shorter step
+  // does not shorten is a jump (a vertex pushed out of a deep penetration moves as far at any h),
+  // and halving again only wastes work and leaves a larger velocity (the jump over a shorter h).
   // (An object in free flight, far_, is judged by its vertices' motion relative to its centre of mass.)
   double worst = 0;
   for (size_t b = 0; b < d.bodies.size(); ++b) {
@@ -392,10 +400,10 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
     for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i)
       if (free_[i] >= 0) worst = std::max(worst, (Vec3((x.row(i) - xn_.row(i)).transpose()) - shift).norm() / edge_scale_(i));
   }
-  if (!(worst <= 2 * o_.motion_fraction) && depth < 8) {
+  if (!(worst <= 2 * o_.motion_fraction) && depth < 8 && !(worst >= kJumpRatio * parent_worst)) {
     s = before;
-    substep(w, s, ext, ws, h / 2, depth + 1);
-    substep(w, s, ext, ws, h / 2, depth + 1);
+    substep(w, s, ext, ws, h / 2, depth + 1, worst);
+    substep(w, s, ext, ws, h / 2, depth + 1, worst);
     return;
   }
   for (int i = 0; i < d.rows; ++i) {
