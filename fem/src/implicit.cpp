@@ -6,10 +6,13 @@
 #include <cstdlib>
 #include <cmath>
 #include <cstdint>
+#include <initializer_list>
 #include <limits>
 #include <string>
 #include <unordered_map>
 #include <vector>
+
+#include <tbb/parallel_invoke.h>
 
 #include "squeeze/common/error.h"
 #include "squeeze/fem/block_ldlt.h"
@@ -179,6 +182,9 @@ class ImplicitIntegrator : public TimeIntegrator {
   std::vector<std::array<int, 6>> tet_block_;
   std::vector<std::array<int, 10>> contact_block_;
   BlockLDLT ldlt_;
+  // Parallel assembly (assemble): rows of free index below it are one part, the others the other;
+  // a boundary between bodies, 0 if no such boundary halves the elements well enough.
+  int assembly_split_ = 0;
   bool analysed_ = false;     // ldlt_ analysed the current pattern
   double factor_cost_ = 0;    // a factorisation's multiply-adds over one CG iteration's (analysis)
   double factor_h_ = 0;       // the substep length of ldlt_'s factorisation (0: none): a preconditioner while h is the same
@@ -222,6 +228,40 @@ void ImplicitIntegrator::fit(const World& w) {
     const double K = E.k / (E.D0 * E.D0);
     vertex_stiffness_(E.i) += K;
     vertex_stiffness_(E.j) += K;
+  }
+  // The assembly's two parts: the boundary between bodies (in free-row order) that best halves the
+  // elements' work (an edge 1, a tetrahedron 3), kept if the larger part is at most 60 %.
+  {
+    std::vector<double> work(free_rows_.size() + 1, 0.0);  // by the free index of an element's first free vertex
+    auto first_free = [&](std::initializer_list<int> rows) {
+      for (int r : rows)
+        if (free_[r] >= 0) return free_[r];
+      return -1;
+    };
+    for (const auto& E : d.edges) {
+      const int f = first_free({E.i, E.j});
+      if (f >= 0) work[f] += 1;
+    }
+    for (const auto& T : d.tet_elems) {
+      const int f = first_free({T.v[0], T.v[1], T.v[2], T.v[3]});
+      if (f >= 0) work[f] += 3;
+    }
+    double total = 0;
+    for (double x : work) total += x;
+    assembly_split_ = 0;
+    double best = 0.6 * total, below = 0;
+    int f = 0;
+    for (size_t b = 0; b < d.bodies.size(); ++b) {
+      const int r0 = d.state_row[b];
+      if (r0 < 0) continue;
+      const int f0 = f;
+      for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i)
+        if (free_[i] >= 0) below += work[free_[i]], ++f;
+      if (f > f0 && f < static_cast<int>(free_rows_.size()) && std::max(below, total - below) <= best) {
+        best = std::max(below, total - below);
+        assembly_split_ = f;
+      }
+    }
   }
   analysed_ = false;
   contacts_.clear();
@@ -651,16 +691,6 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
   const WorldData& d = w.data();
   const WorldOptions& o = w.options();
   H_.zero();
-  for (size_t f = 0; f < free_rows_.size(); ++f) {
-    const int i = free_rows_[f];
-    Mat3 M = (d.mass(i) / (h * h)) * Mat3::Identity();
-    if (o.floor) {
-      if (x(i, 1) < o.floor_height) M(1, 1) += d.contact_k(i);
-      if (floor_damped_[i] && x(i, 1) < xn_(i, 1)) M(1, 1) += d.contact_c(i) / h;
-    }
-    if (d.any_attached) M.diagonal().array() += d.attach_k(i) + d.attach_c(i) / h;  // soft attachment
-    H_.add_diag(static_cast<int>(f), M);
-  }
   // An element's symmetric block matrix over its n vertices: diagonal blocks to the free vertices,
   // the block (b, a), a < b, of each pair through its precomputed code.
   auto scatter = [&](int n, const int* rows, const int* codes, auto&& block) {
@@ -678,40 +708,71 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
       }
     }
   };
-  for (size_t e = 0; e < d.edges.size(); ++e) {
-    const auto& E = d.edges[e];
-    Mat3 He = distance_hessian(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact);
-    if (E.kd > 0) He += (E.kd / h) * edge_g_[e] * edge_g_[e].transpose();
-    const int rows[2] = {E.i, E.j};
-    scatter(2, rows, &edge_block_[e], [&](int a, int b) -> Mat3 { return a == b ? He : Mat3(-He); });
-  }
-  for (size_t t = 0; t < d.tet_elems.size(); ++t) {
-    const auto& T = d.tet_elems[t];
-    Vec3 p[4], gk[4];
-    for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
-    Mat3 Hd[4], Hl[6];  // the diagonal blocks and the blocks (b, a), a < b, in pair order
-    volume_hessian_lower(p, T.V0, T.k, exact, Hd, Hl, gk);
-    const double damp = T.kd / h;
-    if (damp > 0) {
-      const auto& tg = tet_g_[t];
-      int q = 0;
-      for (int a = 0; a < 4; ++a) {
-        Hd[a] += damp * tg[a] * tg[a].transpose();
-        for (int b = a + 1; b < 4; ++b) Hl[q++] += damp * tg[b] * tg[a].transpose();
+  // The inertia, floor, attachment and element blocks of the rows of one part (part −1: all
+  // rows). A block belongs to the part of its row (the larger free index of an off-diagonal
+  // block); an element with rows in both parts is evaluated by both, each adding its own blocks.
+  // Every block receives its terms in the same order whatever the parts: bit for bit the
+  // sequential sum, on one thread or two.
+  const int split = assembly_split_;
+  const auto& pairs = H_.pairs();
+  auto assemble_part = [&](int part) {
+    auto mine = [&](int f) { return f >= 0 && (part < 0 || (f >= split) == (part == 1)); };
+    auto mine_off = [&](int c) { return c >= 0 && (part < 0 || (pairs[static_cast<size_t>(c >> 1)].first >= split) == (part == 1)); };
+    for (size_t f = 0; f < free_rows_.size(); ++f) {
+      if (!mine(static_cast<int>(f))) continue;
+      const int i = free_rows_[f];
+      Mat3 M = (d.mass(i) / (h * h)) * Mat3::Identity();
+      if (o.floor) {
+        if (x(i, 1) < o.floor_height) M(1, 1) += d.contact_k(i);
+        if (floor_damped_[i] && x(i, 1) < xn_(i, 1)) M(1, 1) += d.contact_c(i) / h;
+      }
+      if (d.any_attached) M.diagonal().array() += d.attach_k(i) + d.attach_c(i) / h;  // soft attachment
+      H_.add_diag(static_cast<int>(f), M);
+    }
+    for (size_t e = 0; e < d.edges.size(); ++e) {
+      const auto& E = d.edges[e];
+      const int fi = free_[E.i], fj = free_[E.j];
+      if (!mine(fi) && !mine(fj)) continue;
+      Mat3 He = distance_hessian(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact);
+      if (E.kd > 0) He += (E.kd / h) * edge_g_[e] * edge_g_[e].transpose();
+      if (mine(fi)) H_.add_diag(fi, He);
+      if (mine(fj)) H_.add_diag(fj, He);
+      const int c = edge_block_[e];
+      if (mine_off(c)) H_.add_off(c >> 1, (c & 1) ? Mat3(-He.transpose()) : Mat3(-He));
+    }
+    for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+      const auto& T = d.tet_elems[t];
+      if (!mine(free_[T.v[0]]) && !mine(free_[T.v[1]]) && !mine(free_[T.v[2]]) && !mine(free_[T.v[3]])) continue;
+      Vec3 p[4], gk[4];
+      for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
+      Mat3 Hd[4], Hl[6];  // the diagonal blocks and the blocks (b, a), a < b, in pair order
+      volume_hessian_lower(p, T.V0, T.k, exact, Hd, Hl, gk);
+      const double damp = T.kd / h;
+      if (damp > 0) {
+        const auto& tg = tet_g_[t];
+        int q = 0;
+        for (int a = 0; a < 4; ++a) {
+          Hd[a] += damp * tg[a] * tg[a].transpose();
+          for (int b = a + 1; b < 4; ++b) Hl[q++] += damp * tg[b] * tg[a].transpose();
+        }
+      }
+      const int* codes = tet_block_[t].data();
+      for (int a = 0; a < 4; ++a)
+        if (mine(free_[T.v[a]])) H_.add_diag(free_[T.v[a]], Hd[a]);
+      for (int q = 0; q < 6; ++q) {
+        const int c = codes[q];
+        if (!mine_off(c)) continue;
+        if (c & 1)
+          H_.add_off(c >> 1, Hl[q].transpose());
+        else
+          H_.add_off(c >> 1, Hl[q]);
       }
     }
-    const int* codes = tet_block_[t].data();
-    for (int a = 0; a < 4; ++a)
-      if (free_[T.v[a]] >= 0) H_.add_diag(free_[T.v[a]], Hd[a]);
-    for (int q = 0; q < 6; ++q) {
-      const int c = codes[q];
-      if (c < 0) continue;
-      if (c & 1)
-        H_.add_off(c >> 1, Hl[q].transpose());
-      else
-        H_.add_off(c >> 1, Hl[q]);
-    }
-  }
+  };
+  if (split > 0)
+    tbb::parallel_invoke([&] { assemble_part(0); }, [&] { assemble_part(1); });
+  else
+    assemble_part(-1);
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const LinearContact& c = contacts_[k];
     const double depth = c.c0 - stencil_dot(c, x);
