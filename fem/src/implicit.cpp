@@ -256,7 +256,10 @@ void ImplicitIntegrator::fit(const World& w) {
       if (r0 < 0) continue;
       const int f0 = f;
       for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i)
-        if (free_[i] >= 0) below += work[free_[i]], ++f;
+        if (free_[i] >= 0) {
+          below += work[free_[i]];
+          ++f;
+        }
       if (f > f0 && f < static_cast<int>(free_rows_.size()) && std::max(below, total - below) <= best) {
         best = std::max(below, total - below);
         assembly_split_ = f;
