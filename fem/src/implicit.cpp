@@ -2,6 +2,7 @@
 #include "squeeze/fem/implicit.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <cmath>
@@ -12,6 +13,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include "squeeze/common/error.h"
@@ -34,6 +37,8 @@ constexpr double kCarryMargin = 0.1;
 // beyond the edge; FemImplicit.ABodySlidingOffASlabFallsOffIt). 0.5 dropped most of the organs'
 // resting contacts as they sagged (221 factorisations in 2 s instead of 106); 2 keeps them.
 constexpr double kCarryDrift = 2.0;
+// An assembly in one part computes the element blocks in parallel from this many tetrahedra on.
+constexpr size_t kParallelAssemblyTets = 256;
 // A substep that halves one and moves at least this fraction of its motion is kept (substep).
 constexpr double kJumpRatio = 0.8;
 // A contact's penalty curvature is kept in the Newton matrix while its depth is above −kCurvatureBand
@@ -172,6 +177,10 @@ class ImplicitIntegrator : public TimeIntegrator {
   RowMatrixX3d xn_, y_;                     // start of the substep, inertial target
   std::vector<Vec3> edge_g_;                // per edge: ∂C/∂p_j at x_n (its damping)
   std::vector<std::array<Vec3, 4>> tet_g_;  // per tet: ∂C/∂p_k at x_n (its damping)
+  // The elements' Hessian blocks of one assembly in one part (assemble): per edge its block, per
+  // tet its 4 diagonal blocks and 6 blocks (b, a), a < b, computed in parallel, summed in order.
+  std::vector<Mat3> edge_H_;
+  std::vector<std::array<Mat3, 10>> tet_H_;
   std::vector<LinearContact> contacts_;
   std::vector<LinearContact> carried_;      // the last substep's contacts, offered to the next (see substep)
   std::vector<char> floor_damped_;          // per state row: below the floor at x_n
@@ -732,23 +741,16 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
       if (d.any_attached) M.diagonal().array() += d.attach_k(i) + d.attach_c(i) / h;  // soft attachment
       H_.add_diag(static_cast<int>(f), M);
     }
-    for (size_t e = 0; e < d.edges.size(); ++e) {
+    auto edge_block = [&](size_t e) {
       const auto& E = d.edges[e];
-      const int fi = free_[E.i], fj = free_[E.j];
-      if (!mine(fi) && !mine(fj)) continue;
       Mat3 He = distance_hessian(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact);
       if (E.kd > 0) He += (E.kd / h) * edge_g_[e] * edge_g_[e].transpose();
-      if (mine(fi)) H_.add_diag(fi, He);
-      if (mine(fj)) H_.add_diag(fj, He);
-      const int c = edge_block_[e];
-      if (mine_off(c)) H_.add_off(c >> 1, (c & 1) ? Mat3(-He.transpose()) : Mat3(-He));
-    }
-    for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+      return He;
+    };
+    auto tet_blocks = [&](size_t t, Mat3* Hd, Mat3* Hl) {  // Hd[4], Hl[6]: the blocks (b, a), a < b, in pair order
       const auto& T = d.tet_elems[t];
-      if (!mine(free_[T.v[0]]) && !mine(free_[T.v[1]]) && !mine(free_[T.v[2]]) && !mine(free_[T.v[3]])) continue;
       Vec3 p[4], gk[4];
       for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
-      Mat3 Hd[4], Hl[6];  // the diagonal blocks and the blocks (b, a), a < b, in pair order
       volume_hessian_lower(p, T.V0, T.k, exact, Hd, Hl, gk);
       const double damp = T.kd / h;
       if (damp > 0) {
@@ -759,6 +761,39 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
           for (int b = a + 1; b < 4; ++b) Hl[q++] += damp * tg[b] * tg[a].transpose();
         }
       }
+    };
+    // One part of a large mesh: the blocks computed in parallel first (then summed in order below).
+    const bool buffered = part < 0 && d.tet_elems.size() >= kParallelAssemblyTets;
+    if (buffered) {
+      edge_H_.resize(d.edges.size());
+      tet_H_.resize(d.tet_elems.size());
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, d.edges.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t e = r.begin(); e < r.end(); ++e) edge_H_[e] = edge_block(e);
+      });
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, d.tet_elems.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t t = r.begin(); t < r.end(); ++t) tet_blocks(t, tet_H_[t].data(), tet_H_[t].data() + 4);
+      });
+    }
+    for (size_t e = 0; e < d.edges.size(); ++e) {
+      const auto& E = d.edges[e];
+      const int fi = free_[E.i], fj = free_[E.j];
+      if (!mine(fi) && !mine(fj)) continue;
+      const Mat3 He = buffered ? edge_H_[e] : edge_block(e);
+      if (mine(fi)) H_.add_diag(fi, He);
+      if (mine(fj)) H_.add_diag(fj, He);
+      const int c = edge_block_[e];
+      if (mine_off(c)) H_.add_off(c >> 1, (c & 1) ? Mat3(-He.transpose()) : Mat3(-He));
+    }
+    for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+      const auto& T = d.tet_elems[t];
+      if (!mine(free_[T.v[0]]) && !mine(free_[T.v[1]]) && !mine(free_[T.v[2]]) && !mine(free_[T.v[3]])) continue;
+      Mat3 own[10];
+      const Mat3* Hd = own;
+      if (buffered)
+        Hd = tet_H_[t].data();
+      else
+        tet_blocks(t, own, own + 4);
+      const Mat3* Hl = Hd + 4;
       const int* codes = tet_block_[t].data();
       for (int a = 0; a < 4; ++a)
         if (mine(free_[T.v[a]])) H_.add_diag(free_[T.v[a]], Hd[a]);
