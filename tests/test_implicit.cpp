@@ -620,19 +620,25 @@ namespace {
 // A soft 10 cm cube of 10 × 10 × 10 cells (mean edge about 1.3 cm: gravity alone moves a free
 // vertex ½ g h² = 12 mm in a step, more than half an edge) under gravity at h = 1/20 s:
 // resting on a rigid slab (`support` "slab": penalty contacts), hanging from its pinned top face
-// ("pins"), or free ("none").
-World soft_cube(const std::string& support) {
+// ("pins"), or free ("none"). Its world options are soft_cube_options() unless given; `bottom`
+// is the height of its lowest face (m; the slab's top is at −0.001).
+WorldOptions soft_cube_options() {
   WorldOptions o;
   o.integrator = "implicit";
   o.h = 1.0 / 20;
   o.contact_stiffness = 2e4;
   o.contact_damping = 2;
+  return o;
+}
+
+World soft_cube(const std::string& support, const WorldOptions& o = soft_cube_options(), double bottom = 0) {
   World w(o);
   Material m;
   m.k_distance = m.k_volume = 50;
   m.damping_distance = m.damping_volume = 0.01;
   m.deformation_damping = 20;
-  w.add_body(Body(box_tet_mesh(Vector3d(-0.05, 0, -0.05), Vector3d(0.05, 0.1, 0.05), Eigen::Vector3i(10, 10, 10)), m));
+  w.add_body(Body(
+      box_tet_mesh(Vector3d(-0.05, bottom, -0.05), Vector3d(0.05, bottom + 0.1, 0.05), Eigen::Vector3i(10, 10, 10)), m));
   if (support == "slab")
     w.add_body(Body(box_tet_mesh(Vector3d(-0.2, -0.05, -0.2), Vector3d(0.2, -0.001, 0.2), Eigen::Vector3i(1, 1, 1)),
                     Material{}, true));
@@ -700,21 +706,10 @@ TEST(FemImplicit, BodiesAtRestTakeWholeStepsAndKeepTheirContacts) {
 // pushed out by the same 2 cm at any substep length. The motion check halves such a substep once,
 // sees the halves move as far, and keeps them, instead of halving down to its depth limit.
 TEST(FemImplicit, AJumpIsNotHalvedAgainAndAgain) {
-  WorldOptions o;
-  o.integrator = "implicit";
-  o.h = 1.0 / 20;
-  o.contact_stiffness = 2e4;
-  o.contact_damping = 2;
+  WorldOptions o = soft_cube_options();
   o.rest_overlap = false;
   o.gravity.setZero();
-  World w(o);
-  Material m;
-  m.k_distance = m.k_volume = 50;
-  m.damping_distance = m.damping_volume = 0.01;
-  w.add_body(Body(box_tet_mesh(Vector3d(-0.05, -0.02, -0.05), Vector3d(0.05, 0.08, 0.05), Eigen::Vector3i(10, 10, 10)), m));
-  w.add_body(Body(box_tet_mesh(Vector3d(-0.2, -0.05, -0.2), Vector3d(0.2, -0.001, 0.2), Eigen::Vector3i(1, 1, 1)),
-                  Material{}, true));
-  w.prepare();
+  World w = soft_cube("slab", o, -0.02);
   State s = w.initial_state();
   w.step(s);
   const IntegratorStats st = w.integrator().stats();
