@@ -47,7 +47,9 @@ constexpr double kCurvatureBand = 0.01;
 // An inexact Newton direction (ImplicitOptions::inexact_cg_tolerance) is taken instead of a new
 // factorisation only where a factorisation costs at least this many CG iterations' multiply-adds:
 // the block triangular solves run at about a quarter of the factorisation's speed per multiply-add
-// (memory-bound; bench/README.md), so this is a factorisation of about 10 CG iterations' time, and
+// (memory-bound; bench/README.md; measured with the double-precision factor, before CG's
+// substitutions read it in single precision, BlockLDLT::precondition, which made them 1.3–1.9×
+// faster), so this is a factorisation of about 10 CG iterations' time (now somewhat more), and
 // an inexact direction can cost a Newton iteration more (assembly, gradient, line search). On small
 // meshes (Barriers2: 10; the organs' shells: 18) factorising stays cheaper; the organs' fine
 // meshes (63) are where it pays.
@@ -476,8 +478,9 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
 // misses it, the solve lets it sink, a contact round finds it again and the Newton solve starts
 // over. The last substep's contacts that detection at x_n did not renew are therefore kept, with
 // their linearisation (the plane they were found on), while their depth at x_n is within
-// carry_margin edge lengths of contact: the penalty ½ k max(0, d)² costs nothing while the vertex
-// stays out, and holds it where it rests. Their damping acts only while they are active at x_n.
+// kCarryMargin edge lengths of contact and their vertex has slid less than kCarryDrift edge lengths
+// along the plane: the penalty ½ k max(0, d)² costs nothing while the vertex stays out, and holds
+// it where it rests. Their damping acts only while they are active at x_n.
 void ImplicitIntegrator::carry_contacts() {
   if (carried_.empty()) return;
   std::vector<int> fresh;  // the vertices detection at x_n found (their contacts are new)
@@ -486,13 +489,12 @@ void ImplicitIntegrator::carry_contacts() {
   std::sort(fresh.begin(), fresh.end());
   for (LinearContact c : carried_) {
     if (std::binary_search(fresh.begin(), fresh.end(), c.vertex)) continue;
-    const double scale = c.scale;
     const double depth = c.c0 - stencil_dot(c, xn_);
-    if (!(depth > -kCarryMargin * scale)) continue;
+    if (!(depth > -kCarryMargin * c.scale)) continue;
     Vec3 drift = Vec3::Zero();  // Σ_s w_s (x_s − at_s): the vertex's motion relative to the tet's point
     for (int k = 0; k < 5; ++k)
       if (c.row[k] >= 0) drift += c.w[k] * (Vec3(xn_.row(c.row[k]).transpose()) - c.at[k]);
-    if (!((drift - c.r * c.r.dot(drift)).norm() < kCarryDrift * scale)) continue;
+    if (!((drift - c.r * c.r.dot(drift)).norm() < kCarryDrift * c.scale)) continue;
     if (depth <= 0) c.c = 0;
     contacts_.push_back(c);
   }
