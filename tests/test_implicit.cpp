@@ -200,7 +200,7 @@ TEST(FemBlockLDLT, PartsGiveBitIdenticalFactorsAndSolutions) {
     SCOPED_TRACE(testing::Message() << couplings << " couplings");
     std::vector<std::pair<int, int>> pairs;
     int n = 0;
-    for (const Eigen::Vector3i cells : {Eigen::Vector3i(14, 7, 6), Eigen::Vector3i(9, 9, 9)}) {
+    for (const Eigen::Vector3i& cells : {Eigen::Vector3i(14, 7, 6), Eigen::Vector3i(9, 9, 9)}) {
       const meshing::TetMesh box = box_tet_mesh(Vec3(0, 0, 0), Vec3(1, 0.5, 0.4), cells);
       for (Eigen::Index t = 0; t < box.T.rows(); ++t)
         for (int a = 0; a < 4; ++a)
@@ -243,7 +243,9 @@ TEST(FemBlockLDLT, PartsGiveBitIdenticalFactorsAndSolutions) {
         SCOPED_TRACE(testing::Message() << threads << " threads, " << parts << " parts");
         BlockLDLT f;
         f.analyze(n, pairs, parts);
-        if (couplings == 0) EXPECT_EQ(f.parts(), std::min(2, parts == 0 ? threads : parts));  // the two bodies
+        if (couplings == 0) {
+          EXPECT_EQ(f.parts(), std::min(2, parts == 0 ? threads : parts));  // the two bodies
+        }
         EXPECT_EQ(f.factor_blocks(), ref.factor_blocks());
         if (f.parts() > 1) {
           EXPECT_LE(f.top_updates() + f.largest_bin_updates(), f.factor_updates() - f.factor_updates() / 10);

@@ -24,6 +24,7 @@
 //   if (f.factorize(diag, off)) f.solve(b, x);   // per matrix of that pattern
 #pragma once
 #include <Eigen/Core>
+#include <algorithm>
 #include <utility>
 #include <vector>
 
@@ -64,7 +65,7 @@ class BlockLDLT {
   /// column's blocks): its cost, against 2 · factor_blocks() block-vector products of a solve.
   long long factor_updates() const { return updates_; }
   /// Bins of subtrees of the last analyze() (1: sequential).
-  int parts() const { return static_cast<int>(bin_rows_.size()) + (bin_rows_.empty() ? 1 : 0); }
+  int parts() const { return std::max(1, static_cast<int>(bin_rows_.size())); }
   /// Block products of the factorisation's rows run after the bins (its sequential part), and the
   /// largest bin's: the critical path is their sum, against factor_updates() in sequence.
   long long top_updates() const { return top_updates_; }
