@@ -12,7 +12,8 @@
 // "bench_integrators").
 //
 // Parallel and deterministic: analyze() cuts the elimination tree into disjoint subtrees, dealt to
-// `parts` bins of about equal work, and a top (the rest: the ancestors of the cuts, the densest
+// `parts` bins of about equal work (largest subtree first to the least loaded bin: Graham,
+// "Bounds on multiprocessing timing anomalies", SIAM J. Appl. Math. 17(2), 1969), and a top (the rest: the ancestors of the cuts, the densest
 // rows). factorize() and solve() run the bins in parallel (TBB) and the top after them (before them
 // in the backward substitution). A row of a subtree reads only its own subtree, and every row and
 // every entry of x is summed in the same order as by the sequential algorithm, so the factors and
