@@ -16,6 +16,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <spdlog/spdlog.h>
 
 #include "squeeze/common/error.h"
 #include "squeeze/fem/block_ldlt.h"
@@ -126,6 +127,7 @@ struct LinearContact {
   double c0 = 0;        // m
   double k = 0, c = 0;  // N/m, N·s/m
   int vertex = -1;      // collision index of p (a vertex is in the set once)
+  int body = -1;        // the penetrated object
   double scale = 0;     // m: mean edge length of the object of its first free row (the curvature band
                         // of assemble, the carry limits of carry_contacts)
   Vec3 at[5];           // positions of the stencil's free rows where the contact was linearised
@@ -184,7 +186,9 @@ class ImplicitIntegrator : public TimeIntegrator {
   std::vector<Mat3> edge_H_;
   std::vector<std::array<Mat3, 10>> tet_H_;
   std::vector<LinearContact> contacts_;
-  std::vector<LinearContact> carried_;      // the last substep's contacts, offered to the next (see substep)
+  std::vector<LinearContact> carried_;      // the last substep's contacts by vertex, offered to the next (see substep)
+  bool still_holds(LinearContact& c, const RowMatrixX3d& X) const;
+  const LinearContact* carried_for(int vertex) const;
   std::vector<char> floor_damped_;          // per state row: below the floor at x_n
   BlockMatrix H_;
   // Off-diagonal blocks of each element's vertex pairs (a < b, in the order of pair_code), as
@@ -384,6 +388,7 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
   const WorldData& d = w.data();
   const WorldOptions& o = w.options();
   const State before = s;
+  const IntegratorStats at_start = stats_;
   damp_deformation(w, s, h);
   xn_ = s.x;
   // The inertial target y = x_n + h v_n + h² (g + f_ext / m) of the free rows; fixed rows stay.
@@ -441,6 +446,7 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
   // and halving again only wastes work and leaves a larger velocity (the jump over a shorter h).
   // (An object in free flight, far_, is judged by its vertices' motion relative to its centre of mass.)
   double worst = 0;
+  int worst_i = -1;
   for (size_t b = 0; b < d.bodies.size(); ++b) {
     const int r0 = d.state_row[b];
     if (r0 < 0) continue;
@@ -452,9 +458,18 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
       if (mass > 0) shift /= mass;
     }
     for (int i = r0; i < r0 + d.bodies[b].vertices(); ++i)
-      if (free_[i] >= 0) worst = std::max(worst, (Vec3((x.row(i) - xn_.row(i)).transpose()) - shift).norm() / edge_scale_(i));
+      if (free_[i] >= 0) {
+        const double m = (Vec3((x.row(i) - xn_.row(i)).transpose()) - shift).norm() / edge_scale_(i);
+        if (m > worst) worst = m, worst_i = i;
+      }
   }
-  if (!(worst <= 2 * o_.motion_fraction) && depth < 8 && !(worst >= kJumpRatio * parent_worst)) {
+  const bool halve = !(worst <= 2 * o_.motion_fraction) && depth < 8 && !(worst >= kJumpRatio * parent_worst);
+  spdlog::debug("implicit substep t={:.5f} h={:.3g} depth {}: worst motion {:.3f} edge lengths{}, {} Newton, {} factorisations, "
+                "{} CG, {} contact rounds, {} contacts; worst vertex {}",
+                before.time, h, depth, worst, halve ? " (halved)" : "", stats_.iterations - at_start.iterations,
+                stats_.factorizations - at_start.factorizations, stats_.cg_iterations - at_start.cg_iterations,
+                stats_.contact_rounds - at_start.contact_rounds, contacts_.size(), worst_i);
+  if (halve) {
     s = before;
     substep(w, s, ext, ws, h / 2, depth + 1, worst);
     substep(w, s, ext, ws, h / 2, depth + 1, worst);
@@ -471,6 +486,7 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
   s.time += h;
   ++stats_.substeps;
   carried_ = contacts_;
+  std::sort(carried_.begin(), carried_.end(), [](const LinearContact& a, const LinearContact& b) { return a.vertex < b.vertex; });
 }
 
 // Resting contact: a vertex that a contact held at the end of the last substep is usually found
@@ -489,15 +505,28 @@ void ImplicitIntegrator::carry_contacts() {
   std::sort(fresh.begin(), fresh.end());
   for (LinearContact c : carried_) {
     if (std::binary_search(fresh.begin(), fresh.end(), c.vertex)) continue;
-    const double depth = c.c0 - stencil_dot(c, xn_);
-    if (!(depth > -kCarryMargin * c.scale)) continue;
-    Vec3 drift = Vec3::Zero();  // Σ_s w_s (x_s − at_s): the vertex's motion relative to the tet's point
-    for (int k = 0; k < 5; ++k)
-      if (c.row[k] >= 0) drift += c.w[k] * (Vec3(xn_.row(c.row[k]).transpose()) - c.at[k]);
-    if (!((drift - c.r * c.r.dot(drift)).norm() < kCarryDrift * c.scale)) continue;
-    if (depth <= 0) c.c = 0;
-    contacts_.push_back(c);
+    if (still_holds(c, xn_)) contacts_.push_back(c);
   }
+}
+
+// A carried contact still holds at X while its depth there is above −kCarryMargin edge lengths and
+// its vertex has slid less than kCarryDrift edge lengths along its plane; its damping is switched
+// off where it is not active at X.
+bool ImplicitIntegrator::still_holds(LinearContact& c, const RowMatrixX3d& X) const {
+  const double depth = c.c0 - stencil_dot(c, X);
+  if (!(depth > -kCarryMargin * c.scale)) return false;
+  Vec3 drift = Vec3::Zero();  // Σ_s w_s (x_s − at_s): the vertex's motion relative to the tet's point
+  for (int k = 0; k < 5; ++k)
+    if (c.row[k] >= 0) drift += c.w[k] * (Vec3(X.row(c.row[k]).transpose()) - c.at[k]);
+  if (!((drift - c.r * c.r.dot(drift)).norm() < kCarryDrift * c.scale)) return false;
+  if (depth <= 0) c.c = 0;
+  return true;
+}
+
+const LinearContact* ImplicitIntegrator::carried_for(int vertex) const {
+  auto it = std::lower_bound(carried_.begin(), carried_.end(), vertex,
+                             [](const LinearContact& c, int v) { return c.vertex < v; });
+  return it != carried_.end() && it->vertex == vertex ? &*it : nullptr;
 }
 
 void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetration>& pens, const RowMatrixX3d& x) {
@@ -543,6 +572,17 @@ void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetrat
       }
     c.c0 = p.depth + q;
     c.vertex = p.vertex;
+    c.body = p.body;
+    // Coherence: the last substep held this vertex out of the same object along a plane that still
+    // holds (carry_contacts' limits), and detection now pushes it out the other way: the vertex is
+    // inside a part of that object thinner than its depth estimates can tell apart, and the new
+    // direction would push it through (a jump of the part's thickness at any h). The plane it came
+    // in by is kept.
+    if (const LinearContact* old = carried_for(p.vertex); old && old->body == p.body && old->r.dot(c.r) < 0) {
+      LinearContact k = *old;
+      if (still_holds(k, x)) c = k;
+    }
+
     contacts_.push_back(c);
   }
 }

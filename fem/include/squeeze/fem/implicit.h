@@ -31,7 +31,9 @@
 // (|v| h + ½ |a| h² with every force at the start, capped where the vertex's own edges resist it;
 // an object in free flight, out of reach of everything else, by its motion about its centre of
 // mass only: docs/fem.md); a substep whose solution moved a vertex more than twice that is
-// redone as two halves. Resting contacts are carried from one substep to the next. This keeps contacts resolved at any h: the nominal time step (the scene's
+// redone as two halves. Resting contacts are carried from one substep to the next, and a vertex
+// that detection finds pushed out of the same object the other way than its carried contact (inside
+// a part thinner than its edges, past its mid-plane) keeps the carried plane. This keeps contacts resolved at any h: the nominal time step (the scene's
 // "auto": one frame interval, scene.h) is chosen for the motion one wants to see, not for stability.
 #pragma once
 #include <memory>
