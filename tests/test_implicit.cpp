@@ -196,6 +196,7 @@ TEST(FemBlockLDLT, SolvesSymmetricBlockSystemsOnMeshAndRandomPatterns) {
 // algorithm; bodies apart are cut and the cut takes work off the critical path; precondition()
 // (L in single precision) agrees with solve() to single precision's rounding.
 TEST(FemBlockLDLT, PartsGiveBitIdenticalFactorsAndSolutions) {
+  int pipelined = 0;  // analyses whose top ran on two threads
   for (int couplings : {0, 20}) {
     SCOPED_TRACE(testing::Message() << couplings << " couplings");
     std::vector<std::pair<int, int>> pairs;
@@ -230,6 +231,7 @@ TEST(FemBlockLDLT, PartsGiveBitIdenticalFactorsAndSolutions) {
     BlockLDLT ref;
     ref.analyze(n, pairs, 1);
     ASSERT_EQ(ref.parts(), 1);
+    EXPECT_FALSE(ref.pipelined());
     ASSERT_GE(ref.factor_updates(), BlockLDLT::kParallelUpdates);
     ASSERT_TRUE(ref.factorize(diag, off));
     Eigen::VectorXd x_ref, p_ref;
@@ -247,6 +249,8 @@ TEST(FemBlockLDLT, PartsGiveBitIdenticalFactorsAndSolutions) {
           EXPECT_EQ(f.parts(), std::min(2, parts == 0 ? threads : parts));  // the two bodies
         }
         EXPECT_EQ(f.factor_blocks(), ref.factor_blocks());
+        EXPECT_EQ(f.pipelined(), (parts == 0 ? threads : parts) > 1 && f.top_updates() >= BlockLDLT::kParallelUpdates);
+        pipelined += f.pipelined();
         if (f.parts() > 1) {
           EXPECT_LE(f.top_updates() + f.largest_bin_updates(), f.factor_updates() - f.factor_updates() / 10);
           EXPECT_GE(f.largest_bin_updates() * f.parts() + f.top_updates(), f.factor_updates());
@@ -275,6 +279,51 @@ TEST(FemBlockLDLT, PartsGiveBitIdenticalFactorsAndSolutions) {
       f.solve(b, x);
       EXPECT_TRUE(x == x_ref);
     }
+  }
+  EXPECT_GT(pipelined, 0);  // the joined bodies' top is large enough to run on two threads
+}
+
+// A singular pivot in the top's rows while they run on two threads is refused (the other thread
+// does not wait for it forever), and the next factorisation is the sequential one bit for bit.
+TEST(FemBlockLDLT, PipelinedTopRefusesASingularPivot) {
+  const meshing::TetMesh box = box_tet_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1), Eigen::Vector3i(10, 10, 10));
+  std::vector<std::pair<int, int>> pairs;
+  for (Eigen::Index t = 0; t < box.T.rows(); ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) pairs.emplace_back(std::max(box.T(t, a), box.T(t, b)), std::min(box.T(t, a), box.T(t, b)));
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  const int n = static_cast<int>(box.V.rows());
+  std::mt19937 g(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Eigen::Matrix3d> off(pairs.size()), diag(static_cast<size_t>(n));
+  std::vector<double> row(static_cast<size_t>(n), 1.0);
+  for (size_t q = 0; q < pairs.size(); ++q) {
+    for (int e = 0; e < 9; ++e) off[q](e / 3, e % 3) = u(g);
+    row[pairs[q].first] += off[q].cwiseAbs().sum();
+    row[pairs[q].second] += off[q].cwiseAbs().sum();
+  }
+  for (int i = 0; i < n; ++i) diag[i] = row[i] * Eigen::Matrix3d::Identity();
+  Eigen::VectorXd b = Eigen::VectorXd::NullaryExpr(3 * n, [&] { return u(g); }), x_ref, x;
+  BlockLDLT ref;
+  ref.analyze(n, pairs, 1);
+  ASSERT_TRUE(ref.factorize(diag, off));
+  ref.solve(b, x_ref);
+  BlockLDLT f;
+  f.analyze(n, pairs, 2);
+  ASSERT_TRUE(f.pipelined());
+  const std::vector<int> top = f.top_vertices();
+  ASSERT_GE(top.size(), 3u);
+  for (int v : {top.front(), top[top.size() / 2], top.back()}) {  // first, middle and last in the top
+    SCOPED_TRACE(v);
+    std::vector<Eigen::Matrix3d> bad(diag), bad_off(off);  // vertex v decoupled, zero pivot
+    bad[v].setZero();
+    for (size_t q = 0; q < pairs.size(); ++q)
+      if (pairs[q].first == v || pairs[q].second == v) bad_off[q].setZero();
+    EXPECT_FALSE(f.factorize(bad, bad_off));
+    ASSERT_TRUE(f.factorize(diag, off));
+    f.solve(b, x);
+    EXPECT_TRUE(x == x_ref);
   }
 }
 

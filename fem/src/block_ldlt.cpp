@@ -12,6 +12,8 @@
 #include <atomic>
 #include <cassert>
 #include <cmath>
+#include <thread>
+#include <type_traits>
 
 namespace squeeze::fem {
 
@@ -80,11 +82,35 @@ void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs, in
     updates_ += static_cast<long long>(count_[k]) * (count_[k] + 1) / 2;
   }
   Li_.resize(static_cast<size_t>(Lp_[n]));
+  // The pattern of L, each column's rows ascending (the order in which factorize appends them):
+  // known here, so that a row of the pipelined top can find its slot in a column (its position
+  // among the column's rows) before the rows above it have filled theirs.
+  {
+    std::vector<int> fill(Lp_.begin(), Lp_.end() - 1);
+    std::fill(flag_.begin(), flag_.end(), -1);
+    for (int k = 0; k < n; ++k) {
+      flag_[k] = k;
+      for (int p = Ap_[k]; p < Ap_[k + 1]; ++p)
+        for (int i = Ai_[p]; i < k && flag_[i] != k; i = parent_[i]) {
+          Li_[static_cast<size_t>(fill[i]++)] = k;
+          flag_[i] = k;
+        }
+    }
+  }
   Lx_.resize(Li_.size());
   Dinv_.resize(static_cast<size_t>(n));
   y_.assign(static_cast<size_t>(n), Mat3::Zero());
   pattern_.resize(static_cast<size_t>(n));
   cut(parts, row_cost);
+  // The top's rows on two threads, pipelined (factorize), where the top is large enough.
+  pipelined_ = requested_parts_ > 1 && top_updates_ >= kParallelUpdates && top_rows_.size() >= 2;
+  if (pipelined_) {
+    y2_.assign(static_cast<size_t>(n), Mat3::Zero());
+    flag2_.assign(static_cast<size_t>(n), -1);
+    pattern2_.resize(static_cast<size_t>(n));
+  }
+  done_.assign(static_cast<size_t>(n), 1);
+  for (int k : top_rows_) done_[k] = 0;
 }
 
 // The parallel cut of the elimination tree: greedily cut the subtree of most work (its root goes
@@ -95,6 +121,7 @@ void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs, in
 void BlockLDLT::cut(int parts, const std::vector<long long>& row_cost) {
   const int n = n_;
   if (parts <= 0) parts = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  requested_parts_ = parts;
   bin_rows_.clear();
   bin_pattern_.clear();
   top_rows_.clear();
@@ -194,65 +221,107 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
   assert(static_cast<int>(diag.size()) == n);
   std::fill(count_.begin(), count_.end(), 0);
   std::fill(flag_.begin(), flag_.end(), -1);
+  std::atomic<bool> failed{false};
   // Davis 2005, ldl_numeric, on blocks: row k of L solves L(0:k,0:k) D Y = A(0:k, k) over the
   // pattern of row k (its reach in the elimination tree), Y(i) = block (i, k). A row of a bin
   // reaches only its own subtree: the bins touch disjoint entries of y_, flag_, count_ and L.
-  auto row = [&](int k, int* pattern) {
+  // y, flag, pattern: the workspace of the thread running the row. pipelined: the row runs beside
+  // the one before it (the top on two threads) and waits, for each column i of its pattern, until
+  // the rows above it have put their blocks in column i (count_[i] reaches its slot's position)
+  // and until D(i) is known (done_[i]); it then reads exactly what the sequential row would.
+  auto row = [&](int k, Mat3* y, int* flag, int* pattern, auto pipelined_tag) {
+    constexpr bool pipelined = decltype(pipelined_tag)::value;
     int top = n;
-    flag_[k] = k;
+    flag[k] = k;
     for (int p = Ap_[k]; p < Ap_[k + 1]; ++p) {
       int i = Ai_[p];
       const int s = Asrc_[p];
       if (s < 0)
-        y_[i] += diag[static_cast<size_t>(-1 - s)];
+        y[i] += diag[static_cast<size_t>(-1 - s)];
       else if (s & 1)
-        y_[i] += off[static_cast<size_t>(s >> 1)].transpose();
+        y[i] += off[static_cast<size_t>(s >> 1)].transpose();
       else
-        y_[i] += off[static_cast<size_t>(s >> 1)];
+        y[i] += off[static_cast<size_t>(s >> 1)];
       int len = 0;
-      for (; flag_[i] != k; i = parent_[i]) {
+      for (; flag[i] != k; i = parent_[i]) {
         pattern[len++] = i;
-        flag_[i] = k;
+        flag[i] = k;
       }
       while (len > 0) pattern[--top] = pattern[--len];
     }
-    Mat3 d = y_[k];
-    y_[k].setZero();
+    Mat3 d = y[k];
+    y[k].setZero();
     for (; top < n; ++top) {
       const int i = pattern[top];
-      const Mat3 yi = y_[i];
-      y_[i].setZero();
-      const int p2 = Lp_[i] + count_[i];
-      for (int p = Lp_[i]; p < p2; ++p) y_[Li_[p]].noalias() -= Lx_[p] * yi;
+      int p2;
+      if constexpr (pipelined) {
+        p2 = static_cast<int>(std::lower_bound(Li_.begin() + Lp_[i], Li_.begin() + Lp_[i + 1], k) - Li_.begin());
+        const int above = p2 - Lp_[i];
+        for (int spins = 0; __atomic_load_n(&count_[i], __ATOMIC_ACQUIRE) != above ||
+                            !__atomic_load_n(&done_[i], __ATOMIC_ACQUIRE);
+             ++spins) {
+          if (failed.load(std::memory_order_relaxed)) return false;
+          if (spins > 64) std::this_thread::yield();
+        }
+      } else {
+        p2 = Lp_[i] + count_[i];
+      }
+      const Mat3 yi = y[i];
+      y[i].setZero();
+      for (int p = Lp_[i]; p < p2; ++p) y[Li_[p]].noalias() -= Lx_[p] * yi;
       const Mat3 lki = yi.transpose() * Dinv_[i];  // L(k, i) = Y(i)ᵀ D(i)⁻¹
       d.noalias() -= lki * yi;
-      Li_[p2] = k;
       Lx_[p2] = lki;
-      ++count_[i];
+      if constexpr (pipelined)
+        __atomic_store_n(&count_[i], p2 - Lp_[i] + 1, __ATOMIC_RELEASE);
+      else
+        ++count_[i];
     }
     d = 0.5 * (d + d.transpose());  // symmetric in exact arithmetic
     const double det = d.determinant();
     if (!std::isfinite(det) || det == 0) return false;
     Dinv_[k] = d.inverse();
-    return Dinv_[k].allFinite();
+    if (!Dinv_[k].allFinite()) return false;
+    if constexpr (pipelined) __atomic_store_n(&done_[k], 1, __ATOMIC_RELEASE);
+    return true;
   };
-  std::atomic<bool> ok{true};
   if (!bin_rows_.empty())
     tbb::parallel_for(0, static_cast<int>(bin_rows_.size()), [&](int b) {
       for (int k : bin_rows_[b])
-        if (!ok.load(std::memory_order_relaxed) || !row(k, bin_pattern_[b].data())) {
-          ok = false;
+        if (failed.load(std::memory_order_relaxed) || !row(k, y_.data(), flag_.data(), bin_pattern_[b].data(), std::false_type{})) {
+          failed = true;
           return;
         }
     });
-  if (ok)
+  if (!failed && pipelined_) {
+    // The top's rows on two TBB tasks, each taking the next row not yet taken: a row waits only
+    // for rows taken before it, which a running task holds, so one task alone also gets through
+    // them all (TBB need not run both at once: inside the planner's parallel expansions it runs
+    // the second only if a thread is idle). Each column receives its blocks in row order and every
+    // sum runs in the sequential order: the factor is bit for bit the sequential one.
+    std::fill(flag2_.begin(), flag2_.end(), -1);
+    for (int k : top_rows_) done_[k] = 0;
+    std::atomic<size_t> next{0};
+    tbb::parallel_for(0, 2, [&](int lane) {
+      Mat3* y = lane == 0 ? y_.data() : y2_.data();
+      int* flag = lane == 0 ? flag_.data() : flag2_.data();
+      int* pattern = lane == 0 ? pattern_.data() : pattern2_.data();
+      for (size_t r = next++; r < top_rows_.size(); r = next++)
+        if (failed.load(std::memory_order_relaxed) || !row(top_rows_[r], y, flag, pattern, std::true_type{})) {
+          failed = true;
+          return;
+        }
+    }, tbb::simple_partitioner());
+  } else if (!failed) {
     for (int k : top_rows_)
-      if (!row(k, pattern_.data())) {
-        ok = false;
+      if (!row(k, y_.data(), flag_.data(), pattern_.data(), std::false_type{})) {
+        failed = true;
         break;
       }
-  if (!ok) {
+  }
+  if (failed) {
     for (Mat3& y : y_) y.setZero();
+    for (Mat3& y : y2_) y.setZero();
     return false;
   }
   // L rounded to single precision for precondition(): half the bytes per substitution.

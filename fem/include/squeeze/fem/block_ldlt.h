@@ -15,7 +15,9 @@
 // `parts` bins of about equal work (largest subtree first to the least loaded bin: Graham,
 // "Bounds on multiprocessing timing anomalies", SIAM J. Appl. Math. 17(2), 1969), and a top (the rest: the ancestors of the cuts, the densest
 // rows). factorize() and solve() run the bins in parallel (TBB) and the top after them (before them
-// in the backward substitution). A row of a subtree reads only its own subtree, and every row and
+// in the backward substitution); factorize() runs the top's rows on two threads, pipelined (row k
+// beside row k − 1, waiting per column until the rows above it have put their blocks in it: the
+// column entries arrive in row order, so every sum is the sequential one). A row of a subtree reads only its own subtree, and every row and
 // every entry of x is summed in the same order as by the sequential algorithm, so the factors and
 // solutions are bit for bit those of one part, whatever the number of parts or threads
 // (FemBlockLDLT.PartsGiveBitIdenticalFactorsAndSolutions).
@@ -71,6 +73,18 @@ class BlockLDLT {
   /// largest bin's: the critical path is their sum, against factor_updates() in sequence.
   long long top_updates() const { return top_updates_; }
   long long largest_bin_updates() const { return bin_updates_; }
+  /// Whether factorize() runs the top's rows on two threads, pipelined: row k beside row k − 1,
+  /// each waiting per column for the blocks of the rows above it (bit for bit the sequential
+  /// factor). Chosen by analyze() when more than one part was asked for (or TBB allows more than
+  /// one thread) and the top has at least kParallelUpdates block products.
+  bool pipelined() const { return pipelined_; }
+  /// The block rows (in the numbering of analyze's pairs) of the top, in elimination order.
+  std::vector<int> top_vertices() const {
+    std::vector<int> v;
+    v.reserve(top_rows_.size());
+    for (int k : top_rows_) v.push_back(perm_[static_cast<size_t>(k)]);
+    return v;
+  }
 
   /// Below this many block products per factorisation analyze() keeps one part.
   static constexpr long long kParallelUpdates = 200000;
@@ -96,6 +110,11 @@ class BlockLDLT {
   // Workspace of factorize (mutable scratch of solve).
   std::vector<Mat3> y_;
   std::vector<int> flag_, pattern_, count_;
+  // The pipelined top (factorize): the second thread's workspace, and per row whether D is known.
+  bool pipelined_ = false;
+  int requested_parts_ = 1;
+  std::vector<Mat3> y2_;
+  std::vector<int> flag2_, pattern2_, done_;
   mutable Eigen::VectorXd w_;
   // The parallel cut (analyze): the rows of each bin (ascending), the top rows (ascending), each
   // column's first block whose row is in the top (Lp_[j] for a top column), and the columns with
