@@ -190,6 +190,24 @@ TEST(FemBlockLDLT, SolvesSymmetricBlockSystemsOnMeshAndRandomPatterns) {
   EXPECT_FALSE(f.factorize({Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Zero()}, {Eigen::Matrix3d::Zero()}));
 }
 
+namespace {
+// A symmetric matrix of the pattern `pairs` (n block rows): off-diagonal blocks uniform in [−1, 1]
+// drawn from g, diagonal blocks that dominate their rows (positive definite).
+void dominant_blocks(const std::vector<std::pair<int, int>>& pairs, int n, std::mt19937& g,
+                     std::vector<Eigen::Matrix3d>& off, std::vector<Eigen::Matrix3d>& diag) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  off.resize(pairs.size());
+  diag.resize(static_cast<size_t>(n));
+  std::vector<double> row(static_cast<size_t>(n), 1.0);
+  for (size_t q = 0; q < pairs.size(); ++q) {
+    for (int e = 0; e < 9; ++e) off[q](e / 3, e % 3) = u(g);
+    row[pairs[q].first] += off[q].cwiseAbs().sum();
+    row[pairs[q].second] += off[q].cwiseAbs().sum();
+  }
+  for (int i = 0; i < n; ++i) diag[i] = row[i] * Eigen::Matrix3d::Identity();
+}
+}  // namespace
+
 // The parallel cut of the elimination tree changes only who computes what: on the vertex graphs of
 // two tetrahedral boxes (two bodies), apart or joined by contact-like couplings, the factors and
 // solutions with 1 to 4 parts, under 1 or 2 threads, are bit for bit those of the sequential
@@ -217,14 +235,8 @@ TEST(FemBlockLDLT, PartsGiveBitIdenticalFactorsAndSolutions) {
     std::sort(pairs.begin(), pairs.end());
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
     std::uniform_real_distribution<double> u(-1, 1);
-    std::vector<Eigen::Matrix3d> off(pairs.size()), diag(static_cast<size_t>(n));
-    std::vector<double> row(static_cast<size_t>(n), 1.0);
-    for (size_t q = 0; q < pairs.size(); ++q) {
-      for (int e = 0; e < 9; ++e) off[q](e / 3, e % 3) = u(g);
-      row[pairs[q].first] += off[q].cwiseAbs().sum();
-      row[pairs[q].second] += off[q].cwiseAbs().sum();
-    }
-    for (int i = 0; i < n; ++i) diag[i] = row[i] * Eigen::Matrix3d::Identity();
+    std::vector<Eigen::Matrix3d> off, diag;
+    dominant_blocks(pairs, n, g, off, diag);
     Eigen::VectorXd b(3 * n);
     for (int i = 0; i < 3 * n; ++i) b[i] = u(g);
 
@@ -296,14 +308,8 @@ TEST(FemBlockLDLT, PipelinedTopRefusesASingularPivot) {
   const int n = static_cast<int>(box.V.rows());
   std::mt19937 g(7);
   std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<Eigen::Matrix3d> off(pairs.size()), diag(static_cast<size_t>(n));
-  std::vector<double> row(static_cast<size_t>(n), 1.0);
-  for (size_t q = 0; q < pairs.size(); ++q) {
-    for (int e = 0; e < 9; ++e) off[q](e / 3, e % 3) = u(g);
-    row[pairs[q].first] += off[q].cwiseAbs().sum();
-    row[pairs[q].second] += off[q].cwiseAbs().sum();
-  }
-  for (int i = 0; i < n; ++i) diag[i] = row[i] * Eigen::Matrix3d::Identity();
+  std::vector<Eigen::Matrix3d> off, diag;
+  dominant_blocks(pairs, n, g, off, diag);
   Eigen::VectorXd b = Eigen::VectorXd::NullaryExpr(3 * n, [&] { return u(g); }), x_ref, x;
   BlockLDLT ref;
   ref.analyze(n, pairs, 1);
