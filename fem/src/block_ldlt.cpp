@@ -83,8 +83,9 @@ void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs, in
   }
   Li_.resize(static_cast<size_t>(Lp_[n]));
   // The pattern of L, each column's rows ascending (the order in which factorize appends them):
-  // known here, so that a row of the pipelined top can find its slot in a column (its position
-  // among the column's rows) before the rows above it have filled theirs.
+  // known here, so that the cut finds each column's blocks in the top's rows, and a row of the
+  // pipelined top its slot in a column (its position among the column's rows) before the rows
+  // above it have filled theirs.
   {
     std::vector<int> fill(Lp_.begin(), Lp_.end() - 1);
     std::fill(flag_.begin(), flag_.end(), -1);
@@ -109,8 +110,7 @@ void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs, in
     flag2_.assign(static_cast<size_t>(n), -1);
     pattern2_.resize(static_cast<size_t>(n));
   }
-  done_.assign(static_cast<size_t>(n), 1);
-  for (int k : top_rows_) done_[k] = 0;
+  done_.assign(static_cast<size_t>(n), 1);  // factorize clears the top's before it runs them
 }
 
 // The parallel cut of the elimination tree: greedily cut the subtree of most work (its root goes
@@ -194,24 +194,18 @@ void BlockLDLT::cut(int parts, const std::vector<long long>& row_cost) {
   }
   for (int k = 0; k < n; ++k)
     if (top[k]) top_rows_.push_back(k);
-  // Each column's blocks in top rows: the rows of a column are ancestors of it, in ascending order,
-  // and the top holds every ancestor of its nodes, so these blocks are the column's last.
-  std::vector<int> in_top(static_cast<size_t>(n), 0);
-  if (!bin_rows_.empty()) {
-    std::fill(flag_.begin(), flag_.end(), -1);
-    for (int k : top_rows_) {
-      flag_[k] = k;
-      for (int p = Ap_[k]; p < Ap_[k + 1]; ++p)
-        for (int i = Ai_[p]; i < k && flag_[i] != k; i = parent_[i]) {
-          if (!top[i]) ++in_top[i];
-          flag_[i] = k;
-        }
-    }
-  }
+  // Each column's blocks in top rows (from split_[j] on): the rows of a column are ancestors of it,
+  // in ascending order (Li_, filled by analyze before the cut), and the top holds every ancestor of
+  // its nodes, so these blocks are the column's last.
   split_.resize(static_cast<size_t>(n));
   split_cols_.clear();
   for (int j = 0; j < n; ++j) {
-    split_[j] = top[j] ? Lp_[j] : Lp_[j + 1] - in_top[j];
+    int p = Lp_[j + 1];
+    if (top[j])
+      p = Lp_[j];
+    else
+      while (p > Lp_[j] && top[Li_[static_cast<size_t>(p - 1)]]) --p;
+    split_[j] = p;
     if (split_[j] < Lp_[j + 1]) split_cols_.push_back(j);
   }
 }
