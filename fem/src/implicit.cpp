@@ -745,16 +745,28 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
   const WorldData& d = w.data();
   const WorldOptions& o = w.options();
   H_.zero();
-  // An element's symmetric block matrix over its n vertices: diagonal blocks to the free vertices,
-  // the block (b, a), a < b, of each pair through its precomputed code.
-  auto scatter = [&](int n, const int* rows, const int* codes, auto&& block) {
+  // The inertia, floor, attachment and element blocks are assembled in parts (part −1: all rows).
+  // A block belongs to the part of its row (the larger free index of an off-diagonal block); an
+  // element with rows in both parts is evaluated by both, each adding its own blocks. Every block
+  // receives its terms in the same order whatever the parts: bit for bit the sequential sum, on
+  // one thread or two. mine: a free row (−1: fixed) of the part; mine_off: an off-diagonal block
+  // (its code, −1: none) of the part.
+  const int split = assembly_split_;
+  const auto& pairs = H_.pairs();
+  auto mine = [&](int part, int f) { return f >= 0 && (part < 0 || (f >= split) == (part == 1)); };
+  auto mine_off = [&](int part, int c) {
+    return c >= 0 && (part < 0 || (pairs[static_cast<size_t>(c >> 1)].first >= split) == (part == 1));
+  };
+  // An element's symmetric block matrix over its n vertices, the blocks of one part: diagonal
+  // blocks to the free vertices, the block (b, a), a < b, of each pair through its precomputed code.
+  auto scatter = [&](int part, int n, const int* rows, const int* codes, auto&& block) {
     int q = 0;
     for (int a = 0; a < n; ++a) {
       const int A = rows[a] >= 0 ? free_[rows[a]] : -1;  // −1: a fixed vertex (rigid or pinned)
-      if (A >= 0) H_.add_diag(A, block(a, a));
+      if (mine(part, A)) H_.add_diag(A, block(a, a));
       for (int b = a + 1; b < n; ++b, ++q) {
         const int c = codes[q];
-        if (c < 0) continue;
+        if (!mine_off(part, c)) continue;
         if (c & 1)
           H_.add_off(c >> 1, block(b, a).transpose());
         else
@@ -762,18 +774,9 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
       }
     }
   };
-  // The inertia, floor, attachment and element blocks of the rows of one part (part −1: all
-  // rows). A block belongs to the part of its row (the larger free index of an off-diagonal
-  // block); an element with rows in both parts is evaluated by both, each adding its own blocks.
-  // Every block receives its terms in the same order whatever the parts: bit for bit the
-  // sequential sum, on one thread or two.
-  const int split = assembly_split_;
-  const auto& pairs = H_.pairs();
   auto assemble_part = [&](int part) {
-    auto mine = [&](int f) { return f >= 0 && (part < 0 || (f >= split) == (part == 1)); };
-    auto mine_off = [&](int c) { return c >= 0 && (part < 0 || (pairs[static_cast<size_t>(c >> 1)].first >= split) == (part == 1)); };
     for (size_t f = 0; f < free_rows_.size(); ++f) {
-      if (!mine(static_cast<int>(f))) continue;
+      if (!mine(part, static_cast<int>(f))) continue;
       const int i = free_rows_[f];
       Mat3 M = (d.mass(i) / (h * h)) * Mat3::Identity();
       if (o.floor) {
@@ -818,35 +821,25 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
     }
     for (size_t e = 0; e < d.edges.size(); ++e) {
       const auto& E = d.edges[e];
-      const int fi = free_[E.i], fj = free_[E.j];
-      if (!mine(fi) && !mine(fj)) continue;
+      if (!mine(part, free_[E.i]) && !mine(part, free_[E.j])) continue;
       const Mat3 He = buffered ? edge_H_[e] : edge_block(e);
-      if (mine(fi)) H_.add_diag(fi, He);
-      if (mine(fj)) H_.add_diag(fj, He);
-      const int c = edge_block_[e];
-      if (mine_off(c)) H_.add_off(c >> 1, (c & 1) ? Mat3(-He.transpose()) : Mat3(-He));
+      const int rows[2] = {E.i, E.j};
+      scatter(part, 2, rows, &edge_block_[e], [&](int a, int b) -> Mat3 { return a == b ? He : Mat3(-He); });
     }
     for (size_t t = 0; t < d.tet_elems.size(); ++t) {
       const auto& T = d.tet_elems[t];
-      if (!mine(free_[T.v[0]]) && !mine(free_[T.v[1]]) && !mine(free_[T.v[2]]) && !mine(free_[T.v[3]])) continue;
+      if (!mine(part, free_[T.v[0]]) && !mine(part, free_[T.v[1]]) && !mine(part, free_[T.v[2]]) &&
+          !mine(part, free_[T.v[3]]))
+        continue;
       Mat3 own[10];
       const Mat3* Hd = own;
       if (buffered)
         Hd = tet_H_[t].data();
       else
         tet_blocks(t, own, own + 4);
-      const Mat3* Hl = Hd + 4;
-      const int* codes = tet_block_[t].data();
-      for (int a = 0; a < 4; ++a)
-        if (mine(free_[T.v[a]])) H_.add_diag(free_[T.v[a]], Hd[a]);
-      for (int q = 0; q < 6; ++q) {
-        const int c = codes[q];
-        if (!mine_off(c)) continue;
-        if (c & 1)
-          H_.add_off(c >> 1, Hl[q].transpose());
-        else
-          H_.add_off(c >> 1, Hl[q]);
-      }
+      const Mat3* Hl = Hd + 4;  // block (b, a), a < b, at the pair's index a (7 − a) / 2 + b − a − 1
+      scatter(part, 4, T.v, tet_block_[t].data(),
+              [&](int b, int a) -> const Mat3& { return a == b ? Hd[a] : Hl[a * (7 - a) / 2 + b - a - 1]; });
     }
   };
   if (split > 0)
@@ -859,7 +852,7 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
     const double kc = (depth > -kCurvatureBand * c.scale ? c.k : 0.0) + c.c / h;
     if (!(kc > 0)) continue;
     const Mat3 rr = c.r * c.r.transpose();
-    scatter(5, c.row, contact_block_[k].data(), [&](int a, int b) -> Mat3 { return (kc * c.w[a] * c.w[b]) * rr; });
+    scatter(-1, 5, c.row, contact_block_[k].data(), [&](int a, int b) -> Mat3 { return (kc * c.w[a] * c.w[b]) * rr; });
   }
 }
 
