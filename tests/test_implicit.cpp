@@ -128,6 +128,33 @@ TEST(FemKernels, VolumeHessianMatchesFiniteDifferences) {
   }
 }
 
+namespace {
+// The vertex pairs of a tetrahedral mesh's elements, (I, J) with I > J, shifted by offset, appended
+// to pairs (not sorted, may repeat).
+void add_tet_pairs(const meshing::TetMesh& m, int offset, std::vector<std::pair<int, int>>& pairs) {
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b)
+        pairs.emplace_back(offset + std::max(m.T(t, a), m.T(t, b)), offset + std::min(m.T(t, a), m.T(t, b)));
+}
+
+// A symmetric matrix of the pattern `pairs` (n block rows): off-diagonal blocks uniform in [−1, 1]
+// drawn from g, diagonal blocks that dominate their rows (positive definite).
+void dominant_blocks(const std::vector<std::pair<int, int>>& pairs, int n, std::mt19937& g,
+                     std::vector<Eigen::Matrix3d>& off, std::vector<Eigen::Matrix3d>& diag) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  off.resize(pairs.size());
+  diag.resize(static_cast<size_t>(n));
+  std::vector<double> row(static_cast<size_t>(n), 1.0);
+  for (size_t q = 0; q < pairs.size(); ++q) {
+    for (int e = 0; e < 9; ++e) off[q](e / 3, e % 3) = u(g);
+    row[pairs[q].first] += off[q].cwiseAbs().sum();
+    row[pairs[q].second] += off[q].cwiseAbs().sum();
+  }
+  for (int i = 0; i < n; ++i) diag[i] = row[i] * Eigen::Matrix3d::Identity();
+}
+}  // namespace
+
 // BlockLDLT solves symmetric block systems exactly (residual at rounding level against the dense
 // matrix) on the vertex graph of a tetrahedral mesh and on random graphs, positive definite or
 // indefinite, refactorises a second matrix of the same pattern, and refuses a singular pivot.
@@ -143,10 +170,7 @@ TEST(FemBlockLDLT, SolvesSymmetricBlockSystemsOnMeshAndRandomPatterns) {
   {
     const meshing::TetMesh box = box_tet_mesh(Vec3(0, 0, 0), Vec3(1, 0.5, 0.3), Eigen::Vector3i(6, 3, 2));
     std::vector<std::pair<int, int>> pairs;
-    for (Eigen::Index t = 0; t < box.T.rows(); ++t)
-      for (int a = 0; a < 4; ++a)
-        for (int b = a + 1; b < 4; ++b)
-          pairs.emplace_back(std::max(box.T(t, a), box.T(t, b)), std::min(box.T(t, a), box.T(t, b)));
+    add_tet_pairs(box, 0, pairs);
     std::sort(pairs.begin(), pairs.end());
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
     patterns.emplace_back(static_cast<int>(box.V.rows()), pairs);
@@ -190,23 +214,6 @@ TEST(FemBlockLDLT, SolvesSymmetricBlockSystemsOnMeshAndRandomPatterns) {
   EXPECT_FALSE(f.factorize({Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Zero()}, {Eigen::Matrix3d::Zero()}));
 }
 
-namespace {
-// A symmetric matrix of the pattern `pairs` (n block rows): off-diagonal blocks uniform in [−1, 1]
-// drawn from g, diagonal blocks that dominate their rows (positive definite).
-void dominant_blocks(const std::vector<std::pair<int, int>>& pairs, int n, std::mt19937& g,
-                     std::vector<Eigen::Matrix3d>& off, std::vector<Eigen::Matrix3d>& diag) {
-  std::uniform_real_distribution<double> u(-1, 1);
-  off.resize(pairs.size());
-  diag.resize(static_cast<size_t>(n));
-  std::vector<double> row(static_cast<size_t>(n), 1.0);
-  for (size_t q = 0; q < pairs.size(); ++q) {
-    for (int e = 0; e < 9; ++e) off[q](e / 3, e % 3) = u(g);
-    row[pairs[q].first] += off[q].cwiseAbs().sum();
-    row[pairs[q].second] += off[q].cwiseAbs().sum();
-  }
-  for (int i = 0; i < n; ++i) diag[i] = row[i] * Eigen::Matrix3d::Identity();
-}
-}  // namespace
 
 // The parallel cut of the elimination tree changes only who computes what: on the vertex graphs of
 // two tetrahedral boxes (two bodies), apart or joined by contact-like couplings, the factors and
@@ -221,10 +228,7 @@ TEST(FemBlockLDLT, PartsGiveBitIdenticalFactorsAndSolutions) {
     int n = 0;
     for (const Eigen::Vector3i& cells : {Eigen::Vector3i(14, 7, 6), Eigen::Vector3i(9, 9, 9)}) {
       const meshing::TetMesh box = box_tet_mesh(Vec3(0, 0, 0), Vec3(1, 0.5, 0.4), cells);
-      for (Eigen::Index t = 0; t < box.T.rows(); ++t)
-        for (int a = 0; a < 4; ++a)
-          for (int b = a + 1; b < 4; ++b)
-            pairs.emplace_back(n + std::max(box.T(t, a), box.T(t, b)), n + std::min(box.T(t, a), box.T(t, b)));
+      add_tet_pairs(box, n, pairs);
       n += static_cast<int>(box.V.rows());
     }
     std::mt19937 g(5);
@@ -300,9 +304,7 @@ TEST(FemBlockLDLT, PartsGiveBitIdenticalFactorsAndSolutions) {
 TEST(FemBlockLDLT, PipelinedTopRefusesASingularPivot) {
   const meshing::TetMesh box = box_tet_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1), Eigen::Vector3i(10, 10, 10));
   std::vector<std::pair<int, int>> pairs;
-  for (Eigen::Index t = 0; t < box.T.rows(); ++t)
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b) pairs.emplace_back(std::max(box.T(t, a), box.T(t, b)), std::min(box.T(t, a), box.T(t, b)));
+  add_tet_pairs(box, 0, pairs);
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   const int n = static_cast<int>(box.V.rows());
@@ -677,8 +679,10 @@ namespace {
 // A soft 10 cm cube of 10 × 10 × 10 cells (mean edge about 1.3 cm: gravity alone moves a free
 // vertex ½ g h² = 12 mm in a step, more than half an edge) under gravity at h = 1/20 s:
 // resting on a rigid slab (`support` "slab": penalty contacts), hanging from its pinned top face
-// ("pins"), or free ("none"). Its world options are soft_cube_options() unless given; `bottom`
-// is the height of its lowest face (m; the slab's top is at −0.001).
+// ("pins"), free ("none"), or beside a rigid blade 4 mm thick ("blade": the planes x = blade and
+// x = blade + 0.004 m, 40 cm each way, so its corners are far outside the cube; the cube's column
+// of vertices at x = 0 is the one nearest to it). Its world options are soft_cube_options() unless
+// given; `bottom` is the height of its lowest face (m; the slab's top is at −0.001).
 WorldOptions soft_cube_options() {
   WorldOptions o;
   o.integrator = "implicit";
@@ -688,7 +692,8 @@ WorldOptions soft_cube_options() {
   return o;
 }
 
-World soft_cube(const std::string& support, const WorldOptions& o = soft_cube_options(), double bottom = 0) {
+World soft_cube(const std::string& support, const WorldOptions& o = soft_cube_options(), double bottom = 0,
+                double blade = 0.0005) {
   World w(o);
   Material m;
   m.k_distance = m.k_volume = 50;
@@ -698,6 +703,9 @@ World soft_cube(const std::string& support, const WorldOptions& o = soft_cube_op
       box_tet_mesh(Vector3d(-0.05, bottom, -0.05), Vector3d(0.05, bottom + 0.1, 0.05), Eigen::Vector3i(10, 10, 10)), m));
   if (support == "slab")
     w.add_body(Body(box_tet_mesh(Vector3d(-0.2, -0.05, -0.2), Vector3d(0.2, -0.001, 0.2), Eigen::Vector3i(1, 1, 1)),
+                    Material{}, true));
+  if (support == "blade")
+    w.add_body(Body(box_tet_mesh(Vector3d(blade, -0.2, -0.2), Vector3d(blade + 0.004, 0.2, 0.2), Eigen::Vector3i(1, 1, 1)),
                     Material{}, true));
   if (support == "pins") w.pin(Eigen::AlignedBox3d(Vector3d(-1, 0.099, -1), Vector3d(1, 1, 1)));
   w.prepare();
@@ -809,15 +817,7 @@ TEST(FemImplicit, AThinBladeHoldsWhatIsPressedAgainstIt) {
       o.rest_overlap = false;
       o.gravity = Vector3d(load, 0, 0);
       o.contact_stiffness = 500;
-      World w(o);
-      Material m;
-      m.k_distance = m.k_volume = 50;
-      m.damping_distance = m.damping_volume = 0.01;
-      m.deformation_damping = 20;
-      w.add_body(Body(box_tet_mesh(Vector3d(-0.05, 0, -0.05), Vector3d(0.05, 0.1, 0.05), Eigen::Vector3i(10, 10, 10)), m));
-      w.add_body(Body(box_tet_mesh(Vector3d(gap, -0.2, -0.2), Vector3d(gap + 0.004, 0.2, 0.2), Eigen::Vector3i(1, 1, 1)),
-                      Material{}, true));
-      w.prepare();
+      World w = soft_cube("blade", o, 0, gap);
       State s = w.initial_state();
       const int n = w.body(0).vertices();
       const double x0 = s.x.col(0).head(n).mean();
