@@ -102,9 +102,10 @@ void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs, in
   Dinv_.resize(static_cast<size_t>(n));
   y_.assign(static_cast<size_t>(n), Mat3::Zero());
   pattern_.resize(static_cast<size_t>(n));
+  if (parts <= 0) parts = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   cut(parts, row_cost);
   // The top's rows on two threads, pipelined (factorize), where the top is large enough.
-  pipelined_ = requested_parts_ > 1 && top_updates_ >= kParallelUpdates && top_rows_.size() >= 2;
+  pipelined_ = parts > 1 && top_updates_ >= kParallelUpdates && top_rows_.size() >= 2;
   if (pipelined_) {
     y2_.assign(static_cast<size_t>(n), Mat3::Zero());
     flag2_.assign(static_cast<size_t>(n), -1);
@@ -117,11 +118,9 @@ void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs, in
 // to the top, its children become subtrees) while the estimated critical path, the top's work plus
 // max(largest subtree, subtrees' work / parts), falls; keep the best; deal the subtrees to the
 // bins largest first, each to the least loaded bin (Graham's LPT rule). Ties go to the lower index:
-// the cut is a function of the pattern and the number of parts.
+// the cut is a function of the pattern and the number of parts (>= 1, resolved by analyze).
 void BlockLDLT::cut(int parts, const std::vector<long long>& row_cost) {
   const int n = n_;
-  if (parts <= 0) parts = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
-  requested_parts_ = parts;
   bin_rows_.clear();
   bin_pattern_.clear();
   top_rows_.clear();

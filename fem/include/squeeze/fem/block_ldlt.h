@@ -112,7 +112,6 @@ class BlockLDLT {
   std::vector<int> flag_, pattern_, count_;
   // The pipelined top (factorize): the second thread's workspace, and per row whether D is known.
   bool pipelined_ = false;
-  int requested_parts_ = 1;
   std::vector<Mat3> y2_;
   std::vector<int> flag2_, pattern2_, done_;
   mutable Eigen::VectorXd w_;
