@@ -15,8 +15,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <string>
 #include <vector>
 #include <tbb/parallel_for.h>
+#include "squeeze/common/error.h"
 #include "squeeze/fem/constraints.h"
 #include "squeeze/fem/implicit.h"
 #include "squeeze/fem/integrator.h"
@@ -130,9 +134,7 @@ struct Vbd : TimeIntegrator {
   }
 };
 
-int main(int argc, char** argv) {
-  const std::string file = argc > 1 ? argv[1] : SQUEEZE_SOURCE_DIR "/bench/scenes/ball_drop.json";
-  const double duration = argc > 2 ? std::atof(argv[2]) : 1.0;
+int run_experiment(const std::string& file, double duration) {
   Scene scene = load_scene(file);
   scene.integrator = "implicit";
   scene.time_step.reset();
@@ -140,6 +142,7 @@ int main(int argc, char** argv) {
   const int steps = std::lround(duration / built.world.time_step());
   double edge = 0; int nb = 0;
   for (int b = 0; b < built.world.bodies(); ++b) if (!built.world.body(b).rigid) edge += built.world.body(b).mean_edge_length(), ++nb;
+  if (nb == 0) throw InputError(file + ": no deformable object to compare the solvers on");
   edge /= nb;
   auto run = [&](std::unique_ptr<TimeIntegrator> integ, std::vector<RowMatrixX3d>* traj, const std::vector<RowMatrixX3d>* ref, const char* label) {
     SceneWorld w = built;
@@ -194,5 +197,22 @@ int main(int argc, char** argv) {
   for (int n : {5, 10, 20, 50, 100, 200}) {
     char label[64]; std::snprintf(label, sizeof label, "VBD, %d iterations per step", n);
     run(std::make_unique<Vbd>(n), nullptr, &ref, label);
+  }
+  return 0;
+}
+
+int main(int argc, char** argv) {
+  const std::string file = argc > 1 ? argv[1] : SQUEEZE_SOURCE_DIR "/bench/scenes/ball_drop.json";
+  char* end = nullptr;
+  const double duration = argc > 2 ? std::strtod(argv[2], &end) : 1.0;
+  if (argc > 2 && (end == argv[2] || *end != '\0' || !(duration > 0) || !std::isfinite(duration))) {
+    std::fprintf(stderr, "vbd_experiment: SECONDS must be a positive number, got '%s'\n", argv[2]);
+    return 2;
+  }
+  try {
+    return run_experiment(file, duration);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "vbd_experiment: %s\n", e.what());
+    return 2;
   }
 }
