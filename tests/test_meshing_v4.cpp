@@ -13,6 +13,7 @@
 #include "squeeze/meshing/mesh_pipeline.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tet_faces.h"
+#include "squeeze/meshing/tetrahedralize.h"
 
 namespace {
 
@@ -392,6 +393,81 @@ TEST(MeshingV4, ThickBoundarySliversAreMovedNotPeeled) {
   EXPECT_LE(r.deviation_out, 0.015 * diag);
   EXPECT_LE(r.deviation_in, 0.005 * diag);
   EXPECT_EQ(r.quality.components, 5);
+}
+
+}  // namespace
+
+namespace {
+
+/// A closed hemispherical shell: outer radius R, wall `thickness`, nu segments around, nv rings
+/// from the pole to the rim (both sheets), the rim closed by a band of quads; outward triangles.
+SurfaceMesh hemispherical_shell(double R, double thickness, int nu, int nv) {
+  std::vector<Vec3> V;
+  std::vector<std::array<int, 3>> F;
+  const int per_sheet = 1 + nv * nu;
+  auto id = [&](int sheet, int ring, int j) { return sheet * per_sheet + (ring == 0 ? 0 : 1 + (ring - 1) * nu + (j % nu)); };
+  for (int sheet = 0; sheet < 2; ++sheet) {
+    const double r = sheet == 0 ? R : R - thickness;
+    V.emplace_back(0, 0, r);
+    for (int ring = 1; ring <= nv; ++ring) {
+      const double polar = 0.5 * M_PI * ring / nv;
+      for (int j = 0; j < nu; ++j) {
+        const double a = 2 * M_PI * j / nu;
+        V.emplace_back(r * std::sin(polar) * std::cos(a), r * std::sin(polar) * std::sin(a), r * std::cos(polar));
+      }
+    }
+  }
+  auto add = [&](int sheet, int a, int b, int c) {
+    if (sheet == 0) F.push_back({a, b, c});
+    else F.push_back({a, c, b});  // the inner sheet faces the hollow
+  };
+  for (int sheet = 0; sheet < 2; ++sheet) {
+    for (int j = 0; j < nu; ++j) add(sheet, id(sheet, 0, 0), id(sheet, 1, j), id(sheet, 1, j + 1));
+    for (int ring = 1; ring < nv; ++ring)
+      for (int j = 0; j < nu; ++j) {
+        const int a = id(sheet, ring, j), b = id(sheet, ring + 1, j), c = id(sheet, ring + 1, j + 1), d = id(sheet, ring, j + 1);
+        add(sheet, a, b, c), add(sheet, a, c, d);
+      }
+  }
+  for (int j = 0; j < nu; ++j) {  // the rim
+    const int a = id(0, nv, j), b = id(1, nv, j), c = id(1, nv, j + 1), d = id(0, nv, j + 1);
+    F.push_back({a, b, c}), F.push_back({a, c, d});
+  }
+  SurfaceMesh s;
+  s.V.resize(static_cast<Eigen::Index>(V.size()), 3);
+  for (size_t i = 0; i < V.size(); ++i) s.V.row(static_cast<Eigen::Index>(i)) = V[i].transpose();
+  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t i = 0; i < F.size(); ++i) s.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
+  return s;
+}
+
+// A 4 mm hemispherical shell of radius 0.2 m whose triangles are 6.5 times its thickness: the
+// Delaunay tetrahedralization of its own surface is made conforming, then a refinement round's
+// splits between the two sheets cannot be recovered within the cap. Refinement used to go on for
+// six more rounds on a triangulation classified by the winding number: 2,000 → 6,000 points,
+// 18,077 tetrahedra, 8 s per attempt (the whole `squeeze mesh` at 150: 18 s, over the 15 s
+// bound). It now stops where conformity is lost. The pipeline's mesh (simplified boundary, not
+// conforming either) keeps the volume, the outer bound and the dihedral floor; its inner
+// deviation is 0.24 % of the diagonal for one triangulation of this shell and 0.59 % for this one
+// (docs/meshing.md, "What is left"), so only twice the bound is asserted here.
+TEST(MeshingV4, ThinShellRefinementStopsWhereConformityIsLost) {
+  const SurfaceMesh s = hemispherical_shell(0.2, 0.004, 48, 12);
+  squeeze::meshing::TetrahedralizeOptions t;
+  t.target_tets = 150;
+  squeeze::meshing::TetrahedralizeStats st;
+  const squeeze::meshing::TetMesh m = squeeze::meshing::tetrahedralize(s, t, &st);
+  EXPECT_GT(m.T.rows(), 0);
+  EXPECT_LT(m.T.rows(), 9000) << st.boundary_splits << " boundary splits, " << st.steiner_points << " Steiner points";
+  EXPECT_LT(st.boundary_splits, 2000);
+
+  const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
+  const MeshResult r = mesh(s, 150);
+  ASSERT_TRUE(r.volume_ratio.has_value());
+  EXPECT_NEAR(*r.volume_ratio, 1.0, 0.1);
+  EXPECT_LE(r.deviation_out, 0.015 * diag);
+  EXPECT_LE(r.deviation_in, 0.01 * diag);
+  EXPECT_GE(r.quality.min_dihedral, 5.0);
+  EXPECT_EQ(r.quality.components, 1);
 }
 
 }  // namespace
