@@ -31,6 +31,7 @@
 #include "squeeze/common/error.h"
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/surface.h"
+#include "squeeze/meshing/split_long_edges.h"
 #include "squeeze/meshing/tet_cleanup.h"
 #include "squeeze/meshing/tet_geometry.h"
 #include "squeeze/meshing/winding_number.h"
@@ -967,10 +968,16 @@ class Mesher {
 
 }  // namespace
 
-TetMesh tetrahedralize(const SurfaceMesh& boundary, const TetrahedralizeOptions& opt, TetrahedralizeStats* stats,
+TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOptions& opt, TetrahedralizeStats* stats,
                        Progress* progress) {
-  if (boundary.F.rows() == 0) throw InputError("tetrahedralize: the surface has no face");
+  if (input_boundary.F.rows() == 0) throw InputError("tetrahedralize: the surface has no face");
   if (opt.target_tets < 1) throw InputError("--target-tets must be at least 1");
+  const double median = median_edge_length(input_boundary);
+  const SurfaceMesh boundary =
+      opt.long_edge > 0 && median > 0 ? split_long_edges(input_boundary, opt.long_edge * median) : input_boundary;
+  if (boundary.F.rows() != input_boundary.F.rows())
+    spdlog::debug("tetrahedralize: {} boundary faces with their edges longer than {:.4g} split: {} faces",
+                  input_boundary.F.rows(), opt.long_edge * median, boundary.F.rows());
   double volume = 0;
   const Vec3 o = boundary.V.colwise().mean().transpose();
   for (Eigen::Index f = 0; f < boundary.F.rows(); ++f) {

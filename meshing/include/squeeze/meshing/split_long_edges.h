@@ -1,0 +1,24 @@
+// squeeze::meshing — splitting a surface's long edges at their midpoints (the surface unchanged).
+#pragma once
+#include "squeeze/meshing/surface.h"
+
+namespace squeeze::meshing {
+
+/// Splits every edge of `surface` longer than `max_length` at its midpoint, in rounds, until none
+/// is: red–green refinement (a triangle with one long edge becomes 2 triangles, with two 3 — its
+/// quadrilateral split along the shorter diagonal —, with three 4). Midpoints are shared by both
+/// triangles of an edge, so a conforming mesh stays conforming; every new vertex lies on an edge
+/// of the input, so the surface (as a point set) and each triangle's orientation are unchanged.
+/// Used before a Delaunay tetrahedralization: a long, thin triangle (the side of a cylinder of few
+/// segments) has a circumsphere far larger than itself, which conformity recovery cannot split
+/// down to within its limits (meshing/tetrahedralize.h).
+///   surface     #V by 3, #F by 3
+///   max_length  model units, > 0 (else InputError)
+/// Returns the refined surface: the input's vertices first, in order, then the midpoints.
+SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length);
+
+/// The median length of the edges of `surface`'s triangles (each edge counted once per triangle);
+/// 0 for a surface without faces.
+double median_edge_length(const SurfaceMesh& surface);
+
+}  // namespace squeeze::meshing
