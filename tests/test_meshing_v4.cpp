@@ -5,6 +5,8 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -14,6 +16,7 @@
 #include "squeeze/meshing/mesh_pipeline.h"
 #include "squeeze/meshing/split_long_edges.h"
 #include "squeeze/meshing/surface_io.h"
+#include "squeeze/meshing/tet_cleanup.h"
 #include "squeeze/meshing/tet_faces.h"
 #include "squeeze/meshing/tetrahedralize.h"
 
@@ -558,6 +561,105 @@ TEST(MeshingV4, LongThinTrianglesOfACylinderComeOutExact) {
     EXPECT_GE(r.quality.min_dihedral, 5.0);
     EXPECT_EQ(r.quality.components, 1);
   }
+}
+
+}  // namespace
+
+namespace {
+
+// drop_debris_components: a tetrahedron hanging on a mesh by one vertex is its own face-connected
+// component and goes when its volume share is below the bound; two solids of similar size stay.
+TEST(MeshingV4, DebrisComponentsAreDroppedAndSolidsKept) {
+  squeeze::meshing::TetMesh m;
+  m.V.resize(8, 3);
+  m.V << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1,  // a unit corner tetrahedron (volume 1/6)
+      1, 1, 1, 1.1, 1, 1, 1, 1.1, 1, 1, 1, 1.1;  // a small one (volume 1/6000) sharing no vertex
+  m.T.resize(3, 4);
+  m.T << 0, 1, 2, 3,  //
+      4, 5, 6, 7,     //
+      1, 5, 6, 7;     // joined to the first by vertex 1 and to the second by a face
+  // Components: {0}, {1, 2}; the second's volume is 1/6000 + that of tet 2.
+  Eigen::VectorXi C;
+  ASSERT_EQ(squeeze::meshing::tet_components(m, C), 2);
+  squeeze::meshing::TetMesh a = m;
+  EXPECT_EQ(squeeze::meshing::drop_debris_components(a, 1e-6), 0) << "both above a tiny bound";
+  EXPECT_EQ(a.T.rows(), 3);
+  // Without tet 2 the small tetrahedron hangs by nothing: 0.1 % of the volume.
+  squeeze::meshing::TetMesh b;
+  b.V = m.V;
+  b.T = m.T.topRows(2);
+  b.label = Eigen::VectorXi::LinSpaced(2, 7, 8);
+  EXPECT_EQ(squeeze::meshing::drop_debris_components(b, 0.005), 1);
+  ASSERT_EQ(b.T.rows(), 1);
+  EXPECT_EQ(b.T.row(0), Eigen::RowVector4i(0, 1, 2, 3));
+  EXPECT_EQ(b.label.size(), 1);
+  EXPECT_EQ(b.label(0), 7);
+  // A bound above every component removes nothing (never the whole mesh).
+  squeeze::meshing::TetMesh c = m;
+  EXPECT_EQ(squeeze::meshing::drop_debris_components(c, 0.99), 0);
+}
+
+// A many-part model as an OBJ export has them: an ellipsoid body, a head and eight legs, each leg
+// a cylinder of 10 segments pushed into the body (the parts intersect each other, each is
+// closed), written with six decimals as a script wrote it. One mesh per part: the legs whose
+// boundary was not recovered had left single tetrahedra hanging on by a vertex (45 components
+// for 10 parts at 300).
+TEST(MeshingV4, ManyPartModelWithLegsThroughItsBodyGivesOnePiecePerPart) {
+  std::vector<std::pair<std::vector<Vec3>, std::vector<std::array<int, 3>>>> parts;
+  auto uv_sphere = [&](const Vec3& c, const Vec3& scale) {  // 16 around, 10 rings, poles on z
+    const int nu = 16, nv = 10;
+    std::vector<Vec3> V{Vec3(0, 0, 1)};
+    for (int k = 1; k < nv; ++k)
+      for (int j = 0; j < nu; ++j) {
+        const double th = M_PI * k / nv, a = 2 * M_PI * j / nu;
+        V.emplace_back(std::sin(th) * std::cos(a), std::sin(th) * std::sin(a), std::cos(th));
+      }
+    V.emplace_back(0, 0, -1);
+    const int n = static_cast<int>(V.size());
+    auto idx = [&](int k, int j) { return 1 + (k - 1) * nu + j % nu; };
+    std::vector<std::array<int, 3>> F;
+    for (int j = 0; j < nu; ++j) F.push_back({0, idx(1, j), idx(1, j + 1)});
+    for (int k = 1; k < nv - 1; ++k)
+      for (int j = 0; j < nu; ++j) {
+        const int a = idx(k, j), b = idx(k + 1, j), cc = idx(k + 1, j + 1), d = idx(k, j + 1);
+        F.push_back({a, b, cc}), F.push_back({a, cc, d});
+      }
+    for (int j = 0; j < nu; ++j) F.push_back({n - 1, idx(nv - 1, j + 1), idx(nv - 1, j)});
+    for (Vec3& v : V) v = c + v.cwiseProduct(scale);
+    parts.emplace_back(V, F);
+  };
+  uv_sphere(Vec3::Zero(), Vec3(0.12, 0.08, 0.1));
+  uv_sphere(Vec3(0.15, 0, 0), Vec3(0.06, 0.05, 0.05));
+  for (int i = 0; i < 8; ++i) {
+    const double side = i < 4 ? 1 : -1, k = i % 4, x = -0.06 + 0.045 * k;
+    const SurfaceMesh leg =
+        cylinder(Vec3(x, 0, side * 0.05), Vec3(x + 0.08 * (k - 1.5) / 1.5, -0.12, side * 0.25), 0.012, 10);
+    std::vector<Vec3> V;
+    std::vector<std::array<int, 3>> F;
+    for (Eigen::Index v = 0; v < leg.V.rows(); ++v) V.push_back(leg.V.row(v).transpose());
+    for (Eigen::Index f = 0; f < leg.F.rows(); ++f) F.push_back({leg.F(f, 0), leg.F(f, 1), leg.F(f, 2)});
+    parts.emplace_back(V, F);
+  }
+  const sqt::TempDir dir("spider");
+  const fs::path obj = dir.path() / "spider.obj";
+  {
+    std::ofstream out(obj);
+    int offset = 1;
+    char line[128];
+    for (size_t p = 0; p < parts.size(); ++p) {
+      out << "o part" << p << "\n";
+      for (const Vec3& v : parts[p].first) {
+        std::snprintf(line, sizeof line, "v %.6f %.6f %.6f\n", v.x(), v.y(), v.z());
+        out << line;
+      }
+      for (const auto& f : parts[p].second) out << "f " << f[0] + offset << " " << f[1] + offset << " " << f[2] + offset << "\n";
+      offset += static_cast<int>(parts[p].first.size());
+    }
+  }
+  const MeshResult r = mesh(squeeze::meshing::load_surface(obj), 300);
+  EXPECT_EQ(r.quality.components, 10);
+  ASSERT_TRUE(r.volume_ratio.has_value());
+  EXPECT_NEAR(*r.volume_ratio, 1.0, 0.01);
 }
 
 }  // namespace

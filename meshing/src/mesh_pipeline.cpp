@@ -26,6 +26,7 @@
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/sheet.h"
 #include "squeeze/meshing/shell_tetrahedralize.h"
+#include "squeeze/meshing/tet_cleanup.h"
 #include "squeeze/meshing/tet_faces.h"
 #include "squeeze/meshing/tet_locator.h"
 #include "squeeze/meshing/triangle_bvh.h"
@@ -619,6 +620,13 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
               p.boundary = std::move(b);
               p.envelope = es;
             }
+          }
+          // A part is one connected surface, so its mesh is one piece: tetrahedra hanging on by an
+          // edge or a vertex (a boundary not recovered, its cells classified by the winding number)
+          // are dropped, each under 0.5 % of the part's volume.
+          if (const int debris = drop_debris_components(p.tets, 0.005); debris > 0) {
+            remove_unused_vertices(p.tets);
+            spdlog::debug("part {}: {} tetrahedra in pieces under 0.5 % of its volume dropped", i, debris);
           }
           spdlog::debug("part {}: {} faces, volume {:.4g}, boundary {} faces, target {}, {} tetrahedra, conforming {}", i,
                         p.surface.F.rows(), p.volume, p.boundary.F.rows(), t.target_tets, p.tets.T.rows(),

@@ -40,6 +40,37 @@ void remove_unused_vertices(TetMesh& m) {
   m.V = std::move(V);
 }
 
+int drop_debris_components(TetMesh& m, double max_fraction) {
+  Eigen::VectorXi C;
+  const int n = tet_components(m, C);
+  if (n <= 1) return 0;
+  std::vector<double> volume(static_cast<size_t>(n), 0.0);
+  double total = 0;
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
+    const double v = std::abs(tet_volume(m.V.row(m.T(t, 0)), m.V.row(m.T(t, 1)), m.V.row(m.T(t, 2)), m.V.row(m.T(t, 3))));
+    volume[static_cast<size_t>(C(t))] += v;
+    total += v;
+  }
+  std::vector<char> drop(static_cast<size_t>(n), 0);
+  bool any_kept = false;
+  for (int c = 0; c < n; ++c) {
+    drop[static_cast<size_t>(c)] = volume[static_cast<size_t>(c)] < max_fraction * total;
+    any_kept = any_kept || !drop[static_cast<size_t>(c)];
+  }
+  if (!any_kept) return 0;
+  Eigen::Index kept = 0;
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
+    if (drop[static_cast<size_t>(C(t))]) continue;
+    m.T.row(kept) = m.T.row(t);
+    if (m.label.size() == m.T.rows()) m.label(kept) = m.label(t);
+    ++kept;
+  }
+  const int removed = static_cast<int>(m.T.rows() - kept);
+  if (m.label.size() == m.T.rows()) m.label.conservativeResize(kept);
+  m.T.conservativeResize(kept, Eigen::NoChange);
+  return removed;
+}
+
 int peel_boundary_slivers(TetMesh& m, double min_degrees, double max_height) {
   // How far peeling t moves the boundary: the largest height of t over one of its boundary faces
   // (the distance of the opposite vertex from that face's plane, 3·volume / area).

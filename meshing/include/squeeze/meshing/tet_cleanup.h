@@ -12,6 +12,16 @@ namespace squeeze::meshing {
 ///   mesh  V #V by 3, T #T by 4 (modified in place; label unchanged)
 void remove_unused_vertices(TetMesh& mesh);
 
+/// Removes the face-connected components (tet_components) whose volume is below `max_fraction`
+/// of the mesh's, unless that would remove every tetrahedron. For the mesh of one connected solid:
+/// where its tetrahedra were classified by the winding number (a boundary not recovered), single
+/// tetrahedra can stay attached to the mesh by an edge or a vertex only, a component each (35 of
+/// them on a generated spider's legs). Vertices are kept (remove_unused_vertices drops the orphans).
+///   mesh          V #V by 3, T #T by 4, label #T or empty (modified in place)
+///   max_fraction  in [0, 1): components with a smaller share of the volume go
+/// Returns how many tetrahedra were removed.
+int drop_debris_components(TetMesh& mesh, double max_fraction);
+
 /// Repeatedly removes the tetrahedra with a face on the boundary and a dihedral angle below
 /// `min_degrees` (flat boundary slivers add no volume worth keeping), in up to 16 passes since
 /// peeling exposes new boundary tetrahedra; it never removes the last one. Interior slivers are
