@@ -29,6 +29,16 @@ using sqt::join;
 using Vec3 = Eigen::Vector3d;
 namespace fs = std::filesystem;
 
+/// V, F as a SurfaceMesh.
+SurfaceMesh surface_of(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F) {
+  SurfaceMesh m;
+  m.V.resize(static_cast<Eigen::Index>(V.size()), 3);
+  for (size_t i = 0; i < V.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = V[i].transpose();
+  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t i = 0; i < F.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
+  return m;
+}
+
 /// The surface of the box [lo, hi] with each side divided into n pieces along each axis (n(k) >= 1):
 /// (n0+1)(n1+1)(n2+1) - (n0-1)(n1-1)(n2-1) vertices, outward triangles.
 SurfaceMesh box(const Vec3& lo, const Vec3& hi, std::array<int, 3> n = {1, 1, 1}) {
@@ -63,12 +73,7 @@ SurfaceMesh box(const Vec3& lo, const Vec3& hi, std::array<int, 3> n = {1, 1, 1}
           else F.push_back({q[0], q[2], q[1]}), F.push_back({q[0], q[3], q[2]});
         }
     }
-  SurfaceMesh m;
-  m.V.resize(static_cast<Eigen::Index>(V.size()), 3);
-  for (size_t i = 0; i < V.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = V[i].transpose();
-  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
-  for (size_t i = 0; i < F.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
-  return m;
+  return surface_of(V, F);
 }
 
 /// An icosphere (`levels` subdivisions of the icosahedron) of radius r about c.
@@ -95,12 +100,8 @@ SurfaceMesh sphere(const Vec3& c, double r, int levels) {
     }
     F = G;
   }
-  SurfaceMesh s;
-  s.V.resize(static_cast<Eigen::Index>(V.size()), 3);
-  for (size_t i = 0; i < V.size(); ++i) s.V.row(static_cast<Eigen::Index>(i)) = (c + r * V[i]).transpose();
-  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
-  for (size_t i = 0; i < F.size(); ++i) s.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
-  return s;
+  for (auto& v : V) v = c + r * v;
+  return surface_of(V, F);
 }
 
 double box_volume(const Vec3& lo, const Vec3& hi) { return (hi - lo).prod(); }
@@ -118,6 +119,18 @@ double tet_volume(const squeeze::meshing::TetMesh& m) {
     v += (b - a).cross(c - a).dot(d - a) / 6.0;
   }
   return v;
+}
+
+/// The bounds on a mesh of one closed input: volume ratio within `volume` of 1, deviations
+/// out and in within the given fractions of the diagonal, the dihedral floor of 5°, `components`
+/// pieces.
+void expect_within(const MeshResult& r, double diag, double volume, double out, double in, int components) {
+  ASSERT_TRUE(r.volume_ratio.has_value());
+  EXPECT_NEAR(*r.volume_ratio, 1.0, volume);
+  EXPECT_LE(r.deviation_out, out * diag);
+  EXPECT_LE(r.deviation_in, in * diag);
+  EXPECT_GE(r.quality.min_dihedral, 5.0);
+  EXPECT_EQ(r.quality.components, components);
 }
 
 struct BoxCase {
@@ -376,11 +389,7 @@ TEST(MeshingV4, ThinSegmentsKeepDihedralsOfFiveDegreesOnTheBoundaryRoute) {
   EXPECT_TRUE(r.tet_stats.conforming);
   EXPECT_GT(r.tet_stats.relocated + r.tet_stats.flips, 0) << "no sliver was left to mend: the test no longer tests it";
   EXPECT_GE(r.quality.min_dihedral, 5.0) << r.tet_stats.relocated << " moves, " << r.tet_stats.flips << " flips";
-  ASSERT_TRUE(r.volume_ratio.has_value());
-  EXPECT_NEAR(*r.volume_ratio, 1.0, 0.01);
-  EXPECT_LE(r.deviation_out, 0.015 * diag);
-  EXPECT_LE(r.deviation_in, 0.005 * diag);
-  EXPECT_EQ(r.quality.components, 30);
+  expect_within(r, diag, 0.01, 0.015, 0.005, 30);
 }
 
 // The lumbar spine at 150 tetrahedra (5 vertebrae, the boundary route): a coarse interior leaves a
@@ -392,17 +401,9 @@ TEST(MeshingV4, ThickBoundarySliversAreMovedNotPeeled) {
   const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
   const MeshResult r = mesh(s, 150);
   EXPECT_EQ(r.method, "boundary") << r.fallback_because;
-  EXPECT_GE(r.quality.min_dihedral, 5.0);
-  ASSERT_TRUE(r.volume_ratio.has_value());
-  EXPECT_NEAR(*r.volume_ratio, 1.0, 0.01);
-  EXPECT_LE(r.deviation_out, 0.015 * diag);
-  EXPECT_LE(r.deviation_in, 0.005 * diag);
-  EXPECT_EQ(r.quality.components, 5);
+  expect_within(r, diag, 0.01, 0.015, 0.005, 5);
 }
 
-}  // namespace
-
-namespace {
 
 /// A closed hemispherical shell: outer radius R, wall `thickness`, nu segments around, nv rings
 /// from the pole to the rim (both sheets), the rim closed by a band of quads; outward triangles.
@@ -438,12 +439,7 @@ SurfaceMesh hemispherical_shell(double R, double thickness, int nu, int nv) {
     const int a = id(0, nv, j), b = id(1, nv, j), c = id(1, nv, j + 1), d = id(0, nv, j + 1);
     F.push_back({a, b, c}), F.push_back({a, c, d});
   }
-  SurfaceMesh s;
-  s.V.resize(static_cast<Eigen::Index>(V.size()), 3);
-  for (size_t i = 0; i < V.size(); ++i) s.V.row(static_cast<Eigen::Index>(i)) = V[i].transpose();
-  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
-  for (size_t i = 0; i < F.size(); ++i) s.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
-  return s;
+  return surface_of(V, F);
 }
 
 // A 4 mm hemispherical shell of radius 0.2 m whose triangles are 6.5 times its thickness: the
@@ -466,18 +462,9 @@ TEST(MeshingV4, ThinShellRefinementStopsWhereConformityIsLost) {
   EXPECT_LT(st.boundary_splits, 2000);
 
   const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
-  const MeshResult r = mesh(s, 150);
-  ASSERT_TRUE(r.volume_ratio.has_value());
-  EXPECT_NEAR(*r.volume_ratio, 1.0, 0.1);
-  EXPECT_LE(r.deviation_out, 0.015 * diag);
-  EXPECT_LE(r.deviation_in, 0.01 * diag);
-  EXPECT_GE(r.quality.min_dihedral, 5.0);
-  EXPECT_EQ(r.quality.components, 1);
+  expect_within(mesh(s, 150), diag, 0.1, 0.015, 0.01, 1);
 }
 
-}  // namespace
-
-namespace {
 
 /// A closed cylinder from p0 to p1 of radius r with n segments: each cap a fan around its centre,
 /// each side quad two triangles as long as the cylinder (2n + 2 vertices, 4n faces, outward).
@@ -554,18 +541,10 @@ TEST(MeshingV4, LongThinTrianglesOfACylinderComeOutExact) {
     SCOPED_TRACE("target " + std::to_string(target));
     EXPECT_EQ(r.method, "boundary") << r.fallback_because;
     EXPECT_TRUE(r.tet_stats.conforming);
-    ASSERT_TRUE(r.volume_ratio.has_value());
-    EXPECT_NEAR(*r.volume_ratio, 1.0, 0.01);
-    EXPECT_LE(r.deviation_out, 0.002 * diag);
-    EXPECT_LE(r.deviation_in, 0.002 * diag);
-    EXPECT_GE(r.quality.min_dihedral, 5.0);
-    EXPECT_EQ(r.quality.components, 1);
+    expect_within(r, diag, 0.01, 0.002, 0.002, 1);
   }
 }
 
-}  // namespace
-
-namespace {
 
 // drop_debris_components: a tetrahedron hanging on a mesh by one vertex is its own face-connected
 // component and goes when its volume share is below the bound; two solids of similar size stay.
