@@ -525,6 +525,16 @@ TEST_F(SceneTest, BadPinsAndPresetsNameTheKeyPath) {
        "objects[0].pinned[0].carries_weight: only for soft attachments"},
       {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "stiffness": 1, "carries_weight": 1}]}]})",
        "objects[0].pinned[0].carries_weight: must be"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "stiffness": 1, "sag": 0.1}]}]})",
+       "objects[0].pinned[0].sag: either \"stiffness\" (N/m per vertex) or \"sag\" (m), not both"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "sag": 0}]}]})",
+       "objects[0].pinned[0].sag: must be > 0"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "sag": 0.1, "damping": 1, "damping_ratio": 1}]}]})",
+       "objects[0].pinned[0].damping_ratio: either"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "damping_ratio": 1}]}]})",
+       "objects[0].pinned[0].damping_ratio: only for soft attachments"},
+      {R"({"objects": [{)" + cube + R"(, "pinned": [{"near": [0, 0, 0], "radius": 1, "sag": 0.1, "damping_ratio": -1}]}]})",
+       "objects[0].pinned[0].damping_ratio: must be >= 0"},
   };
   for (const auto& [text, expected] : cases) {
     const fs::path p = scene_file(text);
@@ -639,3 +649,53 @@ TEST_F(SceneTest, SimulateBadInputFailsCleanly) {
 }
 
 }  // namespace
+
+// pinned[].sag: each vertex's spring is m_i |g| / sag, so an attachment holds an object the same at
+// any resolution: the summed stiffness is M |g| / sag for the sphere at 150 and at 1000
+// tetrahedra (the per-vertex "stiffness" sums to a multiple of the vertex count instead), the
+// object starts at rest when it carries the weight, and damping_ratio gives c_i = 2 ζ sqrt(k_i m_i).
+// Without gravity a sag means nothing: one line naming the key.
+TEST_F(SceneTest, SagAttachmentHoldsTheSameAtEveryResolution) {
+  fs::copy_file(kAssets / "sphere.off", dir_->path() / "sphere.off", fs::copy_options::overwrite_existing);
+  double total[2] = {0, 0}, per_vertex_total[2] = {0, 0};
+  int vertices[2] = {0, 0};
+  const int tets[2] = {150, 1000};
+  for (int r = 0; r < 2; ++r) {
+    const std::string obj = R"({"name": "ball", "mesh": "sphere.off", "tets": )" + std::to_string(tets[r]) +
+                            R"(, "transform": {"scale": 0.2, "translate": [0, 1, 0]}, "pinned": [)";
+    const fs::path p = write("sag.json", R"({"floor": null, "objects": [)" + obj +
+                                             R"({"near": [0, 1, 0], "radius": 0.5, "sag": 0.05, "damping_ratio": 0.5,
+                                                 "carries_weight": true}]}]})");
+    const SceneWorld w = build_scene(load_scene(p));
+    const double g = w.world.gravity_of(0).norm();
+    double mass = 0;
+    for (int i = 0; i < w.world.body(0).vertices(); ++i) {
+      const double m = w.world.masses()(i), k = w.world.attachment_stiffness(i);
+      EXPECT_NEAR(k, m * g / 0.05, 1e-12 * k) << "vertex " << i;
+      EXPECT_NEAR(w.world.attachment_damping(i), 2 * 0.5 * std::sqrt(k * m), 1e-12 * k);
+      EXPECT_TRUE(w.world.attachment_carries_weight(i));
+      total[r] += k;
+      mass += m;
+    }
+    EXPECT_NEAR(total[r], mass * g / 0.05, 1e-9 * total[r]);
+    vertices[r] = w.world.body(0).vertices();
+    const fs::path q = write("stiff.json", R"({"floor": null, "objects": [)" + obj +
+                                               R"({"near": [0, 1, 0], "radius": 0.5, "stiffness": 2}]}]})");
+    const SceneWorld ws = build_scene(load_scene(q));
+    for (int i = 0; i < ws.world.body(0).vertices(); ++i) per_vertex_total[r] += ws.world.attachment_stiffness(i);
+  }
+  ASSERT_GT(vertices[1], vertices[0] + 50) << "the two resolutions must differ for the test to mean anything";
+  EXPECT_NEAR(total[1], total[0], 0.01 * total[0]) << "the ball's mass is the same at both resolutions";
+  EXPECT_NEAR(per_vertex_total[1] / per_vertex_total[0], static_cast<double>(vertices[1]) / vertices[0], 1e-9);
+
+  const fs::path none = write("nog.json", R"({"floor": null, "gravity": [0, 0, 0], "objects": [{"name": "ball",
+      "mesh": "sphere.off", "pinned": [{"near": [0, 0, 0], "radius": 2, "sag": 0.05}]}]})");
+  try {
+    build_scene(load_scene(none));
+    ADD_FAILURE() << "a sag without gravity was accepted";
+  } catch (const squeeze::InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("objects[0].pinned[0].sag: no gravity acts on 'ball'"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+}

@@ -321,7 +321,8 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
       for (size_t k = 0; k < pins.size(); ++k) {
         const std::string q = p + ".pinned[" + std::to_string(k) + "]";
         const json& e = pins[k];
-        c.keys(e, q, {"box", "near", "radius", "surface", "distance", "stiffness", "damping", "carries_weight"});
+        c.keys(e, q, {"box", "near", "radius", "surface", "distance", "stiffness", "sag", "damping", "damping_ratio",
+                      "carries_weight"});
         ScenePin pin;
         const int kinds = int(e.contains("box")) + int(e.contains("near")) + int(e.contains("surface"));
         if (kinds != 1)
@@ -347,15 +348,27 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
           if (!e.contains("distance")) c.fail(q + ".distance", "missing (required with \"surface\")");
           pin.distance = c.positive(e["distance"], q + ".distance");
         }
+        if (e.contains("stiffness") && e.contains("sag"))
+          c.fail(q + ".sag", "either \"stiffness\" (N/m per vertex) or \"sag\" (m), not both");
         if (e.contains("stiffness")) pin.stiffness = c.positive(e["stiffness"], q + ".stiffness");
+        if (e.contains("sag")) pin.sag = c.positive(e["sag"], q + ".sag");
+        if (e.contains("damping") && e.contains("damping_ratio"))
+          c.fail(q + ".damping_ratio", "either \"damping\" (N·s/m per vertex) or \"damping_ratio\", not both");
         if (e.contains("damping")) {
-          if (!pin.stiffness) c.fail(q + ".damping", "only for soft attachments (with \"stiffness\"); a hard pin never moves");
+          if (!pin.soft())
+            c.fail(q + ".damping", "only for soft attachments (with \"stiffness\" or \"sag\"); a hard pin never moves");
           pin.damping = c.non_negative(e["damping"], q + ".damping");
+        }
+        if (e.contains("damping_ratio")) {
+          if (!pin.soft())
+            c.fail(q + ".damping_ratio", "only for soft attachments (with \"stiffness\" or \"sag\"); a hard pin never moves");
+          pin.damping_ratio = c.non_negative(e["damping_ratio"], q + ".damping_ratio");
         }
         if (e.contains("carries_weight")) {
           pin.carries_weight = c.boolean(e["carries_weight"], q + ".carries_weight");
-          if (pin.carries_weight && !pin.stiffness)
-            c.fail(q + ".carries_weight", "only for soft attachments (with \"stiffness\"); a hard pin holds its vertices anyway");
+          if (pin.carries_weight && !pin.soft())
+            c.fail(q + ".carries_weight",
+                   "only for soft attachments (with \"stiffness\" or \"sag\"); a hard pin holds its vertices anyway");
         }
         ob.pinned.push_back(std::move(pin));
       }
@@ -753,9 +766,21 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
           where = " (none within " + num(pin.distance) + " m of " + pin.surface.filename().string() + ")";
         throw InputError(file + ": " + key + ": holds no vertex of '" + o.name + "' at rest" + where);
       }
+      const double g = world.gravity_of(b).norm();
+      if (pin.sag && !(g > 0))
+        throw InputError(file + ": objects[" + std::to_string(i) + "].pinned[" + std::to_string(k) +
+                         "].sag: no gravity acts on '" + o.name + "' (a sag is the stretch its weight causes); give \"stiffness\" instead");
       for (int v : held) {
-        if (pin.stiffness) world.attach(r0 + v, *pin.stiffness, pin.damping, pin.carries_weight);
-        else world.pin_vertex(r0 + v);
+        if (!pin.soft()) {
+          world.pin_vertex(r0 + v);
+          continue;
+        }
+        // sag: the vertex's weight stretches its spring by sag, k = m g / sag (its share of the
+        // object's mass, so the attachment as a whole does not depend on the mesh's resolution).
+        const double m = world.masses()(r0 + v);
+        const double stiffness = pin.stiffness ? *pin.stiffness : m * g / *pin.sag;
+        const double damping = pin.damping_ratio ? 2.0 * *pin.damping_ratio * std::sqrt(stiffness * m) : pin.damping;
+        world.attach(r0 + v, stiffness, damping, pin.carries_weight);
       }
       pin_counts[i].push_back(static_cast<int>(held.size()));
     }

@@ -54,12 +54,18 @@ struct ScenePin {
   double radius = 0;                   // near: m, > 0
   std::filesystem::path surface;       // surface: the mesh file (absolute: resolved against the scene's folder)
   double distance = 0;                 // surface: m, > 0
-  std::optional<double> stiffness;     // N/m per vertex, > 0; empty: a hard pin
+  std::optional<double> stiffness;     // N/m per vertex, > 0; empty (and no sag): a hard pin
+  std::optional<double> sag;           // m, > 0, instead of stiffness: each vertex's spring is m_i |g| / sag
+                                       // (its weight would stretch it by sag), so the whole attachment
+                                       // holds the same whatever the mesh's resolution
   double damping = 0;                  // N·s/m per vertex, >= 0 (soft attachments only)
+  std::optional<double> damping_ratio; // >= 0, instead of damping: c_i = 2 ζ sqrt(k_i m_i) (1: critical)
   bool carries_weight = false;         // soft attachments only: the spring carries its vertices' weight
                                        // at rest (World::attach carry_weight), so they start in equilibrium
   /// The key naming the selection in messages: "box", "near" or "surface".
   const char* key() const;
+  /// A soft attachment (stiffness or sag), not a hard pin.
+  bool soft() const { return stiffness.has_value() || sag.has_value(); }
 };
 
 /// A named material of objects[].material.preset: measured values of a tissue or material, with
