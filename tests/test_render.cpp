@@ -794,7 +794,9 @@ TEST_F(RenderTest, PointCachesHoldExactlyTheSurfaceVerticesInTheRestObjOrder) {
     bool all_used = false;
     const Eigen::MatrixX3d rest = obj_vertices(ex / (name + ".obj"), &all_used);
     EXPECT_TRUE(all_used) << name << ": a vertex of the rest OBJ is used by no face";
-    if (name == "box") EXPECT_EQ(rest.rows(), 98) << "the 5×5×5 box has 98 boundary nodes";
+    if (name == "box") {
+      EXPECT_EQ(rest.rows(), 98) << "the 5×5×5 box has 98 boundary nodes";
+    }
     const std::string pc2 = read_text(ex / (name + ".pc2")), mdd = read_text(ex / (name + ".mdd"));
     int32_t points = 0, samples = 0;
     float start = 0;

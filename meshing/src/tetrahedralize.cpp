@@ -567,7 +567,7 @@ class Mesher {
         int axis;
         bool operator()(int a, int b) const { return (*P)[a](axis) < (*P)[b](axis); }
       };
-      using Point_3 = int;
+      using Point_3 [[maybe_unused]] = int;  // the traits concept names it (CGAL spatial_sort)
       using Less_x_3 = Less;
       using Less_y_3 = Less;
       using Less_z_3 = Less;
