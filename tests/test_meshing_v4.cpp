@@ -526,6 +526,13 @@ TEST(MeshingV4, SplitLongEdgesKeepsTheSurfaceAndBoundsItsEdges) {
     EXPECT_LE(longest, bound);
   }
   EXPECT_THROW(squeeze::meshing::split_long_edges(inputs[0], 0.0), squeeze::InputError);
+  // A bound far below the input's edges stops at the face budget (8 #F + 10,000 before a round;
+  // a round at most quadruples), not at a million faces.
+  const SurfaceMesh cube = box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  const SurfaceMesh fine = squeeze::meshing::split_long_edges(cube, 1e-4);
+  EXPECT_GT(fine.F.rows(), 8 * cube.F.rows());
+  EXPECT_LE(fine.F.rows(), 4 * (8 * cube.F.rows() + 10000));
+  EXPECT_NEAR(signed_volume(fine), 1.0, 1e-12);
 }
 
 // A cylinder of 10 segments (22 vertices; its sides are triangles 30 times longer than wide, as

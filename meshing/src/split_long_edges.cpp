@@ -32,8 +32,10 @@ SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length) {
   auto key = [](int a, int b) {
     return (static_cast<uint64_t>(std::min(a, b)) << 32) | static_cast<uint32_t>(std::max(a, b));
   };
-  // Each round halves every long edge; 64 rounds bound any finite ratio of lengths.
-  for (int round = 0; round < 64; ++round) {
+  // Each round halves every long edge; 64 rounds bound any finite ratio of lengths, and the face
+  // budget bounds the output (a round starts only while the faces are within it).
+  const size_t budget = 8 * F.size() + 10000;
+  for (int round = 0; round < 64 && F.size() <= budget; ++round) {
     std::unordered_map<uint64_t, int> mid;  // a long edge → its midpoint (created on first use)
     for (const auto& t : F)
       for (int k = 0; k < 3; ++k) {

@@ -972,12 +972,15 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
                        Progress* progress) {
   if (input_boundary.F.rows() == 0) throw InputError("tetrahedralize: the surface has no face");
   if (opt.target_tets < 1) throw InputError("--target-tets must be at least 1");
-  const double median = median_edge_length(input_boundary);
+  // Long edges split first (TetrahedralizeOptions::long_edge), never below a twentieth of the
+  // diagonal: a large flat face beside fine detail is cut into a few hundred pieces, not millions.
+  const double split_above = std::max(opt.long_edge * median_edge_length(input_boundary),
+                                      bounding_box_diagonal(input_boundary.V) / 20.0);
   const SurfaceMesh boundary =
-      opt.long_edge > 0 && median > 0 ? split_long_edges(input_boundary, opt.long_edge * median) : input_boundary;
+      opt.long_edge > 0 && split_above > 0 ? split_long_edges(input_boundary, split_above) : input_boundary;
   if (boundary.F.rows() != input_boundary.F.rows())
     spdlog::debug("tetrahedralize: {} boundary faces with their edges longer than {:.4g} split: {} faces",
-                  input_boundary.F.rows(), opt.long_edge * median, boundary.F.rows());
+                  input_boundary.F.rows(), split_above, boundary.F.rows());
   double volume = 0;
   const Vec3 o = boundary.V.colwise().mean().transpose();
   for (Eigen::Index f = 0; f < boundary.F.rows(); ++f) {

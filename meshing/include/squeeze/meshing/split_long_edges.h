@@ -12,6 +12,8 @@ namespace squeeze::meshing {
 /// Used before a Delaunay tetrahedralization: a long, thin triangle (the side of a cylinder of few
 /// segments) has a circumsphere far larger than itself, which conformity recovery cannot split
 /// down to within its limits (meshing/tetrahedralize.h).
+/// A round starts only while the faces number at most 8 #F + 10,000, so a bound far below the
+/// input's longest edges stops there (edges longer than max_length then remain).
 ///   surface     #V by 3, #F by 3
 ///   max_length  model units, > 0 (else InputError)
 /// Returns the refined surface: the input's vertices first, in order, then the midpoints.

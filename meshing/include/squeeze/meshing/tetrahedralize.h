@@ -35,10 +35,11 @@ struct TetrahedralizeOptions {
                                   // are left to the sliver moves and flips (squeeze mesh: the
                                   // inner deviation bound)
   int max_tets = 100000;          // a safety net: refinement stops when the mesh reaches this
-  double long_edge = 3.0;         // boundary edges longer than this × the boundary's median edge are
-                                  // split at their midpoints first (split_long_edges: the side of a
-                                  // cylinder of few segments is a triangle 30 times longer than
-                                  // wide, which conformity recovery cannot split down); 0: never
+  double long_edge = 3.0;         // boundary edges longer than this × the boundary's median edge (and
+                                  // than 1/20 of its bounding-box diagonal) are split at their
+                                  // midpoints first (split_long_edges: the side of a cylinder of few
+                                  // segments is a triangle 30 times longer than wide, which
+                                  // conformity recovery cannot split down); 0: never
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
 };
 
