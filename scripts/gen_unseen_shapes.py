@@ -1,0 +1,212 @@
+#!/usr/bin/env python3
+"""Writes the generated shapes of docs/meshing.md, "Version 9", as OFF/OBJ files into DIR.
+
+Usage: scripts/gen_unseen_shapes.py DIR [--elephant PATH/elephant.off]
+Shapes (metres): trefoil.off (knot tube), torus.off, torus_mm.off (x1000), torus_tiny.off (x0.001),
+lbracket.off, pipe.off (3 mm wall), spheres40.off (40 separate spheres), hemishell.off (4 mm wall),
+bowl1mm.off, leg.off (10-segment cylinder), spider.obj (+ .mtl: body, head, 8 legs through the
+body); with --elephant, elephant_holes_{0.01,0.02,0.03}.off (six holes of that radius, as a fraction
+of the diagonal, around seeded random vertices). Then: scripts/mesh_matrix.py DIR/*.off DIR/*.obj
+"""
+import argparse
+import os
+
+import numpy as np
+
+
+def write_off(fn, V, F):
+    with open(fn, "w") as f:
+        f.write("OFF\n%d %d 0\n" % (len(V), len(F)))
+        for v in V:
+            f.write("%.9g %.9g %.9g\n" % tuple(v))
+        for t in F:
+            f.write("3 %d %d %d\n" % tuple(t))
+
+
+def tube(curve, dcurve, r, n, m):
+    V, F = [], []
+    for i in range(n):
+        t = 2 * np.pi * i / n
+        c, d = curve(t), dcurve(t)
+        d = d / np.linalg.norm(d)
+        a = np.array([0, 0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0, 0])
+        u = np.cross(d, a)
+        u /= np.linalg.norm(u)
+        w = np.cross(d, u)
+        for j in range(m):
+            s = 2 * np.pi * j / m
+            V.append(c + r * (np.cos(s) * u + np.sin(s) * w))
+    for i in range(n):
+        for j in range(m):
+            a, b = i * m + j, ((i + 1) % n) * m + j
+            c, d = ((i + 1) % n) * m + (j + 1) % m, i * m + (j + 1) % m
+            F += [(a, b, c), (a, c, d)]
+    return np.array(V), F
+
+
+def shell(R, th, nu, nv):
+    """A closed hemispherical shell: outer radius R, wall th, rim closed by a band."""
+    V, F = [], []
+    for r in (R, R - th):
+        V.append((0, 0, r))
+        for k in range(1, nv + 1):
+            z, rr = r * np.cos(np.pi / 2 * k / nv), r * np.sin(np.pi / 2 * k / nv)
+            V += [(rr * np.cos(2 * np.pi * j / nu), rr * np.sin(2 * np.pi * j / nu), z) for j in range(nu)]
+    no = 1 + nv * nu
+
+    def idx(s, k, j):
+        return s * no + (0 if k == 0 else 1 + (k - 1) * nu + j % nu)
+
+    for s, flip in ((0, False), (1, True)):
+        for j in range(nu):
+            t = (idx(s, 0, 0), idx(s, 1, j), idx(s, 1, j + 1))
+            F.append(t[::-1] if flip else t)
+        for k in range(1, nv):
+            for j in range(nu):
+                a, b, c, d = idx(s, k, j), idx(s, k + 1, j), idx(s, k + 1, j + 1), idx(s, k, j + 1)
+                for t in ((a, b, c), (a, c, d)):
+                    F.append(t[::-1] if flip else t)
+    for j in range(nu):
+        a, b, c, d = idx(0, nv, j), idx(1, nv, j), idx(1, nv, j + 1), idx(0, nv, j + 1)
+        F += [(a, b, c), (a, c, d)]
+    return np.array(V), F
+
+
+def cylinder(p0, p1, r, nu=10):
+    d = p1 - p0
+    d = d / np.linalg.norm(d)
+    a = np.array([0, 0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0, 0])
+    u = np.cross(d, a)
+    u /= np.linalg.norm(u)
+    w = np.cross(d, u)
+    V, F = [p0, p1], []
+    for end in (p0, p1):
+        for j in range(nu):
+            s = 2 * np.pi * j / nu
+            V.append(end + r * (np.cos(s) * u + np.sin(s) * w))
+    for j in range(nu):
+        a0, a1, b0, b1 = 2 + j, 2 + (j + 1) % nu, 2 + nu + j, 2 + nu + (j + 1) % nu
+        F += [(0, a1, a0), (1, b0, b1), (a0, a1, b1), (a0, b1, b0)]
+    return np.array(V), F
+
+
+def uv_sphere(c, scale, nu=16, nv=10):
+    V = [np.array([0, 0, 1.0])]
+    for k in range(1, nv):
+        th = np.pi * k / nv
+        for j in range(nu):
+            a = 2 * np.pi * j / nu
+            V.append(np.array([np.sin(th) * np.cos(a), np.sin(th) * np.sin(a), np.cos(th)]))
+    V.append(np.array([0, 0, -1.0]))
+    n = len(V)
+
+    def idx(k, j):
+        return 1 + (k - 1) * nu + j % nu
+
+    F = [(0, idx(1, j), idx(1, j + 1)) for j in range(nu)]
+    for k in range(1, nv - 1):
+        for j in range(nu):
+            a, b, cc, d = idx(k, j), idx(k + 1, j), idx(k + 1, j + 1), idx(k, j + 1)
+            F += [(a, b, cc), (a, cc, d)]
+    F += [(n - 1, idx(nv - 1, j + 1), idx(nv - 1, j)) for j in range(nu)]
+    return np.array(V) * np.array(scale) + c, F
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("dir")
+    ap.add_argument("--elephant", help="the corpus elephant.off, to cut holes into")
+    args = ap.parse_args()
+    os.makedirs(args.dir, exist_ok=True)
+    out = lambda name: os.path.join(args.dir, name)
+
+    tre = lambda t: 0.1 * np.array([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)])
+    dtre = lambda t: 0.1 * np.array([np.cos(t) + 4 * np.cos(2 * t), -np.sin(t) + 4 * np.sin(2 * t), -3 * np.cos(3 * t)])
+    write_off(out("trefoil.off"), *tube(tre, dtre, 0.05, 300, 16))
+    tor = lambda t: np.array([0.3 * np.cos(t), 0.3 * np.sin(t), 0])
+    dtor = lambda t: np.array([-np.sin(t), np.cos(t), 0])
+    V, F = tube(tor, dtor, 0.08, 96, 24)
+    write_off(out("torus.off"), V, F)
+    write_off(out("torus_mm.off"), V * 1000, F)
+    write_off(out("torus_tiny.off"), V * 0.001, F)
+    write_off(out("hemishell.off"), *shell(0.2, 0.004, 48, 12))
+    write_off(out("bowl1mm.off"), *shell(0.1, 0.001, 64, 16))
+
+    P = [(0, 0), (0.3, 0), (0.3, 0.02), (0.02, 0.02), (0.02, 0.2), (0, 0.2)]
+    V = [(x, y, 0) for x, y in P] + [(x, y, 0.15) for x, y in P]
+    F = [(0, 2, 1), (0, 3, 2), (0, 5, 3), (5, 4, 3)]
+    F = F + [(c + 6, b + 6, a + 6) for a, b, c in F]
+    for i in range(6):
+        j = (i + 1) % 6
+        F += [(i, j, j + 6), (i, j + 6, i + 6)]
+    write_off(out("lbracket.off"), np.array(V, float), F)
+
+    ro, ri, L, nu, nz = 0.05, 0.047, 0.5, 40, 20
+    V, F = [], []
+    for k in range(nz + 1):
+        z = L * k / nz
+        V += [(ro * np.cos(2 * np.pi * j / nu), ro * np.sin(2 * np.pi * j / nu), z) for j in range(nu)]
+        V += [(ri * np.cos(2 * np.pi * j / nu), ri * np.sin(2 * np.pi * j / nu), z) for j in range(nu)]
+    o = lambda k, j: k * 2 * nu + j % nu
+    i_ = lambda k, j: k * 2 * nu + nu + j % nu
+    for k in range(nz):
+        for j in range(nu):
+            a, b, c, d = o(k, j), o(k, j + 1), o(k + 1, j + 1), o(k + 1, j)
+            F += [(a, b, c), (a, c, d)]
+            a, b, c, d = i_(k, j), i_(k, j + 1), i_(k + 1, j + 1), i_(k + 1, j)
+            F += [(a, c, b), (a, d, c)]
+    for j in range(nu):
+        a, b, c, d = o(0, j), o(0, j + 1), i_(0, j + 1), i_(0, j)
+        F += [(a, c, b), (a, d, c)]
+        a, b, c, d = o(nz, j), o(nz, j + 1), i_(nz, j + 1), i_(nz, j)
+        F += [(a, b, c), (a, c, d)]
+    write_off(out("pipe.off"), np.array(V), F)
+
+    rng = np.random.default_rng(3)
+    V, F = [], []
+    for _ in range(40):
+        c, r = rng.uniform(-0.5, 0.5, 3), rng.uniform(0.02, 0.06)
+        v, f = uv_sphere(c, (r, r, r), 12, 8)
+        F += [(x + len(V), y + len(V), z + len(V)) for x, y, z in f]
+        V += list(v)
+    write_off(out("spheres40.off"), np.array(V), F)
+
+    write_off(out("leg.off"), *cylinder(np.array([0, 0, 0.05]), np.array([0.08, -0.12, 0.25]), 0.012))
+    parts = [("body",) + uv_sphere(np.zeros(3), (0.12, 0.08, 0.1)),
+             ("head",) + uv_sphere(np.array([0.15, 0, 0]), (0.06, 0.05, 0.05))]
+    for i in range(8):
+        side, k = (1 if i < 4 else -1), i % 4
+        x = -0.06 + 0.045 * k
+        p0, p1 = np.array([x, 0, side * 0.05]), np.array([x + 0.08 * (k - 1.5) / 1.5, -0.12, side * 0.25])
+        parts.append(("leg%d" % i,) + cylinder(p0, p1, 0.012))
+    with open(out("spider.mtl"), "w") as f:
+        for n in ("shell", "leg"):
+            f.write("newmtl %s\nKd 0.3 0.2 0.1\n" % n)
+    with open(out("spider.obj"), "w") as f:
+        f.write("mtllib spider.mtl\n")
+        off = 1
+        for name, V, F in parts:
+            f.write("o %s\nusemtl %s\n" % (name, "leg" if "leg" in name else "shell"))
+            for v in V:
+                f.write("v %.6f %.6f %.6f\n" % tuple(v))
+            for t in F:
+                f.write("f %d %d %d\n" % (t[0] + off, t[1] + off, t[2] + off))
+            off += len(V)
+
+    if args.elephant:
+        L = open(args.elephant).read().split()
+        nv, nf = int(L[1]), int(L[2])
+        V = np.array(L[4:4 + 3 * nv], float).reshape(-1, 3)
+        F = np.array(L[4 + 3 * nv:4 + 3 * nv + 4 * nf], int).reshape(-1, 4)[:, 1:]
+        diag = np.linalg.norm(V.max(0) - V.min(0))
+        for rad in (0.01, 0.02, 0.03):
+            rng = np.random.default_rng(5)
+            keep = np.ones(len(F), bool)
+            for _ in range(6):
+                p = V[rng.integers(len(V))]
+                keep &= np.linalg.norm(V[F].mean(1) - p, axis=1) > rad * diag
+            write_off(out("elephant_holes_%g.off" % rad), V, F[keep])
+
+
+if __name__ == "__main__":
+    main()
