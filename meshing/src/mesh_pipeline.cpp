@@ -605,6 +605,12 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
               e2.max_inside *= 0.5;
               b = simplify_envelope(p.surface, e2, &es, nullptr);
               if (p.check && does_self_intersect(b)) continue;
+              // Where the target's face count, not the bounds, stopped the simplification, half the
+              // bounds give the same boundary, and tetrahedralizing it again gives the same mesh.
+              if (b.F == p.boundary.F && b.V == p.boundary.V) {
+                spdlog::debug("part {}: retry 1 (half the bounds) gives the same boundary: skipped", i);
+                continue;
+              }
             } else {
               if (p.check || p.surface.F.rows() > std::max(4000, 8 * e.target_faces)) continue;
               b = p.surface;
