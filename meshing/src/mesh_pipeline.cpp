@@ -607,7 +607,8 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
               if (p.check && does_self_intersect(b)) continue;
               // Where the target's face count, not the bounds, stopped the simplification, half the
               // bounds give the same boundary, and tetrahedralizing it again gives the same mesh.
-              if (b.F == p.boundary.F && b.V == p.boundary.V) {
+              if (b.F.rows() == p.boundary.F.rows() && b.V.rows() == p.boundary.V.rows() && b.F == p.boundary.F &&
+                  b.V == p.boundary.V) {
                 spdlog::debug("part {}: retry 1 (half the bounds) gives the same boundary: skipped", i);
                 continue;
               }
