@@ -751,7 +751,8 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     const int b = static_cast<int>(i), r0 = world.first_state_row(b);
     for (size_t k = 0; k < o.pinned.size(); ++k) {
       const ScenePin& pin = o.pinned[k];
-      const std::string key = "objects[" + std::to_string(i) + "].pinned[" + std::to_string(k) + "]." + pin.key();
+      const std::string at = "objects[" + std::to_string(i) + "].pinned[" + std::to_string(k) + "]";
+      const std::string key = at + "." + pin.key();
       std::vector<int> held;
       try {
         held = pinned_vertices(world.body(b), pin);
@@ -768,8 +769,8 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
       }
       const double g = world.gravity_of(b).norm();
       if (pin.sag && !(g > 0))
-        throw InputError(file + ": objects[" + std::to_string(i) + "].pinned[" + std::to_string(k) +
-                         "].sag: no gravity acts on '" + o.name + "' (a sag is the stretch its weight causes); give \"stiffness\" instead");
+        throw InputError(file + ": " + at + ".sag: no gravity acts on '" + o.name +
+                         "' (a sag is the stretch its weight causes); give \"stiffness\" instead");
       for (int v : held) {
         if (!pin.soft()) {
           world.pin_vertex(r0 + v);

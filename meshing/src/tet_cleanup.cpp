@@ -40,34 +40,40 @@ void remove_unused_vertices(TetMesh& m) {
   m.V = std::move(V);
 }
 
+namespace {
+
+// Keeps the tetrahedra `keep` (ascending rows of T) and their labels, in that order.
+void keep_tets(TetMesh& m, const std::vector<int>& keep) {
+  Eigen::MatrixX4i T(static_cast<Eigen::Index>(keep.size()), 4);
+  Eigen::VectorXi L(m.label.size() ? static_cast<Eigen::Index>(keep.size()) : 0);
+  for (size_t i = 0; i < keep.size(); ++i) {
+    T.row(static_cast<Eigen::Index>(i)) = m.T.row(keep[i]);
+    if (L.size()) L(static_cast<Eigen::Index>(i)) = m.label(keep[i]);
+  }
+  m.T = std::move(T);
+  m.label = std::move(L);
+}
+
+}  // namespace
+
 int drop_debris_components(TetMesh& m, double max_fraction) {
   Eigen::VectorXi C;
   const int n = tet_components(m, C);
   if (n <= 1) return 0;
+  const Eigen::VectorXd v = tet_volumes(m).cwiseAbs();
   std::vector<double> volume(static_cast<size_t>(n), 0.0);
   double total = 0;
   for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
-    const double v = std::abs(tet_volume(m.V.row(m.T(t, 0)), m.V.row(m.T(t, 1)), m.V.row(m.T(t, 2)), m.V.row(m.T(t, 3))));
-    volume[static_cast<size_t>(C(t))] += v;
-    total += v;
+    volume[static_cast<size_t>(C(t))] += v(t);
+    total += v(t);
   }
-  std::vector<char> drop(static_cast<size_t>(n), 0);
-  bool any_kept = false;
-  for (int c = 0; c < n; ++c) {
-    drop[static_cast<size_t>(c)] = volume[static_cast<size_t>(c)] < max_fraction * total;
-    any_kept = any_kept || !drop[static_cast<size_t>(c)];
-  }
-  if (!any_kept) return 0;
-  Eigen::Index kept = 0;
-  for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
-    if (drop[static_cast<size_t>(C(t))]) continue;
-    m.T.row(kept) = m.T.row(t);
-    if (m.label.size() == m.T.rows()) m.label(kept) = m.label(t);
-    ++kept;
-  }
-  const int removed = static_cast<int>(m.T.rows() - kept);
-  if (m.label.size() == m.T.rows()) m.label.conservativeResize(kept);
-  m.T.conservativeResize(kept, Eigen::NoChange);
+  const double bound = max_fraction * total;
+  std::vector<int> keep;
+  for (int t = 0; t < m.T.rows(); ++t)
+    if (!(volume[static_cast<size_t>(C(t))] < bound)) keep.push_back(t);
+  if (keep.empty()) return 0;  // every component below the bound: keep them all
+  const int removed = static_cast<int>(m.T.rows() - static_cast<Eigen::Index>(keep.size()));
+  if (removed > 0) keep_tets(m, keep);
   return removed;
 }
 
@@ -98,14 +104,7 @@ int peel_boundary_slivers(TetMesh& m, double min_degrees, double max_height) {
         keep.push_back(t);
     if (keep.size() == static_cast<size_t>(m.T.rows()) || keep.empty()) break;
     removed += static_cast<int>(m.T.rows()) - static_cast<int>(keep.size());
-    Eigen::MatrixX4i T(static_cast<Eigen::Index>(keep.size()), 4);
-    Eigen::VectorXi L(m.label.size() ? static_cast<Eigen::Index>(keep.size()) : 0);
-    for (size_t i = 0; i < keep.size(); ++i) {
-      T.row(static_cast<Eigen::Index>(i)) = m.T.row(keep[i]);
-      if (L.size()) L(static_cast<Eigen::Index>(i)) = m.label(keep[i]);
-    }
-    m.T = std::move(T);
-    m.label = std::move(L);
+    keep_tets(m, keep);
   }
   return removed;
 }
