@@ -117,6 +117,8 @@ def main():
     ap.add_argument("dir")
     ap.add_argument("--elephant", help="the corpus elephant.off, to cut holes into")
     args = ap.parse_args()
+    if args.elephant and not os.path.isfile(args.elephant):
+        ap.error("--elephant: no such file: " + args.elephant)
     os.makedirs(args.dir, exist_ok=True)
     out = lambda name: os.path.join(args.dir, name)
 

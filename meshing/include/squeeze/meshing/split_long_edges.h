@@ -13,14 +13,16 @@ namespace squeeze::meshing {
 /// segments) has a circumsphere far larger than itself, which conformity recovery cannot split
 /// down to within its limits (meshing/tetrahedralize.h).
 /// A round starts only while the faces number at most 8 #F + 10,000, so a bound far below the
-/// input's longest edges stops there (edges longer than max_length then remain).
+/// input's longest edges stops there (edges longer than max_length then remain). Source: the
+/// red–green refinement of Bank, Sherman, Weiser, "Refinement algorithms and data structures for
+/// regular local mesh refinement", Scientific Computing (IMACS), 1983, on surface triangles.
 ///   surface     #V by 3, #F by 3
 ///   max_length  model units, > 0 (else InputError)
 /// Returns the refined surface: the input's vertices first, in order, then the midpoints.
 SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length);
 
-/// The median length of the edges of `surface`'s triangles (each edge counted once per triangle);
-/// 0 for a surface without faces.
+/// The median length (model units) of the edges of `surface`'s triangles (each edge counted once
+/// per triangle); 0 for a surface without faces. Throws nothing.
 double median_edge_length(const SurfaceMesh& surface);
 
 }  // namespace squeeze::meshing

@@ -19,7 +19,8 @@ void remove_unused_vertices(TetMesh& mesh);
 /// them on a generated spider's legs). Vertices are kept (remove_unused_vertices drops the orphans).
 ///   mesh          V #V by 3, T #T by 4, label #T or empty (modified in place)
 ///   max_fraction  in [0, 1): components with a smaller share of the volume go
-/// Returns how many tetrahedra were removed.
+/// Throws nothing; returns how many tetrahedra were removed. Source: squeeze's own clean-up
+/// (components by shared faces, tet_faces.h).
 int drop_debris_components(TetMesh& mesh, double max_fraction);
 
 /// Repeatedly removes the tetrahedra with a face on the boundary and a dihedral angle below
