@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 
 #include "fem_test_worlds.h"
@@ -214,6 +215,43 @@ TEST(FemBlockLDLT, SolvesSymmetricBlockSystemsOnMeshAndRandomPatterns) {
   EXPECT_FALSE(f.factorize({Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Zero()}, {Eigen::Matrix3d::Zero()}));
 }
 
+
+// precondition() keeps a small factor's single-precision values as doubles (the same numbers,
+// without a conversion per use; BlockLDLT::kRoundedInDouble): its results are those of the
+// single-precision copy bit for bit, sequential or cut into parts, and solve() is unchanged.
+TEST(FemBlockLDLT, PreconditionerInDoubleEqualsSinglePrecisionBitForBit) {
+  std::vector<std::pair<int, int>> pairs;
+  int n = 0;
+  for (const Eigen::Vector3i& cells : {Eigen::Vector3i(8, 5, 4), Eigen::Vector3i(6, 6, 6)}) {
+    const meshing::TetMesh box = box_tet_mesh(Vec3(0, 0, 0), Vec3(1, 0.5, 0.4), cells);
+    add_tet_pairs(box, n, pairs);
+    n += static_cast<int>(box.V.rows());
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  std::mt19937 g(3);
+  std::vector<Eigen::Matrix3d> off, diag;
+  dominant_blocks(pairs, n, g, off, diag);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::VectorXd b(3 * n);
+  for (int i = 0; i < 3 * n; ++i) b[i] = u(g);
+  for (int parts : {1, 2}) {
+    SCOPED_TRACE(parts);
+    BlockLDLT f;
+    f.analyze(n, pairs, parts);
+    Eigen::VectorXd x[2], p[2];
+    for (int in_double : {0, 1}) {
+      f.set_rounded_in_double(in_double ? std::numeric_limits<size_t>::max() : 0);
+      ASSERT_TRUE(f.factorize(diag, off));
+      f.solve(b, x[in_double]);
+      f.precondition(b, p[in_double]);
+    }
+    EXPECT_TRUE(x[0] == x[1]);
+    EXPECT_TRUE(p[0] == p[1]);
+    EXPECT_LT((p[1] - x[1]).norm(), 1e-5 * x[1].norm());
+    EXPECT_GT((p[1] - x[1]).norm(), 0.0);  // single-precision values
+  }
+}
 
 // The parallel cut of the elimination tree changes only who computes what: on the vertex graphs of
 // two tetrahedral boxes (two bodies), apart or joined by contact-like couplings, the factors and

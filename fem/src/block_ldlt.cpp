@@ -15,7 +15,117 @@
 #include <thread>
 #include <type_traits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace squeeze::fem {
+namespace {
+
+// The block kernels of factorize and the substitutions: the same IEEE operations in the same
+// order as the Eigen expressions they replaced (Eigen 3.4 with SSE2), so bit for bit the same
+// factors and solutions (the trajectories of bench/scenes/ball_drop, headon and organs are
+// byte-identical to the build before), without Eigen's per-block index arithmetic and
+// one-at-a-time conversions of the single-precision blocks. Each entry of a block-vector product is a
+// sum of three products, which Eigen associated two ways: its SSE2 product of a double block
+// (rows 0 and 1 as a pair) and its product of a transposed double block as (a₀ + a₁) + a₂; row 2
+// of a double block and every entry of a single-precision block (converted to double one number
+// at a time) as a₀ + (a₁ + a₂). kRight: the single-precision factor's association (every entry
+// a₀ + (a₁ + a₂)), whether its blocks are read as floats or as the doubles they round to. The
+// result is then subtracted from its target.
+inline double sum_right(double a0, double a1, double a2) { return a0 + (a1 + a2); }
+inline double sum_left(double a0, double a1, double a2) { return (a0 + a1) + a2; }
+#if defined(__SSE2__)
+// Rows 0 and 1 of column c of a column-major 3×3 block, as doubles.
+inline __m128d column01(const double* b, int c) { return _mm_loadu_pd(b + 3 * c); }
+inline __m128d column01(const float* b, int c) {
+  return _mm_cvtps_pd(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(b + 3 * c))));
+}
+#endif
+
+// t ← t − B v (t, v: 3 doubles; B: a column-major 3×3 block of doubles or floats).
+template <bool kRight, class Real>
+inline void subtract_product(const Real* B, const double* v, double* t) {
+#if defined(__SSE2__)
+  const __m128d v0 = _mm_set1_pd(v[0]), v1 = _mm_set1_pd(v[1]), v2 = _mm_set1_pd(v[2]);
+  const __m128d p0 = _mm_mul_pd(column01(B, 0), v0), p1 = _mm_mul_pd(column01(B, 1), v1), p2 = _mm_mul_pd(column01(B, 2), v2);
+  const __m128d xy = kRight ? _mm_add_pd(p0, _mm_add_pd(p1, p2)) : _mm_add_pd(_mm_add_pd(p0, p1), p2);
+  _mm_storeu_pd(t, _mm_sub_pd(_mm_loadu_pd(t), xy));
+#else
+  for (int r = 0; r < 2; ++r) {
+    const double a0 = static_cast<double>(B[r]) * v[0], a1 = static_cast<double>(B[3 + r]) * v[1],
+                 a2 = static_cast<double>(B[6 + r]) * v[2];
+    t[r] -= kRight ? sum_right(a0, a1, a2) : sum_left(a0, a1, a2);
+  }
+#endif
+  t[2] -= sum_right(static_cast<double>(B[2]) * v[0], static_cast<double>(B[5]) * v[1], static_cast<double>(B[8]) * v[2]);
+}
+
+// t ← t − Bᵀ v.
+template <bool kRight, class Real>
+inline void subtract_transposed_product(const Real* B, const double* v, double* t) {
+#if defined(__SSE2__)
+  // Entries 0 and 1 as a pair: the rows of B's columns 0 and 1, (B(r,0), B(r,1)).
+  const __m128d c0 = column01(B, 0), c1 = column01(B, 1), c2 = column01(B, 2);  // (B(0,c), B(1,c))
+  const __m128d r0 = _mm_unpacklo_pd(c0, c1), r1 = _mm_unpackhi_pd(c0, c1);
+  const __m128d r2 = _mm_set_pd(static_cast<double>(B[5]), static_cast<double>(B[2]));
+  const __m128d v01 = _mm_loadu_pd(v), v2 = _mm_set1_pd(v[2]);
+  const __m128d p0 = _mm_mul_pd(r0, _mm_unpacklo_pd(v01, v01)), p1 = _mm_mul_pd(r1, _mm_unpackhi_pd(v01, v01)),
+                p2 = _mm_mul_pd(r2, v2);
+  const __m128d xy = kRight ? _mm_add_pd(p0, _mm_add_pd(p1, p2)) : _mm_add_pd(_mm_add_pd(p0, p1), p2);
+  _mm_storeu_pd(t, _mm_sub_pd(_mm_loadu_pd(t), xy));
+  // Entry 2: column 2 of B with v.
+  const __m128d q = _mm_mul_pd(c2, v01);
+  const double a0 = _mm_cvtsd_f64(q), a1 = _mm_cvtsd_f64(_mm_unpackhi_pd(q, q)), a2 = static_cast<double>(B[8]) * v[2];
+  t[2] -= kRight ? sum_right(a0, a1, a2) : sum_left(a0, a1, a2);
+#else
+  for (int c = 0; c < 3; ++c) {  // column c of B with v
+    const double a0 = static_cast<double>(B[3 * c]) * v[0], a1 = static_cast<double>(B[3 * c + 1]) * v[1],
+                 a2 = static_cast<double>(B[3 * c + 2]) * v[2];
+    t[c] -= kRight ? sum_right(a0, a1, a2) : sum_left(a0, a1, a2);
+  }
+#endif
+}
+
+// Column j of L into w: w(L_i(p)) −= L_p w(j) for p in [begin, end). The pointers are arguments,
+// not a lambda's captures: the SSE2 stores may alias anything, and the loop reloaded captures
+// from memory after each.
+template <bool kRight, class Block>
+void forward_column(const Block* L, const int* Li, double* w, int j, int begin, int end) {
+  const double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
+  for (int p = begin; p < end; ++p) subtract_product<kRight>(L[p].data(), wj, w + 3 * static_cast<size_t>(Li[p]));
+}
+
+// w(j) −= Σ L_pᵀ w(L_i(p)) over p in [begin, end), in that order.
+template <bool kRight, class Block>
+void backward_column(const Block* L, const int* Li, double* w, int j, int begin, int end) {
+  double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
+  for (int p = begin; p < end; ++p) subtract_transposed_product<kRight>(L[p].data(), w + 3 * static_cast<size_t>(Li[p]), wj);
+  for (int c = 0; c < 3; ++c) w[3 * j + c] = wj[c];
+}
+
+// The same with the blocks' transposes given (LT_p = L_pᵀ, column-major): w(j) −= Σ LT_p w(L_i(p)),
+// the product read by columns like the forward one (the same sums: entry c of L_pᵀ v is column c
+// of L_p with v either way).
+template <bool kRight>
+void backward_column_transposed(const Eigen::Matrix3d* LT, const int* Li, double* w, int j, int begin, int end) {
+  double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
+  for (int p = begin; p < end; ++p) subtract_product<kRight>(LT[p].data(), w + 3 * static_cast<size_t>(Li[p]), wj);
+  for (int c = 0; c < 3; ++c) w[3 * j + c] = wj[c];
+}
+
+// Y(L_i(p)) −= L_p Y_i for p in [begin, end): factorize's updates of the rows below column i,
+// column by column. (Loading L_p once per block instead of once per column, against the aliasing
+// of the stores, did not help: GCC then spilled the broadcast entries of Y_i.)
+void update_rows(const Eigen::Matrix3d* L, const int* Li, Eigen::Matrix3d* y, int begin, int end, const Eigen::Matrix3d& Yi) {
+  const double yi[9] = {Yi(0, 0), Yi(1, 0), Yi(2, 0), Yi(0, 1), Yi(1, 1), Yi(2, 1), Yi(0, 2), Yi(1, 2), Yi(2, 2)};
+  for (int p = begin; p < end; ++p) {
+    double* t = y[Li[p]].data();
+    for (int c = 0; c < 3; ++c) subtract_product<false>(L[p].data(), yi + 3 * c, t + 3 * c);
+  }
+}
+
+}  // namespace
 
 void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs, int parts) {
   assert(n >= 0);
@@ -261,7 +371,7 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
       }
       const Mat3 yi = y[i];
       y[i].setZero();
-      for (int p = Lp_[i]; p < p2; ++p) y[Li_[p]].noalias() -= Lx_[p] * yi;
+      update_rows(Lx_.data(), Li_.data(), y, Lp_[i], p2, yi);
       const Mat3 lki = yi.transpose() * Dinv_[i];  // L(k, i) = Y(i)ᵀ D(i)⁻¹
       d.noalias() -= lki * yi;
       Lx_[p2] = lki;
@@ -317,10 +427,22 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
     for (Mat3& y : y2_) y.setZero();
     return false;
   }
-  // L rounded to single precision for precondition(): half the bytes per substitution.
-  Lf_.resize(Lx_.size());
+  // L rounded to single precision for precondition(): half the bytes per substitution. A factor
+  // that fits in the cache keeps the rounded values as doubles (exactly the same numbers): its
+  // substitutions are not memory-bound, and converting every block twice per substitution cost
+  // more than the bytes saved (kRoundedInDouble).
+  const bool in_double = Lx_.size() * sizeof(Mat3) <= rounded_in_double_;
+  Lf_.resize(in_double ? 0 : Lx_.size());
+  Lr_.resize(in_double ? Lx_.size() : 0);
+  Lrt_.resize(Lr_.size());
   auto round = [&](size_t begin, size_t end) {
-    for (size_t p = begin; p < end; ++p) Lf_[p] = Lx_[p].cast<float>();
+    if (in_double)
+      for (size_t p = begin; p < end; ++p) {
+        Lr_[p] = Lx_[p].cast<float>().cast<double>();
+        Lrt_[p] = Lr_[p].transpose();
+      }
+    else
+      for (size_t p = begin; p < end; ++p) Lf_[p] = Lx_[p].cast<float>();
   };
   if (bin_rows_.empty())
     round(0, Lx_.size());
@@ -329,23 +451,24 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
   return true;
 }
 
-template <class Block>
-void BlockLDLT::substitute(const std::vector<Block>& Lx, const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+template <bool kRight, class Block>
+void BlockLDLT::substitute(const std::vector<Block>& Lx, const std::vector<Mat3>* LT, const Eigen::VectorXd& b,
+                           Eigen::VectorXd& x) const {
   const int n = n_;
   assert(b.size() == 3 * static_cast<Eigen::Index>(n));
   w_.resize(b.size());
   for (int k = 0; k < n; ++k) w_.segment<3>(3 * k) = b.segment<3>(3 * static_cast<Eigen::Index>(perm_[k]));
   // L w = b by columns: the bins' columns into their own rows, then every column into the top's
   // rows in ascending column order (each entry of w receives its terms in the sequential order).
-  auto forward = [&](int j, int begin, int end) {
-    const Eigen::Vector3d wj = w_.segment<3>(3 * j);
-    for (int p = begin; p < end; ++p) w_.segment<3>(3 * static_cast<Eigen::Index>(Li_[p])).noalias() -= Lx[p].template cast<double>() * wj;
-  };
+  double* const w = w_.data();
+  const Block* const L = Lx.data();
+  auto forward = [&](int j, int begin, int end) { forward_column<kRight>(L, Li_.data(), w, j, begin, end); };
   // Lᵀ w = w by columns, each reading its ancestors (done before it: the top before the bins).
   auto backward = [&](int j) {
-    Eigen::Vector3d wj = w_.segment<3>(3 * j);
-    for (int p = Lp_[j]; p < Lp_[j + 1]; ++p) wj.noalias() -= Lx[p].template cast<double>().transpose() * w_.segment<3>(3 * static_cast<Eigen::Index>(Li_[p]));
-    w_.segment<3>(3 * j) = wj;
+    if (LT)
+      backward_column_transposed<kRight>(LT->data(), Li_.data(), w, j, Lp_[j], Lp_[j + 1]);
+    else
+      backward_column<kRight>(L, Li_.data(), w, j, Lp_[j], Lp_[j + 1]);
   };
   if (!bin_rows_.empty())
     tbb::parallel_for(0, static_cast<int>(bin_rows_.size()), [&](int bin) {
@@ -362,8 +485,13 @@ void BlockLDLT::substitute(const std::vector<Block>& Lx, const Eigen::VectorXd& 
   for (int k = 0; k < n; ++k) x.segment<3>(3 * static_cast<Eigen::Index>(perm_[k])) = w_.segment<3>(3 * k);
 }
 
-void BlockLDLT::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const { substitute(Lx_, b, x); }
+void BlockLDLT::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const { substitute<false>(Lx_, nullptr, b, x); }
 
-void BlockLDLT::precondition(const Eigen::VectorXd& b, Eigen::VectorXd& x) const { substitute(Lf_, b, x); }
+void BlockLDLT::precondition(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  if (Lr_.empty())
+    substitute<true>(Lf_, nullptr, b, x);
+  else
+    substitute<true>(Lr_, &Lrt_, b, x);
+}
 
 }  // namespace squeeze::fem
