@@ -15,77 +15,10 @@
 #include <thread>
 #include <type_traits>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+#include "block_kernels.h"
 
 namespace squeeze::fem {
 namespace {
-
-// The block kernels of factorize and the substitutions: the same IEEE operations in the same
-// order as the Eigen expressions they replaced (Eigen 3.4 with SSE2), so bit for bit the same
-// factors and solutions (the trajectories of bench/scenes/ball_drop, headon and organs are
-// byte-identical to the build before), without Eigen's per-block index arithmetic and
-// one-at-a-time conversions of the single-precision blocks. Each entry of a block-vector product is a
-// sum of three products, which Eigen associated two ways: its SSE2 product of a double block
-// (rows 0 and 1 as a pair) and its product of a transposed double block as (a₀ + a₁) + a₂; row 2
-// of a double block and every entry of a single-precision block (converted to double one number
-// at a time) as a₀ + (a₁ + a₂). kRight: the single-precision factor's association (every entry
-// a₀ + (a₁ + a₂)), whether its blocks are read as floats or as the doubles they round to. The
-// result is then subtracted from its target.
-inline double sum_right(double a0, double a1, double a2) { return a0 + (a1 + a2); }
-inline double sum_left(double a0, double a1, double a2) { return (a0 + a1) + a2; }
-#if defined(__SSE2__)
-// Rows 0 and 1 of column c of a column-major 3×3 block, as doubles.
-inline __m128d column01(const double* b, int c) { return _mm_loadu_pd(b + 3 * c); }
-inline __m128d column01(const float* b, int c) {
-  return _mm_cvtps_pd(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(b + 3 * c))));
-}
-#endif
-
-// t ← t − B v (t, v: 3 doubles; B: a column-major 3×3 block of doubles or floats).
-template <bool kRight, class Real>
-inline void subtract_product(const Real* B, const double* v, double* t) {
-#if defined(__SSE2__)
-  const __m128d v0 = _mm_set1_pd(v[0]), v1 = _mm_set1_pd(v[1]), v2 = _mm_set1_pd(v[2]);
-  const __m128d p0 = _mm_mul_pd(column01(B, 0), v0), p1 = _mm_mul_pd(column01(B, 1), v1), p2 = _mm_mul_pd(column01(B, 2), v2);
-  const __m128d xy = kRight ? _mm_add_pd(p0, _mm_add_pd(p1, p2)) : _mm_add_pd(_mm_add_pd(p0, p1), p2);
-  _mm_storeu_pd(t, _mm_sub_pd(_mm_loadu_pd(t), xy));
-#else
-  for (int r = 0; r < 2; ++r) {
-    const double a0 = static_cast<double>(B[r]) * v[0], a1 = static_cast<double>(B[3 + r]) * v[1],
-                 a2 = static_cast<double>(B[6 + r]) * v[2];
-    t[r] -= kRight ? sum_right(a0, a1, a2) : sum_left(a0, a1, a2);
-  }
-#endif
-  t[2] -= sum_right(static_cast<double>(B[2]) * v[0], static_cast<double>(B[5]) * v[1], static_cast<double>(B[8]) * v[2]);
-}
-
-// t ← t − Bᵀ v.
-template <bool kRight, class Real>
-inline void subtract_transposed_product(const Real* B, const double* v, double* t) {
-#if defined(__SSE2__)
-  // Entries 0 and 1 as a pair: the rows of B's columns 0 and 1, (B(r,0), B(r,1)).
-  const __m128d c0 = column01(B, 0), c1 = column01(B, 1), c2 = column01(B, 2);  // (B(0,c), B(1,c))
-  const __m128d r0 = _mm_unpacklo_pd(c0, c1), r1 = _mm_unpackhi_pd(c0, c1);
-  const __m128d r2 = _mm_set_pd(static_cast<double>(B[5]), static_cast<double>(B[2]));
-  const __m128d v01 = _mm_loadu_pd(v), v2 = _mm_set1_pd(v[2]);
-  const __m128d p0 = _mm_mul_pd(r0, _mm_unpacklo_pd(v01, v01)), p1 = _mm_mul_pd(r1, _mm_unpackhi_pd(v01, v01)),
-                p2 = _mm_mul_pd(r2, v2);
-  const __m128d xy = kRight ? _mm_add_pd(p0, _mm_add_pd(p1, p2)) : _mm_add_pd(_mm_add_pd(p0, p1), p2);
-  _mm_storeu_pd(t, _mm_sub_pd(_mm_loadu_pd(t), xy));
-  // Entry 2: column 2 of B with v.
-  const __m128d q = _mm_mul_pd(c2, v01);
-  const double a0 = _mm_cvtsd_f64(q), a1 = _mm_cvtsd_f64(_mm_unpackhi_pd(q, q)), a2 = static_cast<double>(B[8]) * v[2];
-  t[2] -= kRight ? sum_right(a0, a1, a2) : sum_left(a0, a1, a2);
-#else
-  for (int c = 0; c < 3; ++c) {  // column c of B with v
-    const double a0 = static_cast<double>(B[3 * c]) * v[0], a1 = static_cast<double>(B[3 * c + 1]) * v[1],
-                 a2 = static_cast<double>(B[3 * c + 2]) * v[2];
-    t[c] -= kRight ? sum_right(a0, a1, a2) : sum_left(a0, a1, a2);
-  }
-#endif
-}
 
 // Column j of L into w: w(L_i(p)) −= L_p w(j) for p in [begin, end). The pointers are arguments,
 // not a lambda's captures: the SSE2 stores may alias anything, and the loop reloaded captures
@@ -93,14 +26,14 @@ inline void subtract_transposed_product(const Real* B, const double* v, double* 
 template <bool kRight, class Block>
 void forward_column(const Block* L, const int* Li, double* w, int j, int begin, int end) {
   const double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
-  for (int p = begin; p < end; ++p) subtract_product<kRight>(L[p].data(), wj, w + 3 * static_cast<size_t>(Li[p]));
+  for (int p = begin; p < end; ++p) blocks::product<blocks::Op::kSubtract, kRight>(L[p].data(), wj, w + 3 * static_cast<size_t>(Li[p]));
 }
 
 // w(j) −= Σ L_pᵀ w(L_i(p)) over p in [begin, end), in that order.
 template <bool kRight, class Block>
 void backward_column(const Block* L, const int* Li, double* w, int j, int begin, int end) {
   double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
-  for (int p = begin; p < end; ++p) subtract_transposed_product<kRight>(L[p].data(), w + 3 * static_cast<size_t>(Li[p]), wj);
+  for (int p = begin; p < end; ++p) blocks::transposed_product<blocks::Op::kSubtract, kRight>(L[p].data(), w + 3 * static_cast<size_t>(Li[p]), wj);
   for (int c = 0; c < 3; ++c) w[3 * j + c] = wj[c];
 }
 
@@ -110,7 +43,7 @@ void backward_column(const Block* L, const int* Li, double* w, int j, int begin,
 template <bool kRight>
 void backward_column_transposed(const Eigen::Matrix3d* LT, const int* Li, double* w, int j, int begin, int end) {
   double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
-  for (int p = begin; p < end; ++p) subtract_product<kRight>(LT[p].data(), w + 3 * static_cast<size_t>(Li[p]), wj);
+  for (int p = begin; p < end; ++p) blocks::product<blocks::Op::kSubtract, kRight>(LT[p].data(), w + 3 * static_cast<size_t>(Li[p]), wj);
   for (int c = 0; c < 3; ++c) w[3 * j + c] = wj[c];
 }
 
@@ -121,7 +54,7 @@ void update_rows(const Eigen::Matrix3d* L, const int* Li, Eigen::Matrix3d* y, in
   const double yi[9] = {Yi(0, 0), Yi(1, 0), Yi(2, 0), Yi(0, 1), Yi(1, 1), Yi(2, 1), Yi(0, 2), Yi(1, 2), Yi(2, 2)};
   for (int p = begin; p < end; ++p) {
     double* t = y[Li[p]].data();
-    for (int c = 0; c < 3; ++c) subtract_product<false>(L[p].data(), yi + 3 * c, t + 3 * c);
+    for (int c = 0; c < 3; ++c) blocks::product<blocks::Op::kSubtract, false>(L[p].data(), yi + 3 * c, t + 3 * c);
   }
 }
 

@@ -18,6 +18,7 @@
 #include <tbb/parallel_invoke.h>
 #include <spdlog/spdlog.h>
 
+#include "block_kernels.h"
 #include "squeeze/common/error.h"
 #include "squeeze/fem/block_ldlt.h"
 #include "squeeze/fem/constraints.h"
@@ -74,6 +75,12 @@ class BlockMatrix {
     col_start_.assign(static_cast<size_t>(n) + 1, 0);
     for (const auto& p : pairs_) ++col_start_[p.second + 1];
     for (int J = 0; J < n; ++J) col_start_[J + 1] += col_start_[J];
+    row_start_.assign(static_cast<size_t>(n) + 1, 0);
+    for (const auto& p : pairs_) ++row_start_[p.first + 1];
+    for (int I = 0; I < n; ++I) row_start_[I + 1] += row_start_[I];
+    row_pairs_.resize(pairs_.size());
+    std::vector<int> next(row_start_.begin(), row_start_.end() - 1);
+    for (size_t q = 0; q < pairs_.size(); ++q) row_pairs_[static_cast<size_t>(next[pairs_[q].first]++)] = static_cast<int>(q);
     diag_.assign(static_cast<size_t>(n), Mat3::Zero());
     off_.assign(pairs_.size(), Mat3::Zero());
     return true;
@@ -93,14 +100,26 @@ class BlockMatrix {
   // the diagonal block of vertex I.
   void add_diag(int I, const Mat3& H) { diag_[static_cast<size_t>(I)] += H; }
   void add_off(int id, const Mat3& H) { off_[static_cast<size_t>(id)] += H; }
-  // out = A p (3 per block).
+  // out = A p (3 per block). Row by row, each row's terms in the order of a pass over the pairs
+  // (by column, then row: first the blocks (K, J), J < K, by column, then the transposes of the
+  // blocks (I, K) of column K, by row), so the same sums as that pass, which read and wrote two
+  // rows of out per block: 51.6 → 45.1 M instructions over the ball's second (callgrind).
   void multiply(const Eigen::VectorXd& p, Eigen::VectorXd& out) const {
     out.resize(p.size());
-    for (int I = 0; I < n_; ++I) out.segment<3>(3 * I).noalias() = diag_[static_cast<size_t>(I)] * p.segment<3>(3 * I);
-    for (size_t q = 0; q < pairs_.size(); ++q) {
-      const int I = pairs_[q].first, J = pairs_[q].second;
-      out.segment<3>(3 * I).noalias() += off_[q] * p.segment<3>(3 * J);
-      out.segment<3>(3 * J).noalias() += off_[q].transpose() * p.segment<3>(3 * I);
+    const double* const pv = p.data();
+    const Mat3* const off = off_.data();
+    const std::pair<int, int>* const pairs = pairs_.data();
+    const int* const row_pairs = row_pairs_.data();
+    double* const o = out.data();
+    for (int K = 0; K < n_; ++K) {
+      blocks::product<blocks::Op::kAssign, false>(diag_[static_cast<size_t>(K)].data(), pv + 3 * K, o + 3 * K);
+      blocks::Sum3 t(o + 3 * K);
+      for (int a = row_start_[K]; a < row_start_[K + 1]; ++a) {
+        const int q = row_pairs[a];
+        t.add_product(off[q].data(), pv + 3 * pairs[q].second);
+      }
+      for (int q = col_start_[K]; q < col_start_[K + 1]; ++q) t.add_transposed_product(off[q].data(), pv + 3 * pairs[q].first);
+      t.store(o + 3 * K);
     }
   }
   int blocks() const { return n_; }
@@ -112,6 +131,7 @@ class BlockMatrix {
   int n_ = -1;
   std::vector<std::pair<int, int>> pairs_;  // (I, J), I > J, sorted by column then row
   std::vector<int> col_start_;             // per block column J: its pairs [col_start_[J], col_start_[J+1])
+  std::vector<int> row_start_, row_pairs_;  // per block row I: its pairs row_pairs_[row_start_[I] .. row_start_[I+1]), by column
   std::vector<Mat3> diag_;                 // per block row: its diagonal block
   std::vector<Mat3> off_;                  // per pair (I, J): block (I, J)
 };
