@@ -5,6 +5,7 @@
 #include <tbb/global_control.h>
 
 #include <Eigen/Eigenvalues>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -128,6 +129,72 @@ TEST(FemKernels, VolumeHessianMatchesFiniteDifferences) {
     }
   }
 }
+
+#if defined(__SSE2__)
+// The implicit integrator's assembly computes its elements' Newton blocks two at a time (SSE2
+// lanes): they must be the scalar functions' to the last bit, exact and positive semi-definite,
+// damped or not (each lane on its own), compressed and stretched edges, inverted and flat
+// tetrahedra; a zero-length edge is refused (the scalar function takes it).
+TEST(FemKernels, NewtonBlockPairsEqualScalarBitForBit) {
+  struct Edge { int i, j; double D0, k, kd; };
+  struct Tet { int v[4]; double V0, k, kd; };
+  std::mt19937 g(17);
+  std::uniform_real_distribution<double> u(0.1, 3.0);
+  const int n = 40;
+  RowMatrixX3d X(n, 3);
+  for (int i = 0; i < n; ++i) X.row(i) = rand_vec(g).transpose();
+  X.row(5) = 0.5 * (X.row(2) + X.row(3)), X.row(4) = X.row(2);  // tet (2, 3, 4, 5): flat
+  std::vector<Edge> edges;
+  std::vector<Tet> tets{{{2, 3, 4, 5}, 0.05, 3.0, 0.2}};
+  for (int e = 0; e < 300; ++e) {
+    const int i = static_cast<int>(g() % n), j = (i + 1 + static_cast<int>(g() % (n - 1))) % n;
+    edges.push_back({i, j, u(g), u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)});  // some undamped
+  }
+  for (int t = 0; t < 300; ++t) {
+    Tet T{{0, 0, 0, 0}, u(g) * 0.01, u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)};
+    for (int& c : T.v) c = static_cast<int>(g() % n);
+    tets.push_back(T);
+  }
+  std::vector<Vec3> eg(edges.size());
+  std::vector<std::array<Vec3, 4>> tg(tets.size());
+  for (auto& v : eg) v = rand_vec(g, 5.0);
+  for (auto& a : tg)
+    for (auto& v : a) v = rand_vec(g, 5.0);
+  const double h = 1.0 / 30;
+  const double* x = X.data();
+  auto bits_equal = [](const double* a, const double* b, int m) { return std::memcmp(a, b, sizeof(double) * m) == 0; };
+  for (bool exact : {true, false}) {
+    for (size_t e = 0; e + 1 < edges.size(); ++e) {
+      Eigen::Matrix3d P[2];
+      ASSERT_TRUE(edge_newton_block_pair(x, edges[e], edges[e + 1], !exact, h, eg[e].data(), eg[e + 1].data(),
+                                         P[0].data(), P[1].data()));
+      for (int q = 0; q < 2; ++q) {
+        const Edge& E = edges[e + q];
+        const Eigen::Matrix3d S = edge_newton_block(Vec3(x + 3 * E.i), Vec3(x + 3 * E.j), E.D0, E.k, !exact, E.kd, h, eg[e + q]);
+        EXPECT_TRUE(bits_equal(S.data(), P[q].data(), 9)) << "edge " << e + q << (exact ? " exact" : " psd");
+      }
+    }
+    for (size_t t = 0; t + 1 < tets.size(); ++t) {
+      Eigen::Matrix3d P[2][10];
+      tet_newton_blocks_pair(x, tets[t], tets[t + 1], exact, h, tg[t][0].data(), tg[t + 1][0].data(), P[0][0].data(),
+                             P[1][0].data());
+      for (int q = 0; q < 2; ++q) {
+        const Tet& T = tets[t + q];
+        Vec3 p[4];
+        for (int c = 0; c < 4; ++c) p[c] = Vec3(x + 3 * T.v[c]);
+        Eigen::Matrix3d S[10];
+        tet_newton_blocks(p, T.V0, T.k, exact, T.kd, h, tg[t + q].data(), S, S + 4);
+        for (int b = 0; b < 10; ++b)
+          EXPECT_TRUE(bits_equal(S[b].data(), P[q][b].data(), 9)) << "tet " << t + q << " block " << b << (exact ? " exact" : " psd");
+      }
+    }
+  }
+  Edge zero{0, 1, 0.3, 2.0, 0.1};
+  X.row(1) = X.row(0);
+  Eigen::Matrix3d P[2];
+  EXPECT_FALSE(edge_newton_block_pair(x, zero, edges[0], false, h, eg[0].data(), eg[1].data(), P[0].data(), P[1].data()));
+}
+#endif
 
 namespace {
 // The vertex pairs of a tetrahedral mesh's elements, (I, J) with I > J, shifted by offset, appended
@@ -569,7 +636,7 @@ TEST(FemImplicit, BitIdenticalWhateverTheThreadCount) {
     o.floor_height = -0.15;
     o.contact_stiffness = 2e3;
     o.contact_damping = 0.5;
-    o.parallel = {0, 0, 0};
+    o.parallel = {0, 0, 0, 0};
     World w(o);
     Material m;
     m.k_distance = m.k_volume = 5;

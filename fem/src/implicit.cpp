@@ -39,8 +39,6 @@ constexpr double kCarryMargin = 0.1;
 // beyond the edge; FemImplicit.ABodySlidingOffASlabFallsOffIt). 0.5 dropped most of the organs'
 // resting contacts as they sagged (221 factorisations in 2 s instead of 106); 2 keeps them.
 constexpr double kCarryDrift = 2.0;
-// An assembly in one part computes the element blocks in parallel from this many tetrahedra on.
-constexpr size_t kParallelAssemblyTets = 256;
 // A substep that halves one and moves at least this fraction of its motion is kept (substep).
 constexpr double kJumpRatio = 0.8;
 // A contact's penalty curvature is kept in the Newton matrix while its depth is above −kCurvatureBand
@@ -100,6 +98,22 @@ class BlockMatrix {
   // the diagonal block of vertex I.
   void add_diag(int I, const Mat3& H) { diag_[static_cast<size_t>(I)] += H; }
   void add_off(int id, const Mat3& H) { off_[static_cast<size_t>(id)] += H; }
+  // Adds H (transposed: Hᵀ) to, or subtracts it from, the off-diagonal block id: the same entry
+  // additions as add_off(id, H.transpose()) and add_off(id, −H).
+  void add_off(int id, const Mat3& H, bool transposed) {
+    Mat3& B = off_[static_cast<size_t>(id)];
+    if (transposed)
+      B += H.transpose();
+    else
+      B += H;
+  }
+  void subtract_off(int id, const Mat3& H, bool transposed) {
+    Mat3& B = off_[static_cast<size_t>(id)];
+    if (transposed)
+      B -= H.transpose();
+    else
+      B -= H;
+  }
   // out = A p (3 per block). Row by row, each row's terms in the order of a pass over the pairs
   // (by column, then row: first the blocks (K, J), J < K, by column, then the transposes of the
   // blocks (I, K) of column K, by row), so the same sums as that pass, which read and wrote two
@@ -186,6 +200,7 @@ class ImplicitIntegrator : public TimeIntegrator {
   void energy_gradient(const World& w, const RowMatrixX3d& x, double h, bool damping, RowMatrixX3d& Gr) const;
   void gradient(const World& w, const RowMatrixX3d& x, double h, Eigen::VectorXd& g);
   void assemble(const World& w, const RowMatrixX3d& x, double h, bool exact);
+  void element_blocks(const World& w, const RowMatrixX3d& x, double h, bool exact);
   void build_pattern(const World& w);
   bool factorize(double h);
   bool newton_direction(const World& w, const RowMatrixX3d& x, double h, const Eigen::VectorXd& g, Eigen::VectorXd& dx);
@@ -761,6 +776,57 @@ void ImplicitIntegrator::build_pattern(const World& w) {
   }
 }
 
+// The elements' Newton blocks at x into edge_H_ and tet_H_, two at a time (constraints.h, the SSE2
+// pair kernels: bit for bit the scalar edge_newton_block and tet_newton_blocks), on the calling
+// thread below WorldOptions::parallel.assembly_tets tetrahedra, else in parallel. With the pair
+// kernels a block costs half what it did, and two TBB tasks per Newton iteration cost more than
+// they save on small meshes, the more so while another process keeps the second core busy
+// (bench_integrators, implicit, load 2.3–2.7, simulated s per wall s on the calling thread /
+// parallel: the ball, 473 tetrahedra, 16.0–16.9 / 12.4–15.4; the bunny, 1,914, 3.17–3.21 /
+// 3.13–3.17; balls of 1,135, 6,216 and 24,066 tetrahedra 6.46 / 5.87, 0.251 / 0.207, 5.43 / 6.22;
+// the threshold was 256 before).
+void ImplicitIntegrator::element_blocks(const World& w, const RowMatrixX3d& x, double h, bool exact) {
+  const WorldData& d = w.data();
+  edge_H_.resize(d.edges.size());
+  tet_H_.resize(d.tet_elems.size());
+  const double* const X = x.data();
+  auto edges = [&](size_t e, size_t end) {
+#if defined(__SSE2__)
+    for (; e + 1 < end; e += 2)
+      if (!edge_newton_block_pair(X, d.edges[e], d.edges[e + 1], !exact, h, edge_g_[e].data(), edge_g_[e + 1].data(),
+                                  edge_H_[e].data(), edge_H_[e + 1].data()))
+        break;  // a zero-length edge: the scalar function from here on
+#endif
+    for (; e < end; ++e) {
+      const auto& E = d.edges[e];
+      edge_H_[e] = edge_newton_block(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact, E.kd,
+                                     h, edge_g_[e]);
+    }
+  };
+  auto tets = [&](size_t t, size_t end) {
+#if defined(__SSE2__)
+    for (; t + 1 < end; t += 2)
+      tet_newton_blocks_pair(X, d.tet_elems[t], d.tet_elems[t + 1], exact, h, tet_g_[t][0].data(), tet_g_[t + 1][0].data(),
+                             tet_H_[t][0].data(), tet_H_[t + 1][0].data());
+#endif
+    for (; t < end; ++t) {
+      const auto& T = d.tet_elems[t];
+      Vec3 p[4];
+      for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
+      tet_newton_blocks(p, T.V0, T.k, exact, T.kd, h, tet_g_[t].data(), tet_H_[t].data(), tet_H_[t].data() + 4);
+    }
+  };
+  if (d.tet_elems.size() < static_cast<size_t>(w.options().parallel.assembly_tets)) {
+    edges(0, d.edges.size());
+    tets(0, d.tet_elems.size());
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, d.edges.size(), 1024),
+                    [&](const tbb::blocked_range<size_t>& r) { edges(r.begin(), r.end()); });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, d.tet_elems.size(), 256),
+                    [&](const tbb::blocked_range<size_t>& r) { tets(r.begin(), r.end()); });
+}
+
 void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double h, bool exact) {
   const WorldData& d = w.data();
   const WorldOptions& o = w.options();
@@ -808,41 +874,39 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
     }
     auto edge_block = [&](size_t e) {
       const auto& E = d.edges[e];
-      Mat3 He = distance_hessian(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact);
-      if (E.kd > 0) He += (E.kd / h) * edge_g_[e] * edge_g_[e].transpose();
-      return He;
+      return edge_newton_block(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact, E.kd, h,
+                               edge_g_[e]);
     };
     auto tet_blocks = [&](size_t t, Mat3* Hd, Mat3* Hl) {  // Hd[4], Hl[6]: the blocks (b, a), a < b, in pair order
       const auto& T = d.tet_elems[t];
-      Vec3 p[4], gk[4];
+      Vec3 p[4];
       for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
-      volume_hessian_lower(p, T.V0, T.k, exact, Hd, Hl, gk);
-      const double damp = T.kd / h;
-      if (damp > 0) {
-        const auto& tg = tet_g_[t];
-        int q = 0;
-        for (int a = 0; a < 4; ++a) {
-          Hd[a] += damp * tg[a] * tg[a].transpose();
-          for (int b = a + 1; b < 4; ++b) Hl[q++] += damp * tg[b] * tg[a].transpose();
-        }
-      }
+      tet_newton_blocks(p, T.V0, T.k, exact, T.kd, h, tet_g_[t].data(), Hd, Hl);
     };
-    // One part of a large mesh: the blocks computed in parallel first (then summed in order below).
-    const bool buffered = part < 0 && d.tet_elems.size() >= kParallelAssemblyTets;
-    if (buffered) {
-      edge_H_.resize(d.edges.size());
-      tet_H_.resize(d.tet_elems.size());
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, d.edges.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t e = r.begin(); e < r.end(); ++e) edge_H_[e] = edge_block(e);
-      });
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, d.tet_elems.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t t = r.begin(); t < r.end(); ++t) tet_blocks(t, tet_H_[t].data(), tet_H_[t].data() + 4);
-      });
+    if (part < 0) {  // all the blocks computed first (element_blocks), then summed in order
+      for (size_t e = 0; e < d.edges.size(); ++e) {
+        const auto& E = d.edges[e];
+        const int A = free_[E.i], B = free_[E.j], c = edge_block_[e];
+        const Mat3& He = edge_H_[e];  // the edge's blocks: He on the diagonal, −He (its transpose) off it
+        if (A >= 0) H_.add_diag(A, He);
+        if (B >= 0) H_.add_diag(B, He);
+        if (c >= 0) H_.subtract_off(c >> 1, He, c & 1);
+      }
+      for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+        const auto& T = d.tet_elems[t];
+        const Mat3* Hd = tet_H_[t].data();
+        const Mat3* Hl = Hd + 4;  // in pair order, as the codes
+        for (int k = 0; k < 4; ++k)
+          if (free_[T.v[k]] >= 0) H_.add_diag(free_[T.v[k]], Hd[k]);
+        for (int q = 0; q < 6; ++q)
+          if (const int c = tet_block_[t][q]; c >= 0) H_.add_off(c >> 1, Hl[q], c & 1);
+      }
+      return;
     }
     for (size_t e = 0; e < d.edges.size(); ++e) {
       const auto& E = d.edges[e];
       if (!mine(part, free_[E.i]) && !mine(part, free_[E.j])) continue;
-      const Mat3 He = buffered ? edge_H_[e] : edge_block(e);
+      const Mat3 He = edge_block(e);
       const int rows[2] = {E.i, E.j};
       scatter(part, 2, rows, &edge_block_[e], [&](int a, int b) -> Mat3 { return a == b ? He : Mat3(-He); });
     }
@@ -853,19 +917,18 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
         continue;
       Mat3 own[10];
       const Mat3* Hd = own;
-      if (buffered)
-        Hd = tet_H_[t].data();
-      else
-        tet_blocks(t, own, own + 4);
+      tet_blocks(t, own, own + 4);
       const Mat3* Hl = Hd + 4;  // block (b, a), a < b, at the pair's index a (7 − a) / 2 + b − a − 1
       scatter(part, 4, T.v, tet_block_[t].data(),
               [&](int b, int a) -> const Mat3& { return a == b ? Hd[a] : Hl[a * (7 - a) / 2 + b - a - 1]; });
     }
   };
-  if (split > 0)
+  if (split > 0) {
     tbb::parallel_invoke([&] { assemble_part(0); }, [&] { assemble_part(1); });
-  else
+  } else {
+    element_blocks(w, x, h, exact);
     assemble_part(-1);
+  }
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const LinearContact& c = contacts_[k];
     const double depth = c.c0 - stencil_dot(c, x);
