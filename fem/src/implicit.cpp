@@ -628,7 +628,23 @@ double ImplicitIntegrator::potential(const World& w, const RowMatrixX3d& x, doub
   const WorldOptions& o = w.options();
   double G = 0;
   for (int i : free_rows_) G += 0.5 * d.mass(i) * (x.row(i) - y_.row(i)).squaredNorm() / (h * h);
-  for (size_t e = 0; e < d.edges.size(); ++e) {
+  size_t e = 0, t = 0;
+#if defined(__SSE2__)
+  // Two elements at a time (constraints.h, bit for bit the scalar terms below), summed in order.
+  auto add_pair = [&G](__m128d energy, __m128d damping, double kd0, double kd1) {
+    G += _mm_cvtsd_f64(energy);
+    if (kd0 > 0) G += _mm_cvtsd_f64(damping);
+    G += _mm_cvtsd_f64(_mm_unpackhi_pd(energy, energy));
+    if (kd1 > 0) G += _mm_cvtsd_f64(_mm_unpackhi_pd(damping, damping));
+  };
+  for (; e + 1 < d.edges.size(); e += 2) {
+    __m128d energy, damping;
+    edge_potential_pair(x.data(), xn_.data(), d.edges[e], d.edges[e + 1], h, edge_g_[e].data(), edge_g_[e + 1].data(),
+                        energy, damping);
+    add_pair(energy, damping, d.edges[e].kd, d.edges[e + 1].kd);
+  }
+#endif
+  for (; e < d.edges.size(); ++e) {
     const auto& E = d.edges[e];
     const Vec3 xi = x.row(E.i).transpose(), xj = x.row(E.j).transpose();
     G += distance_energy(xi, xj, E.D0, E.k);
@@ -637,7 +653,15 @@ double ImplicitIntegrator::potential(const World& w, const RowMatrixX3d& x, doub
       G += 0.5 * E.kd / h * q * q;
     }
   }
-  for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+#if defined(__SSE2__)
+  for (; t + 1 < d.tet_elems.size(); t += 2) {
+    __m128d energy, damping;
+    tet_potential_pair(x.data(), xn_.data(), d.tet_elems[t], d.tet_elems[t + 1], h, tet_g_[t][0].data(),
+                       tet_g_[t + 1][0].data(), energy, damping);
+    add_pair(energy, damping, d.tet_elems[t].kd, d.tet_elems[t + 1].kd);
+  }
+#endif
+  for (; t < d.tet_elems.size(); ++t) {
     const auto& T = d.tet_elems[t];
     Vec3 p[4];
     for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
@@ -678,7 +702,34 @@ void ImplicitIntegrator::energy_gradient(const World& w, const RowMatrixX3d& x, 
   const WorldOptions& o = w.options();
   Gr.setZero(d.rows, 3);
   auto add = [&](int row, const Vec3& v) { Gr.row(row) += v.transpose(); };
-  for (size_t e = 0; e < d.edges.size(); ++e) {
+  size_t e = 0, t = 0;
+#if defined(__SSE2__)
+  // Two elements at a time (constraints.h, bit for bit the scalar terms below), added in order.
+  double* const gr = Gr.data();
+  auto add_lane = [gr](int row, const simd::Pair3& f, int lane, bool negate) {
+    for (int c = 0; c < 3; ++c) {
+      const __m128d v = c == 0 ? f.x : c == 1 ? f.y : f.z;
+      const double value = _mm_cvtsd_f64(lane ? _mm_unpackhi_pd(v, v) : v);
+      gr[3 * row + c] += negate ? -value : value;
+    }
+  };
+  for (; e + 1 < d.edges.size(); e += 2) {
+    const simd::Pair3 f = edge_gradient_pair(x.data(), xn_.data(), d.edges[e], d.edges[e + 1], h, damping,
+                                             edge_g_[e].data(), edge_g_[e + 1].data());
+    for (int lane = 0; lane < 2; ++lane) {
+      add_lane(d.edges[e + lane].j, f, lane, false);
+      add_lane(d.edges[e + lane].i, f, lane, true);
+    }
+  }
+  for (; t + 1 < d.tet_elems.size(); t += 2) {
+    simd::Pair3 f[4];
+    tet_gradient_pair(x.data(), xn_.data(), d.tet_elems[t], d.tet_elems[t + 1], h, damping, tet_g_[t][0].data(),
+                      tet_g_[t + 1][0].data(), f);
+    for (int lane = 0; lane < 2; ++lane)
+      for (int k = 0; k < 4; ++k) add_lane(d.tet_elems[t + lane].v[k], f[k], lane, false);
+  }
+#endif
+  for (; e < d.edges.size(); ++e) {
     const auto& E = d.edges[e];
     const Vec3 xi = x.row(E.i).transpose(), xj = x.row(E.j).transpose();
     Vec3 gj;
@@ -691,7 +742,7 @@ void ImplicitIntegrator::energy_gradient(const World& w, const RowMatrixX3d& x, 
     add(E.j, f);
     add(E.i, -f);
   }
-  for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+  for (; t < d.tet_elems.size(); ++t) {
     const auto& T = d.tet_elems[t];
     Vec3 p[4], gk[4];
     for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();

@@ -461,6 +461,107 @@ SQUEEZE_FEM_INLINE void tet_newton_blocks_pair(const double* x, const Tet& t0, c
       if (B > A) ++q;
     }
 }
+
+// The implicit integrator's potential terms and gradients of two elements at once (implicit.cpp,
+// "potential", "energy_gradient"), bit for bit its scalar expressions
+// (FemKernels.PotentialPairsEqualScalarBitForBit): an element's energy ½ k C², and its damping
+// potential ½ (k_d / h) q², q = ∇C(x_n)·(x − x_n) summed over its vertices. x, xn: row-major
+// positions and the substep's start (m); g: the gradients at x_n (3 doubles per vertex, j's for
+// an edge, the four corners' for a tetrahedron).
+template <class Edge>
+SQUEEZE_FEM_INLINE void edge_potential_pair(const double* x, const double* xn, const Edge& e0, const Edge& e1, double h,
+                                            const double* g0, const double* g1, __m128d& energy, __m128d& damping) {
+  using namespace simd;
+  const Pair3 xi = load_pair(x + 3 * e0.i, x + 3 * e1.i), xj = load_pair(x + 3 * e0.j, x + 3 * e1.j);
+  const Pair3 d = sub(xj, xi);
+  const __m128d D0 = _mm_set_pd(e1.D0, e0.D0);
+  const __m128d C = _mm_div_pd(_mm_sub_pd(_mm_sqrt_pd(dot(d, d)), D0), D0);
+  energy = _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(_mm_set1_pd(0.5), _mm_set_pd(e1.k, e0.k)), C), C);
+  const Pair3 dx = sub(sub(xj, load_pair(xn + 3 * e0.j, xn + 3 * e1.j)), sub(xi, load_pair(xn + 3 * e0.i, xn + 3 * e1.i)));
+  const __m128d q = dot(load_pair(g0, g1), dx);
+  const __m128d c = _mm_div_pd(_mm_mul_pd(_mm_set1_pd(0.5), _mm_set_pd(e1.kd, e0.kd)), _mm_set1_pd(h));
+  damping = _mm_mul_pd(_mm_mul_pd(c, q), q);
+}
+
+template <class Tet>
+SQUEEZE_FEM_INLINE void tet_potential_pair(const double* x, const double* xn, const Tet& t0, const Tet& t1, double h,
+                                           const double* g0, const double* g1, __m128d& energy, __m128d& damping) {
+  using namespace simd;
+  Pair3 p[4];
+  for (int c = 0; c < 4; ++c) p[c] = load_pair(x + 3 * t0.v[c], x + 3 * t1.v[c]);
+  const Pair3 a = sub(p[1], p[0]), b = sub(p[2], p[0]), c = sub(p[3], p[0]);
+  const __m128d V0 = _mm_set_pd(t1.V0, t0.V0);
+  const __m128d V = _mm_div_pd(dot(a, cross(b, c)), _mm_set1_pd(6.0));
+  const __m128d C = _mm_div_pd(_mm_sub_pd(V, V0), V0);
+  energy = _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(_mm_set1_pd(0.5), _mm_set_pd(t1.k, t0.k)), C), C);
+  __m128d q = _mm_setzero_pd();
+  for (int k = 0; k < 4; ++k)
+    q = _mm_add_pd(q, dot(load_pair(g0 + 3 * k, g1 + 3 * k), sub(p[k], load_pair(xn + 3 * t0.v[k], xn + 3 * t1.v[k]))));
+  const __m128d cd = _mm_div_pd(_mm_mul_pd(_mm_set1_pd(0.5), _mm_set_pd(t1.kd, t0.kd)), _mm_set1_pd(h));
+  damping = _mm_mul_pd(_mm_mul_pd(cd, q), q);
+}
+
+/// The gradient of an edge's energy, plus its damping potential's where `damping` and k_d > 0:
+/// f = k C ∂C/∂p_j + (k_d / h) q g (∂/∂p_i = −f), of two edges at once.
+template <class Edge>
+SQUEEZE_FEM_INLINE simd::Pair3 edge_gradient_pair(const double* x, const double* xn, const Edge& e0, const Edge& e1,
+                                                  double h, bool damping, const double* g0, const double* g1) {
+  using namespace simd;
+  const Pair3 xi = load_pair(x + 3 * e0.i, x + 3 * e1.i), xj = load_pair(x + 3 * e0.j, x + 3 * e1.j);
+  const Pair3 d = sub(xj, xi);
+  const __m128d D0 = _mm_set_pd(e1.D0, e0.D0);
+  const __m128d len = _mm_sqrt_pd(dot(d, d));
+  const __m128d den = _mm_mul_pd(len, D0);
+  const __m128d positive = _mm_cmpgt_pd(len, _mm_setzero_pd());  // len > 0 (false for NaN): else ∂C/∂p_j = 0
+  const Pair3 gj{_mm_and_pd(positive, _mm_div_pd(d.x, den)), _mm_and_pd(positive, _mm_div_pd(d.y, den)),
+                 _mm_and_pd(positive, _mm_div_pd(d.z, den))};
+  const __m128d C = _mm_div_pd(_mm_sub_pd(len, D0), D0);
+  Pair3 f = scale(_mm_mul_pd(_mm_set_pd(e1.k, e0.k), C), gj);
+  const __m128d kd = _mm_set_pd(e1.kd, e0.kd);
+  const __m128d damped = _mm_cmpgt_pd(kd, _mm_setzero_pd());
+  if (damping && _mm_movemask_pd(damped)) {
+    const Pair3 g = load_pair(g0, g1);
+    const Pair3 dx = sub(sub(xj, load_pair(xn + 3 * e0.j, xn + 3 * e1.j)), sub(xi, load_pair(xn + 3 * e0.i, xn + 3 * e1.i)));
+    const Pair3 sum = add(f, scale(_mm_mul_pd(_mm_div_pd(kd, _mm_set1_pd(h)), dot(g, dx)), g));
+    auto pick = [&](__m128d with, __m128d without) { return _mm_or_pd(_mm_and_pd(damped, with), _mm_andnot_pd(damped, without)); };
+    f = {pick(sum.x, f.x), pick(sum.y, f.y), pick(sum.z, f.z)};
+  }
+  return f;
+}
+
+/// The gradient of a tetrahedron's energy, plus its damping potential's where `damping`:
+/// f[k] = k C ∂C/∂p_k (+ (k_d / h) q ∂C/∂p_k(x_n), q = 0 where k_d = 0), of two tetrahedra at once.
+template <class Tet>
+SQUEEZE_FEM_INLINE void tet_gradient_pair(const double* x, const double* xn, const Tet& t0, const Tet& t1, double h,
+                                          bool damping, const double* g0, const double* g1, simd::Pair3 f[4]) {
+  using namespace simd;
+  Pair3 p[4];
+  for (int c = 0; c < 4; ++c) p[c] = load_pair(x + 3 * t0.v[c], x + 3 * t1.v[c]);
+  const __m128d V0 = _mm_set_pd(t1.V0, t0.V0);
+  const Pair3 a = sub(p[1], p[0]), b = sub(p[2], p[0]), c = sub(p[3], p[0]);
+  const Pair3 bc = cross(b, c);
+  const __m128d V = _mm_div_pd(dot(a, bc), _mm_set1_pd(6.0));
+  const __m128d s = _mm_div_pd(_mm_set1_pd(1.0), _mm_mul_pd(_mm_set1_pd(6.0), V0));
+  Pair3 g[4];
+  g[1] = scale(s, bc);
+  g[2] = scale(s, cross(c, a));
+  g[3] = scale(s, cross(a, b));
+  g[0] = neg(add(add(g[1], g[2]), g[3]));
+  const __m128d kC = _mm_mul_pd(_mm_set_pd(t1.k, t0.k), _mm_div_pd(_mm_sub_pd(V, V0), V0));
+  if (!damping) {
+    for (int k = 0; k < 4; ++k) f[k] = scale(kC, g[k]);
+    return;
+  }
+  const __m128d kd = _mm_set_pd(t1.kd, t0.kd);
+  const __m128d damped = _mm_cmpgt_pd(kd, _mm_setzero_pd());
+  Pair3 tg[4];
+  for (int k = 0; k < 4; ++k) tg[k] = load_pair(g0 + 3 * k, g1 + 3 * k);
+  __m128d q = _mm_setzero_pd();
+  for (int k = 0; k < 4; ++k) q = _mm_add_pd(q, dot(tg[k], sub(p[k], load_pair(xn + 3 * t0.v[k], xn + 3 * t1.v[k]))));
+  q = _mm_and_pd(damped, q);  // 0 where k_d = 0
+  const __m128d r = _mm_mul_pd(_mm_div_pd(kd, _mm_set1_pd(h)), q);
+  for (int k = 0; k < 4; ++k) f[k] = add(scale(kC, g[k]), scale(r, tg[k]));
+}
 #endif
 
 }  // namespace squeeze::fem
