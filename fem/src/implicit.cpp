@@ -195,7 +195,8 @@ class ImplicitIntegrator : public TimeIntegrator {
                double parent_worst = std::numeric_limits<double>::infinity());
   void carry_contacts();
   void add_contacts(const World& w, const std::vector<Penetration>& pens, const RowMatrixX3d& x);
-  void solve(const World& w, double h, RowMatrixX3d& x);
+  // G_x: G(x) if known (the initial guess's, computed to choose it), else NaN.
+  void solve(const World& w, double h, RowMatrixX3d& x, double G_x = std::numeric_limits<double>::quiet_NaN());
   double potential(const World& w, const RowMatrixX3d& x, double h) const;
   void energy_gradient(const World& w, const RowMatrixX3d& x, double h, bool damping, RowMatrixX3d& Gr) const;
   void gradient(const World& w, const RowMatrixX3d& x, double h, Eigen::VectorXd& g);
@@ -460,12 +461,14 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
   // The initial guess: the inertial target y (exact in free flight) or x_n + h v_n (exact at rest
   // and in equilibrium), whichever has the lower potential. Both come from the state alone.
   RowMatrixX3d x = y_;
+  double G_x = potential(w, x, h);
   {
     RowMatrixX3d coast = xn_;
     for (int i : free_rows_) coast.row(i) += h * s.v.row(i);
-    if (potential(w, coast, h) < potential(w, x, h)) x = std::move(coast);
+    const double G_coast = potential(w, coast, h);
+    if (G_coast < G_x) x = std::move(coast), G_x = G_coast;
   }
-  solve(w, h, x);
+  solve(w, h, x, G_x);  // its first line search starts from G_x (one potential less per substep)
   for (int round = 0; round < o_.contact_rounds && o.collisions; ++round) {
     probe.x = x;
     const size_t count = contacts_.size();
@@ -1062,7 +1065,7 @@ bool ImplicitIntegrator::newton_direction(const World& w, const RowMatrixX3d& x,
   return false;
 }
 
-void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
+void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x, double G_x) {
   if (free_rows_.empty()) return;
   build_pattern(w);
   const WorldData& d = w.data();
@@ -1082,8 +1085,8 @@ void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
   };
   bool converged = false;
   double previous_full_step = 0;  // the last Newton step (edge lengths) if the line search took it whole, else 0
-  double Gx = 0;         // G(x)
-  bool have_Gx = false;  // Gx is known
+  double Gx = G_x;                   // G(x)
+  bool have_Gx = !std::isnan(G_x);  // Gx is known
   for (int it = 0; it < o_.max_newton_iterations; ++it) {
     gradient(w, x, h, g);
     // Converged when the residual force would move no vertex by tolerance × its edge scale.
