@@ -63,6 +63,10 @@ class BlockMatrix {
   // n blocks per side; pairs (I, J) with I > J (duplicates allowed). Returns true if the pattern
   // differs from the previous one (the factorisation must be analysed again).
   bool build(int n, std::vector<std::pair<int, int>> pairs) {
+    // The same pairs in the same order as last time (a substep without contacts after another):
+    // the same pattern, without sorting them again (1.2 % of the ball's samples, perf).
+    if (n == n_ && pairs == input_) return false;
+    input_ = pairs;
     std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
       return a.second != b.second ? a.second < b.second : a.first < b.first;  // by column, then row
     });
@@ -143,6 +147,7 @@ class BlockMatrix {
 
  private:
   int n_ = -1;
+  std::vector<std::pair<int, int>> input_;  // the pairs given to the last build, as given
   std::vector<std::pair<int, int>> pairs_;  // (I, J), I > J, sorted by column then row
   std::vector<int> col_start_;             // per block column J: its pairs [col_start_[J], col_start_[J+1])
   std::vector<int> row_start_, row_pairs_;  // per block row I: its pairs row_pairs_[row_start_[I] .. row_start_[I+1]), by column
