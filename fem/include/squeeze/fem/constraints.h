@@ -421,7 +421,7 @@ SQUEEZE_FEM_INLINE void tet_newton_blocks_pair(const double* x, const Tet& t0, c
   g[3] = scale(s, cross(a, b));
   g[0] = neg(add(add(g[1], g[2]), g[3]));
   const __m128d C = _mm_div_pd(_mm_sub_pd(V, V0), V0);
-  // Block by block, in registers: volume_hessian_lower's k ∇_b C ∇_a Cᵀ, then its curvature's
+  // Block by block: volume_hessian_lower's k ∇_b C ∇_a Cᵀ, then its curvature's
   // cross-product term (w skew(u), skew(u) = [[0, −u_z, u_y], [u_z, 0, −u_x], [−u_y, u_x, 0]]),
   // then the damping's (kd / h) ∇_b C(x_n) ∇_a C(x_n)ᵀ.
   const __m128d w = _mm_div_pd(_mm_mul_pd(k, C), _mm_mul_pd(_mm_set1_pd(6.0), V0));
@@ -435,29 +435,42 @@ SQUEEZE_FEM_INLINE void tet_newton_blocks_pair(const double* x, const Tet& t0, c
     for (int q = 0; q < 4; ++q) tg[q] = load_pair(tg0 + 3 * q, tg1 + 3 * q);
   Pair3 kg[4];
   for (int q = 0; q < 4; ++q) kg[q] = scale(k, g[q]);
+  Pair3 dtg[4] = {};
+  if (lanes)
+    for (int r = 0; r < 4; ++r) dtg[r] = scale(damp, tg[r]);
+  const __m128d zero = _mm_setzero_pd(), sign = _mm_set1_pd(-0.0);
   int q = 0;  // the pair (a, b) in Hl's order
-  // Unrolled (the pragmas): as loops, GCC kept the blocks' operands in memory (about 980
-  // instructions per tetrahedron, callgrind).
+  // Unrolled (the pragmas), entry by entry from registers to the outputs: as loops over blocks
+  // accumulated in arrays, GCC kept their operands in memory (about 980 instructions per
+  // tetrahedron, callgrind).
   SQUEEZE_FEM_UNROLL
   for (int A = 0; A < 4; ++A)
     SQUEEZE_FEM_UNROLL
     for (int B = A; B < 4; ++B) {
-      __m128d m[9];
-      const __m128d ku[3] = {kg[B].x, kg[B].y, kg[B].z}, v[3] = {g[A].x, g[A].y, g[A].z};
-      for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 3; ++i) m[i + 3 * j] = _mm_mul_pd(ku[i], v[j]);
-      if (curvature && B > A) {
-        const Pair3& u = skew_u[q];
-        const __m128d zero = _mm_setzero_pd(), sign = _mm_set1_pd(-0.0);
-        const __m128d S[9] = {zero, u.z, _mm_xor_pd(u.y, sign), _mm_xor_pd(u.z, sign), zero, u.x, u.y, _mm_xor_pd(u.x, sign), zero};
-        for (int e = 0; e < 9; ++e) {
-          const __m128d ws = _mm_mul_pd(w, S[e]);
-          m[e] = skew_subtract[q] ? _mm_sub_pd(m[e], ws) : _mm_add_pd(m[e], ws);
-        }
-      }
-      if (lanes) add_outer_masked(m, damp, tg[B], tg[A], damped, lanes == 3);
       const int slot = B == A ? A : 4 + q;
-      store_block_pair(m, out0 + 9 * slot, out1 + 9 * slot);
+      double* o0 = out0 + 9 * slot;
+      double* o1 = out1 + 9 * slot;
+      const __m128d ku[3] = {kg[B].x, kg[B].y, kg[B].z}, v[3] = {g[A].x, g[A].y, g[A].z};
+      const Pair3& u = skew_u[B > A ? q : 0];
+      const __m128d S[9] = {zero, u.z, _mm_xor_pd(u.y, sign), _mm_xor_pd(u.z, sign), zero, u.x, u.y, _mm_xor_pd(u.x, sign), zero};
+      const __m128d du[3] = {dtg[B].x, dtg[B].y, dtg[B].z}, dv[3] = {tg[A].x, tg[A].y, tg[A].z};
+      SQUEEZE_FEM_UNROLL
+      for (int j = 0; j < 3; ++j)
+        SQUEEZE_FEM_UNROLL
+        for (int i = 0; i < 3; ++i) {
+          const int e = i + 3 * j;
+          __m128d m = _mm_mul_pd(ku[i], v[j]);
+          if (curvature && B > A) {
+            const __m128d ws = _mm_mul_pd(w, S[e]);
+            m = skew_subtract[q] ? _mm_sub_pd(m, ws) : _mm_add_pd(m, ws);
+          }
+          if (lanes) {
+            const __m128d sum = _mm_add_pd(m, _mm_mul_pd(du[i], dv[j]));
+            m = lanes == 3 ? sum : _mm_or_pd(_mm_and_pd(damped, sum), _mm_andnot_pd(damped, m));
+          }
+          _mm_storel_pd(o0 + e, m);
+          _mm_storeh_pd(o1 + e, m);
+        }
       if (B > A) ++q;
     }
 }
