@@ -207,7 +207,10 @@ class ImplicitIntegrator : public TimeIntegrator {
   void energy_gradient(const World& w, const RowMatrixX3d& x, double h, bool damping, RowMatrixX3d& Gr) const;
   void gradient(const World& w, const RowMatrixX3d& x, double h, Eigen::VectorXd& g);
   void assemble(const World& w, const RowMatrixX3d& x, double h, bool exact);
-  void element_blocks(const World& w, const RowMatrixX3d& x, double h, bool exact);
+  // The Newton blocks at x of the edges edges[0, ne) and the tetrahedra tets[0, nt) (element
+  // indices; null: 0, 1, …) into eH[0, ne) and tH[0, nt); in parallel if `parallel`.
+  void element_blocks(const World& w, const RowMatrixX3d& x, double h, bool exact, const int* edges, size_t ne,
+                      Mat3* eH, const int* tets, size_t nt, std::array<Mat3, 10>* tH, bool parallel);
   void build_pattern(const World& w);
   bool factorize(double h);
   bool newton_direction(const World& w, const RowMatrixX3d& x, double h, const Eigen::VectorXd& g, Eigen::VectorXd& dx);
@@ -227,6 +230,11 @@ class ImplicitIntegrator : public TimeIntegrator {
   // tet its 4 diagonal blocks and 6 blocks (b, a), a < b, computed in parallel, summed in order.
   std::vector<Mat3> edge_H_;
   std::vector<std::array<Mat3, 10>> tet_H_;
+  // An assembly in two parts: per part, its elements (those with a free row in it, ascending) and
+  // their blocks.
+  std::vector<int> part_edges_[2], part_tets_[2];
+  std::vector<Mat3> part_edge_H_[2];
+  std::vector<std::array<Mat3, 10>> part_tet_H_[2];
   std::vector<LinearContact> contacts_;
   std::vector<LinearContact> carried_;      // the last substep's contacts by vertex, offered to the next (see substep)
   bool still_holds(LinearContact& c, const RowMatrixX3d& X) const;
@@ -320,6 +328,18 @@ void ImplicitIntegrator::fit(const World& w) {
       if (f > f0 && f < static_cast<int>(free_rows_.size()) && std::max(below, total - below) <= best) {
         best = std::max(below, total - below);
         assembly_split_ = f;
+      }
+    }
+    for (int part = 0; part < 2; ++part) {
+      auto mine = [&](int row) { return free_[row] >= 0 && (free_[row] >= assembly_split_) == (part == 1); };
+      part_edges_[part].clear();
+      part_tets_[part].clear();
+      if (assembly_split_ == 0) continue;
+      for (size_t e = 0; e < d.edges.size(); ++e)
+        if (mine(d.edges[e].i) || mine(d.edges[e].j)) part_edges_[part].push_back(static_cast<int>(e));
+      for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+        const auto& T = d.tet_elems[t];
+        if (mine(T.v[0]) || mine(T.v[1]) || mine(T.v[2]) || mine(T.v[3])) part_tets_[part].push_back(static_cast<int>(t));
       }
     }
   }
@@ -836,55 +856,76 @@ void ImplicitIntegrator::build_pattern(const World& w) {
   }
 }
 
-// The elements' Newton blocks at x into edge_H_ and tet_H_, two at a time (constraints.h, the SSE2
-// pair kernels: bit for bit the scalar edge_newton_block and tet_newton_blocks), on the calling
-// thread below WorldOptions::parallel.assembly_tets tetrahedra, else in parallel. With the pair
+// Elements' Newton blocks at x, two at a time (constraints.h, the SSE2 pair kernels: bit for bit
+// the scalar edge_newton_block and tet_newton_blocks). The assembly in one part computes all of
+// them on the calling thread below WorldOptions::parallel.assembly_tets tetrahedra, else in
+// parallel; each of two parts computes its own on its own thread. With the pair
 // kernels a block costs half what it did, and two TBB tasks per Newton iteration cost more than
 // they save on small meshes, the more so while another process keeps the second core busy
 // (bench_integrators, implicit, load 2.3–2.7, simulated s per wall s on the calling thread /
 // parallel: the ball, 473 tetrahedra, 16.0–16.9 / 12.4–15.4; the bunny, 1,914, 3.17–3.21 /
 // 3.13–3.17; balls of 1,135, 6,216 and 24,066 tetrahedra 6.46 / 5.87, 0.251 / 0.207, 5.43 / 6.22;
 // the threshold was 256 before).
-void ImplicitIntegrator::element_blocks(const World& w, const RowMatrixX3d& x, double h, bool exact) {
+void ImplicitIntegrator::element_blocks(const World& w, const RowMatrixX3d& x, double h, bool exact, const int* edge_ids,
+                                        size_t ne, Mat3* eH, const int* tet_ids, size_t nt, std::array<Mat3, 10>* tH,
+                                        bool parallel) {
   const WorldData& d = w.data();
-  edge_H_.resize(d.edges.size());
-  tet_H_.resize(d.tet_elems.size());
   const double* const X = x.data();
-  auto edges = [&](size_t e, size_t end) {
+  // Element a of the list: ids[a], or a itself (two instantiations of each loop: the indirection
+  // cost the one-body assembly 1.5 M instructions over the ball's second).
+  auto listed = [](const int* ids) { return [ids](size_t a) { return static_cast<size_t>(ids[a]); }; };
+  auto all = [](size_t a) { return a; };
+  auto edges_of = [&](auto edge, size_t a, size_t end) {
 #if defined(__SSE2__)
-    for (; e + 1 < end; e += 2)
-      if (!edge_newton_block_pair(X, d.edges[e], d.edges[e + 1], !exact, h, edge_g_[e].data(), edge_g_[e + 1].data(),
-                                  edge_H_[e].data(), edge_H_[e + 1].data()))
+    for (; a + 1 < end; a += 2) {
+      const size_t e0 = edge(a), e1 = edge(a + 1);
+      if (!edge_newton_block_pair(X, d.edges[e0], d.edges[e1], !exact, h, edge_g_[e0].data(), edge_g_[e1].data(),
+                                  eH[a].data(), eH[a + 1].data()))
         break;  // a zero-length edge: the scalar function from here on
+    }
 #endif
-    for (; e < end; ++e) {
+    for (; a < end; ++a) {
+      const size_t e = edge(a);
       const auto& E = d.edges[e];
-      edge_H_[e] = edge_newton_block(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact, E.kd,
-                                     h, edge_g_[e]);
+      eH[a] = edge_newton_block(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact, E.kd, h,
+                                edge_g_[e]);
     }
   };
-  auto tets = [&](size_t t, size_t end) {
+  auto tets_of = [&](auto tet, size_t a, size_t end) {
 #if defined(__SSE2__)
-    for (; t + 1 < end; t += 2)
-      tet_newton_blocks_pair(X, d.tet_elems[t], d.tet_elems[t + 1], exact, h, tet_g_[t][0].data(), tet_g_[t + 1][0].data(),
-                             tet_H_[t][0].data(), tet_H_[t + 1][0].data());
+    for (; a + 1 < end; a += 2) {
+      const size_t t0 = tet(a), t1 = tet(a + 1);
+      tet_newton_blocks_pair(X, d.tet_elems[t0], d.tet_elems[t1], exact, h, tet_g_[t0][0].data(), tet_g_[t1][0].data(),
+                             tH[a][0].data(), tH[a + 1][0].data());
+    }
 #endif
-    for (; t < end; ++t) {
+    for (; a < end; ++a) {
+      const size_t t = tet(a);
       const auto& T = d.tet_elems[t];
       Vec3 p[4];
       for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
-      tet_newton_blocks(p, T.V0, T.k, exact, T.kd, h, tet_g_[t].data(), tet_H_[t].data(), tet_H_[t].data() + 4);
+      tet_newton_blocks(p, T.V0, T.k, exact, T.kd, h, tet_g_[t].data(), tH[a].data(), tH[a].data() + 4);
     }
   };
-  if (d.tet_elems.size() < static_cast<size_t>(w.options().parallel.assembly_tets)) {
-    edges(0, d.edges.size());
-    tets(0, d.tet_elems.size());
+  auto edges = [&](size_t a, size_t end) {
+    if (edge_ids)
+      edges_of(listed(edge_ids), a, end);
+    else
+      edges_of(all, a, end);
+  };
+  auto tets = [&](size_t a, size_t end) {
+    if (tet_ids)
+      tets_of(listed(tet_ids), a, end);
+    else
+      tets_of(all, a, end);
+  };
+  if (!parallel) {
+    edges(0, ne);
+    tets(0, nt);
     return;
   }
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, d.edges.size(), 1024),
-                    [&](const tbb::blocked_range<size_t>& r) { edges(r.begin(), r.end()); });
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, d.tet_elems.size(), 256),
-                    [&](const tbb::blocked_range<size_t>& r) { tets(r.begin(), r.end()); });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ne, 1024), [&](const tbb::blocked_range<size_t>& r) { edges(r.begin(), r.end()); });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nt, 256), [&](const tbb::blocked_range<size_t>& r) { tets(r.begin(), r.end()); });
 }
 
 void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double h, bool exact) {
@@ -932,17 +973,6 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
       if (d.any_attached) M.diagonal().array() += d.attach_k(i) + d.attach_c(i) / h;  // soft attachment
       H_.add_diag(static_cast<int>(f), M);
     }
-    auto edge_block = [&](size_t e) {
-      const auto& E = d.edges[e];
-      return edge_newton_block(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact, E.kd, h,
-                               edge_g_[e]);
-    };
-    auto tet_blocks = [&](size_t t, Mat3* Hd, Mat3* Hl) {  // Hd[4], Hl[6]: the blocks (b, a), a < b, in pair order
-      const auto& T = d.tet_elems[t];
-      Vec3 p[4];
-      for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
-      tet_newton_blocks(p, T.V0, T.k, exact, T.kd, h, tet_g_[t].data(), Hd, Hl);
-    };
     if (part < 0) {  // all the blocks computed first (element_blocks), then summed in order
       for (size_t e = 0; e < d.edges.size(); ++e) {
         const auto& E = d.edges[e];
@@ -963,30 +993,34 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
       }
       return;
     }
-    for (size_t e = 0; e < d.edges.size(); ++e) {
-      const auto& E = d.edges[e];
-      if (!mine(part, free_[E.i]) && !mine(part, free_[E.j])) continue;
-      const Mat3 He = edge_block(e);
+    // One of two parts: its elements' blocks first (into its own buffers), then summed in order.
+    const std::vector<int>& pe = part_edges_[part];
+    const std::vector<int>& pt = part_tets_[part];
+    part_edge_H_[part].resize(pe.size());
+    part_tet_H_[part].resize(pt.size());
+    element_blocks(w, x, h, exact, pe.data(), pe.size(), part_edge_H_[part].data(), pt.data(), pt.size(),
+                   part_tet_H_[part].data(), false);
+    for (size_t a = 0; a < pe.size(); ++a) {
+      const auto& E = d.edges[static_cast<size_t>(pe[a])];
+      const Mat3& He = part_edge_H_[part][a];
       const int rows[2] = {E.i, E.j};
-      scatter(part, 2, rows, &edge_block_[e], [&](int a, int b) -> Mat3 { return a == b ? He : Mat3(-He); });
+      scatter(part, 2, rows, &edge_block_[static_cast<size_t>(pe[a])], [&](int i, int j) -> Mat3 { return i == j ? He : Mat3(-He); });
     }
-    for (size_t t = 0; t < d.tet_elems.size(); ++t) {
-      const auto& T = d.tet_elems[t];
-      if (!mine(part, free_[T.v[0]]) && !mine(part, free_[T.v[1]]) && !mine(part, free_[T.v[2]]) &&
-          !mine(part, free_[T.v[3]]))
-        continue;
-      Mat3 own[10];
-      const Mat3* Hd = own;
-      tet_blocks(t, own, own + 4);
+    for (size_t a = 0; a < pt.size(); ++a) {
+      const size_t t = static_cast<size_t>(pt[a]);
+      const Mat3* Hd = part_tet_H_[part][a].data();
       const Mat3* Hl = Hd + 4;  // block (b, a), a < b, at the pair's index a (7 − a) / 2 + b − a − 1
-      scatter(part, 4, T.v, tet_block_[t].data(),
-              [&](int b, int a) -> const Mat3& { return a == b ? Hd[a] : Hl[a * (7 - a) / 2 + b - a - 1]; });
+      scatter(part, 4, d.tet_elems[t].v, tet_block_[t].data(),
+              [&](int j, int i) -> const Mat3& { return i == j ? Hd[i] : Hl[i * (7 - i) / 2 + j - i - 1]; });
     }
   };
   if (split > 0) {
     tbb::parallel_invoke([&] { assemble_part(0); }, [&] { assemble_part(1); });
   } else {
-    element_blocks(w, x, h, exact);
+    edge_H_.resize(d.edges.size());
+    tet_H_.resize(d.tet_elems.size());
+    element_blocks(w, x, h, exact, nullptr, d.edges.size(), edge_H_.data(), nullptr, d.tet_elems.size(), tet_H_.data(),
+                   d.tet_elems.size() >= static_cast<size_t>(o.parallel.assembly_tets));
     assemble_part(-1);
   }
   for (size_t k = 0; k < contacts_.size(); ++k) {
