@@ -518,7 +518,7 @@ double centroid_gap(const World& w, const State& s) { return (centroid(w, s, 1) 
 World busy_world(int n = 4) {
   WorldOptions o;
   o.h = 1e-4;
-  o.parallel = {0, 0, 0};  // every pass in parallel, however small (with 2 threads)
+  o.parallel = {0, 0, 0, 0};  // every pass in parallel, however small (with 2 threads)
   o.floor = true;
   o.floor_height = -0.3;
   o.contact_stiffness = 2e3;

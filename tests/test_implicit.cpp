@@ -5,10 +5,12 @@
 #include <tbb/global_control.h>
 
 #include <Eigen/Eigenvalues>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 
 #include "fem_test_worlds.h"
@@ -128,6 +130,152 @@ TEST(FemKernels, VolumeHessianMatchesFiniteDifferences) {
   }
 }
 
+#if defined(__SSE2__)
+// The implicit integrator's assembly computes its elements' Newton blocks two at a time (SSE2
+// lanes): they must be the scalar functions' to the last bit, exact and positive semi-definite,
+// damped or not (each lane on its own), compressed and stretched edges, inverted and flat
+// tetrahedra; a zero-length edge is refused (the scalar function takes it).
+TEST(FemKernels, NewtonBlockPairsEqualScalarBitForBit) {
+  struct Edge { int i, j; double D0, k, kd; };
+  struct Tet { int v[4]; double V0, k, kd; };
+  std::mt19937 g(17);
+  std::uniform_real_distribution<double> u(0.1, 3.0);
+  const int n = 40;
+  RowMatrixX3d X(n, 3);
+  for (int i = 0; i < n; ++i) X.row(i) = rand_vec(g).transpose();
+  X.row(5) = 0.5 * (X.row(2) + X.row(3)), X.row(4) = X.row(2);  // tet (2, 3, 4, 5): flat
+  std::vector<Edge> edges;
+  std::vector<Tet> tets{{{2, 3, 4, 5}, 0.05, 3.0, 0.2}};
+  for (int e = 0; e < 300; ++e) {
+    const int i = static_cast<int>(g() % n), j = (i + 1 + static_cast<int>(g() % (n - 1))) % n;
+    edges.push_back({i, j, u(g), u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)});  // some undamped
+  }
+  for (int t = 0; t < 300; ++t) {
+    Tet T{{0, 0, 0, 0}, u(g) * 0.01, u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)};
+    for (int& c : T.v) c = static_cast<int>(g() % n);
+    tets.push_back(T);
+  }
+  std::vector<Vec3> eg(edges.size());
+  std::vector<std::array<Vec3, 4>> tg(tets.size());
+  for (auto& v : eg) v = rand_vec(g, 5.0);
+  for (auto& a : tg)
+    for (auto& v : a) v = rand_vec(g, 5.0);
+  const double h = 1.0 / 30;
+  const double* x = X.data();
+  auto bits_equal = [](const double* a, const double* b, int m) { return std::memcmp(a, b, sizeof(double) * m) == 0; };
+  for (bool exact : {true, false}) {
+    for (size_t e = 0; e + 1 < edges.size(); ++e) {
+      Eigen::Matrix3d P[2];
+      ASSERT_TRUE(edge_newton_block_pair(x, edges[e], edges[e + 1], !exact, h, eg[e].data(), eg[e + 1].data(),
+                                         P[0].data(), P[1].data()));
+      for (int q = 0; q < 2; ++q) {
+        const Edge& E = edges[e + q];
+        const Eigen::Matrix3d S = edge_newton_block(Vec3(x + 3 * E.i), Vec3(x + 3 * E.j), E.D0, E.k, !exact, E.kd, h, eg[e + q]);
+        EXPECT_TRUE(bits_equal(S.data(), P[q].data(), 9)) << "edge " << e + q << (exact ? " exact" : " psd");
+      }
+    }
+    for (size_t t = 0; t + 1 < tets.size(); ++t) {
+      Eigen::Matrix3d P[2][10];
+      tet_newton_blocks_pair(x, tets[t], tets[t + 1], exact, h, tg[t][0].data(), tg[t + 1][0].data(), P[0][0].data(),
+                             P[1][0].data());
+      for (int q = 0; q < 2; ++q) {
+        const Tet& T = tets[t + q];
+        Vec3 p[4];
+        for (int c = 0; c < 4; ++c) p[c] = Vec3(x + 3 * T.v[c]);
+        Eigen::Matrix3d S[10];
+        tet_newton_blocks(p, T.V0, T.k, exact, T.kd, h, tg[t + q].data(), S, S + 4);
+        for (int b = 0; b < 10; ++b)
+          EXPECT_TRUE(bits_equal(S[b].data(), P[q][b].data(), 9)) << "tet " << t + q << " block " << b << (exact ? " exact" : " psd");
+      }
+    }
+  }
+  Edge zero{0, 1, 0.3, 2.0, 0.1};
+  X.row(1) = X.row(0);
+  Eigen::Matrix3d P[2];
+  EXPECT_FALSE(edge_newton_block_pair(x, zero, edges[0], false, h, eg[0].data(), eg[1].data(), P[0].data(), P[1].data()));
+}
+
+// The potential's and the gradient's element terms two at a time: bit for bit the implicit
+// integrator's scalar expressions (its potential and energy_gradient), damped or not, with and
+// without the damping potential, a zero-length edge and a flat tetrahedron included.
+TEST(FemKernels, PotentialPairsEqualScalarBitForBit) {
+  struct Edge { int i, j; double D0, k, kd; };
+  struct Tet { int v[4]; double V0, k, kd; };
+  std::mt19937 g(23);
+  std::uniform_real_distribution<double> u(0.1, 3.0);
+  const int n = 40;
+  RowMatrixX3d X(n, 3), Xn(n, 3);
+  for (int i = 0; i < n; ++i) X.row(i) = rand_vec(g).transpose(), Xn.row(i) = X.row(i) + 0.1 * rand_vec(g).transpose();
+  X.row(1) = X.row(0);                                          // edge (0, 1): zero length
+  X.row(5) = 0.5 * (X.row(2) + X.row(3)), X.row(4) = X.row(2);  // tet (2, 3, 4, 5): flat
+  std::vector<Edge> edges{{0, 1, 0.3, 2.0, 0.1}};
+  std::vector<Tet> tets{{{2, 3, 4, 5}, 0.05, 3.0, 0.2}};
+  for (int e = 0; e < 300; ++e) {
+    const int i = static_cast<int>(g() % n), j = (i + 1 + static_cast<int>(g() % (n - 1))) % n;
+    edges.push_back({i, j, u(g), u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)});
+  }
+  for (int t = 0; t < 300; ++t) {
+    Tet T{{0, 0, 0, 0}, u(g) * 0.01, u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)};
+    for (int& c : T.v) c = static_cast<int>(g() % n);
+    tets.push_back(T);
+  }
+  std::vector<Vec3> eg(edges.size());
+  std::vector<std::array<Vec3, 4>> tg(tets.size());
+  for (auto& v : eg) v = rand_vec(g, 5.0);
+  for (auto& a : tg)
+    for (auto& v : a) v = rand_vec(g, 5.0);
+  const double h = 1.0 / 30;
+  const double *x = X.data(), *xn = Xn.data();
+  auto lane = [](__m128d v, int q) { return _mm_cvtsd_f64(q ? _mm_unpackhi_pd(v, v) : v); };
+  auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; };
+  auto same3 = [&](const simd::Pair3& f, int q, const Vec3& v) {
+    return same(lane(f.x, q), v[0]) && same(lane(f.y, q), v[1]) && same(lane(f.z, q), v[2]);
+  };
+  for (size_t e = 0; e + 1 < edges.size(); ++e) {
+    __m128d energy, damping;
+    edge_potential_pair(x, xn, edges[e], edges[e + 1], h, eg[e].data(), eg[e + 1].data(), energy, damping);
+    for (bool damped : {true, false}) {
+      const simd::Pair3 f = edge_gradient_pair(x, xn, edges[e], edges[e + 1], h, damped, eg[e].data(), eg[e + 1].data());
+      for (int q = 0; q < 2; ++q) {
+        const Edge& E = edges[e + q];
+        const Vec3 xi(x + 3 * E.i), xj(x + 3 * E.j), xni(xn + 3 * E.i), xnj(xn + 3 * E.j);
+        const double qd = eg[e + q].dot((xj - xnj) - (xi - xni));
+        EXPECT_TRUE(same(lane(energy, q), distance_energy(xi, xj, E.D0, E.k))) << "edge " << e + q;
+        EXPECT_TRUE(same(lane(damping, q), 0.5 * E.kd / h * qd * qd)) << "edge " << e + q;
+        Vec3 gj;
+        const double C = distance_constraint(xi, xj, E.D0, &gj);
+        Vec3 ref = E.k * C * gj;
+        if (damped && E.kd > 0) ref += (E.kd / h * qd) * eg[e + q];
+        EXPECT_TRUE(same3(f, q, ref)) << "edge " << e + q << (damped ? " damped" : "");
+      }
+    }
+  }
+  for (size_t t = 0; t + 1 < tets.size(); ++t) {
+    __m128d energy, damping;
+    tet_potential_pair(x, xn, tets[t], tets[t + 1], h, tg[t][0].data(), tg[t + 1][0].data(), energy, damping);
+    for (bool damped : {true, false}) {
+      simd::Pair3 f[4];
+      tet_gradient_pair(x, xn, tets[t], tets[t + 1], h, damped, tg[t][0].data(), tg[t + 1][0].data(), f);
+      for (int q = 0; q < 2; ++q) {
+        const Tet& T = tets[t + q];
+        Vec3 p[4], gk[4];
+        for (int k = 0; k < 4; ++k) p[k] = Vec3(x + 3 * T.v[k]);
+        double qd = 0;
+        for (int k = 0; k < 4; ++k) qd += tg[t + q][k].dot(p[k] - Vec3(xn + 3 * T.v[k]));
+        EXPECT_TRUE(same(lane(energy, q), volume_energy(p[0], p[1], p[2], p[3], T.V0, T.k))) << "tet " << t + q;
+        EXPECT_TRUE(same(lane(damping, q), 0.5 * T.kd / h * qd * qd)) << "tet " << t + q;
+        const double C = volume_constraint(p[0], p[1], p[2], p[3], T.V0, gk);
+        const double r = damped && T.kd > 0 ? qd : 0.0;
+        for (int k = 0; k < 4; ++k) {
+          const Vec3 ref = damped ? Vec3(T.k * C * gk[k] + (T.kd / h * r) * tg[t + q][k]) : Vec3(T.k * C * gk[k]);
+          EXPECT_TRUE(same3(f[k], q, ref)) << "tet " << t + q << " corner " << k << (damped ? " damped" : "");
+        }
+      }
+    }
+  }
+}
+#endif
+
 namespace {
 // The vertex pairs of a tetrahedral mesh's elements, (I, J) with I > J, shifted by offset, appended
 // to pairs (not sorted, may repeat).
@@ -214,6 +362,44 @@ TEST(FemBlockLDLT, SolvesSymmetricBlockSystemsOnMeshAndRandomPatterns) {
   EXPECT_FALSE(f.factorize({Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Zero()}, {Eigen::Matrix3d::Zero()}));
 }
 
+
+// precondition() keeps a small factor's single-precision values as doubles (the same numbers,
+// without a conversion per use; BlockLDLT::kRoundedInDouble): its results are those of the
+// single-precision copy bit for bit, sequential or cut into parts, and solve() is unchanged.
+TEST(FemBlockLDLT, PreconditionerInDoubleEqualsSinglePrecisionBitForBit) {
+  std::vector<std::pair<int, int>> pairs;
+  int n = 0;
+  for (const Eigen::Vector3i& cells : {Eigen::Vector3i(14, 7, 6), Eigen::Vector3i(9, 9, 9)}) {  // two bodies: a cut
+    const meshing::TetMesh box = box_tet_mesh(Vec3(0, 0, 0), Vec3(1, 0.5, 0.4), cells);
+    add_tet_pairs(box, n, pairs);
+    n += static_cast<int>(box.V.rows());
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  std::mt19937 g(3);
+  std::vector<Eigen::Matrix3d> off, diag;
+  dominant_blocks(pairs, n, g, off, diag);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::VectorXd b(3 * n);
+  for (int i = 0; i < 3 * n; ++i) b[i] = u(g);
+  for (int parts : {1, 2}) {
+    SCOPED_TRACE(parts);
+    BlockLDLT f;
+    f.analyze(n, pairs, parts);
+    ASSERT_EQ(f.parts(), parts);  // the bins' substitutions run too
+    Eigen::VectorXd x[2], p[2];
+    for (int in_double : {0, 1}) {
+      f.set_rounded_in_double(in_double ? std::numeric_limits<size_t>::max() : 0);
+      ASSERT_TRUE(f.factorize(diag, off));
+      f.solve(b, x[in_double]);
+      f.precondition(b, p[in_double]);
+    }
+    EXPECT_TRUE(x[0] == x[1]);
+    EXPECT_TRUE(p[0] == p[1]);
+    EXPECT_LT((p[1] - x[1]).norm(), 1e-5 * x[1].norm());
+    EXPECT_GT((p[1] - x[1]).norm(), 0.0);  // single-precision values
+  }
+}
 
 // The parallel cut of the elimination tree changes only who computes what: on the vertex graphs of
 // two tetrahedral boxes (two bodies), apart or joined by contact-like couplings, the factors and
@@ -531,7 +717,7 @@ TEST(FemImplicit, BitIdenticalWhateverTheThreadCount) {
     o.floor_height = -0.15;
     o.contact_stiffness = 2e3;
     o.contact_damping = 0.5;
-    o.parallel = {0, 0, 0};
+    o.parallel = {0, 0, 0, 0};
     World w(o);
     Material m;
     m.k_distance = m.k_volume = 5;

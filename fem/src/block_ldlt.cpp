@@ -15,7 +15,50 @@
 #include <thread>
 #include <type_traits>
 
+#include "block_kernels.h"
+
 namespace squeeze::fem {
+namespace {
+
+// Column j of L into w: w(L_i(p)) −= L_p w(j) for p in [begin, end). The pointers are arguments,
+// not a lambda's captures: the SSE2 stores may alias anything, and the loop reloaded captures
+// from memory after each.
+template <bool kRight, class Block>
+void forward_column(const Block* L, const int* Li, double* w, int j, int begin, int end) {
+  const double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
+  for (int p = begin; p < end; ++p) blocks::product<blocks::Op::kSubtract, kRight>(L[p].data(), wj, w + 3 * static_cast<size_t>(Li[p]));
+}
+
+// w(j) −= Σ L_pᵀ w(L_i(p)) over p in [begin, end), in that order.
+template <bool kRight, class Block>
+void backward_column(const Block* L, const int* Li, double* w, int j, int begin, int end) {
+  double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
+  for (int p = begin; p < end; ++p) blocks::transposed_product<blocks::Op::kSubtract, kRight>(L[p].data(), w + 3 * static_cast<size_t>(Li[p]), wj);
+  for (int c = 0; c < 3; ++c) w[3 * j + c] = wj[c];
+}
+
+// The same with the blocks' transposes given (LT_p = L_pᵀ, column-major): w(j) −= Σ LT_p w(L_i(p)),
+// the product read by columns like the forward one (the same sums: entry c of L_pᵀ v is column c
+// of L_p with v either way).
+template <bool kRight>
+void backward_column_transposed(const Eigen::Matrix3d* LT, const int* Li, double* w, int j, int begin, int end) {
+  double wj[3] = {w[3 * j], w[3 * j + 1], w[3 * j + 2]};
+  for (int p = begin; p < end; ++p) blocks::product<blocks::Op::kSubtract, kRight>(LT[p].data(), w + 3 * static_cast<size_t>(Li[p]), wj);
+  for (int c = 0; c < 3; ++c) w[3 * j + c] = wj[c];
+}
+
+// Y(L_i(p)) −= L_p Y_i for p in [begin, end): factorize's updates of the rows below column i,
+// column by column. (Loading L_p once per block instead of once per column, against the aliasing
+// of the stores, did not help: GCC then spilled the broadcast entries of Y_i.)
+void update_rows(const Eigen::Matrix3d* L, const int* Li, Eigen::Matrix3d* y, int begin, int end, const Eigen::Matrix3d& Yi) {
+  const double yi[9] = {Yi(0, 0), Yi(1, 0), Yi(2, 0), Yi(0, 1), Yi(1, 1), Yi(2, 1), Yi(0, 2), Yi(1, 2), Yi(2, 2)};
+  for (int p = begin; p < end; ++p) {
+    double* t = y[Li[p]].data();
+    for (int c = 0; c < 3; ++c) blocks::product<blocks::Op::kSubtract, false>(L[p].data(), yi + 3 * c, t + 3 * c);
+  }
+}
+
+}  // namespace
 
 void BlockLDLT::analyze(int n, const std::vector<std::pair<int, int>>& pairs, int parts) {
   assert(n >= 0);
@@ -261,7 +304,7 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
       }
       const Mat3 yi = y[i];
       y[i].setZero();
-      for (int p = Lp_[i]; p < p2; ++p) y[Li_[p]].noalias() -= Lx_[p] * yi;
+      update_rows(Lx_.data(), Li_.data(), y, Lp_[i], p2, yi);
       const Mat3 lki = yi.transpose() * Dinv_[i];  // L(k, i) = Y(i)ᵀ D(i)⁻¹
       d.noalias() -= lki * yi;
       Lx_[p2] = lki;
@@ -317,10 +360,22 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
     for (Mat3& y : y2_) y.setZero();
     return false;
   }
-  // L rounded to single precision for precondition(): half the bytes per substitution.
-  Lf_.resize(Lx_.size());
+  // L rounded to single precision for precondition(): half the bytes per substitution. A factor
+  // that fits in the cache keeps the rounded values as doubles (exactly the same numbers): its
+  // substitutions are not memory-bound, and converting every block twice per substitution cost
+  // more than the bytes saved (kRoundedInDouble).
+  const bool in_double = Lx_.size() * sizeof(Mat3) <= rounded_in_double_;
+  Lf_.resize(in_double ? 0 : Lx_.size());
+  Lr_.resize(in_double ? Lx_.size() : 0);
+  Lrt_.resize(Lr_.size());
   auto round = [&](size_t begin, size_t end) {
-    for (size_t p = begin; p < end; ++p) Lf_[p] = Lx_[p].cast<float>();
+    if (in_double)
+      for (size_t p = begin; p < end; ++p) {
+        Lr_[p] = Lx_[p].cast<float>().cast<double>();
+        Lrt_[p] = Lr_[p].transpose();
+      }
+    else
+      for (size_t p = begin; p < end; ++p) Lf_[p] = Lx_[p].cast<float>();
   };
   if (bin_rows_.empty())
     round(0, Lx_.size());
@@ -329,23 +384,24 @@ bool BlockLDLT::factorize(const std::vector<Mat3>& diag, const std::vector<Mat3>
   return true;
 }
 
-template <class Block>
-void BlockLDLT::substitute(const std::vector<Block>& Lx, const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+template <bool kRight, class Block>
+void BlockLDLT::substitute(const std::vector<Block>& Lx, const std::vector<Mat3>* LT, const Eigen::VectorXd& b,
+                           Eigen::VectorXd& x) const {
   const int n = n_;
   assert(b.size() == 3 * static_cast<Eigen::Index>(n));
   w_.resize(b.size());
   for (int k = 0; k < n; ++k) w_.segment<3>(3 * k) = b.segment<3>(3 * static_cast<Eigen::Index>(perm_[k]));
   // L w = b by columns: the bins' columns into their own rows, then every column into the top's
   // rows in ascending column order (each entry of w receives its terms in the sequential order).
-  auto forward = [&](int j, int begin, int end) {
-    const Eigen::Vector3d wj = w_.segment<3>(3 * j);
-    for (int p = begin; p < end; ++p) w_.segment<3>(3 * static_cast<Eigen::Index>(Li_[p])).noalias() -= Lx[p].template cast<double>() * wj;
-  };
+  double* const w = w_.data();
+  const Block* const L = Lx.data();
+  auto forward = [&](int j, int begin, int end) { forward_column<kRight>(L, Li_.data(), w, j, begin, end); };
   // Lᵀ w = w by columns, each reading its ancestors (done before it: the top before the bins).
   auto backward = [&](int j) {
-    Eigen::Vector3d wj = w_.segment<3>(3 * j);
-    for (int p = Lp_[j]; p < Lp_[j + 1]; ++p) wj.noalias() -= Lx[p].template cast<double>().transpose() * w_.segment<3>(3 * static_cast<Eigen::Index>(Li_[p]));
-    w_.segment<3>(3 * j) = wj;
+    if (LT)
+      backward_column_transposed<kRight>(LT->data(), Li_.data(), w, j, Lp_[j], Lp_[j + 1]);
+    else
+      backward_column<kRight>(L, Li_.data(), w, j, Lp_[j], Lp_[j + 1]);
   };
   if (!bin_rows_.empty())
     tbb::parallel_for(0, static_cast<int>(bin_rows_.size()), [&](int bin) {
@@ -362,8 +418,13 @@ void BlockLDLT::substitute(const std::vector<Block>& Lx, const Eigen::VectorXd& 
   for (int k = 0; k < n; ++k) x.segment<3>(3 * static_cast<Eigen::Index>(perm_[k])) = w_.segment<3>(3 * k);
 }
 
-void BlockLDLT::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const { substitute(Lx_, b, x); }
+void BlockLDLT::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const { substitute<false>(Lx_, nullptr, b, x); }
 
-void BlockLDLT::precondition(const Eigen::VectorXd& b, Eigen::VectorXd& x) const { substitute(Lf_, b, x); }
+void BlockLDLT::precondition(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  if (Lr_.empty())
+    substitute<true>(Lf_, nullptr, b, x);
+  else
+    substitute<true>(Lr_, &Lrt_, b, x);
+}
 
 }  // namespace squeeze::fem

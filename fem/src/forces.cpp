@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include "squeeze/common/error.h"
@@ -28,6 +29,16 @@ struct ForceWorkspace::Impl {
   std::vector<int> contact_rows;  // rows with a list (to reset them)
   StepStats stats;
   Eigen::VectorXd overlap;    // the rest-overlap tolerances after the last evaluation (State::overlap)
+  // find_penetrations' last call: its input (the state's positions, the tolerances it used) and
+  // output. Detection is a function of them (and of the world, version), and the implicit
+  // integrator asks again at the same state: its last contact round of a substep and the first
+  // detection of the next one both detect at the substep's result (the ball of bench_integrators,
+  // 1 s: 37 of 108 detections, 40.7 M → 21.1 M instructions, callgrind).
+  bool last_valid = false;
+  RowMatrixX3d last_x;
+  Eigen::VectorXd last_allowance, last_overlap;
+  std::vector<Penetration> last_pens;
+  StepStats last_stats;
 
   void fit(const WorldData& d) {
     if (version == d.version) return;
@@ -37,6 +48,7 @@ struct ForceWorkspace::Impl {
     contact_tail.assign(static_cast<size_t>(d.rows), -1);
     contact_rows.clear();
     if (!hash || hash->cell() != d.cell || hash->table_size() != d.table) hash = std::make_unique<SpatialHash>(d.cell, d.table);
+    last_valid = false;
     version = d.version;
   }
 };
@@ -275,23 +287,42 @@ std::vector<Penetration> find_penetrations(const World& w, const State& s, Force
   check_rows(d, s, nullptr);
   ForceWorkspace::Impl& ws = workspace.impl();
   ws.fit(d);
+  const Eigen::VectorXd& allowance = current_overlap(d, s);
+  auto same = [](const auto& a, const auto& b) {
+    return a.size() == b.size() && std::equal(a.data(), a.data() + a.size(), b.data(), [](double u, double v) {
+             return std::memcmp(&u, &v, sizeof(double)) == 0;  // bit for bit (NaN, −0)
+           });
+  };
+  if (ws.last_valid && same(ws.last_x, s.x) && same(ws.last_allowance, allowance)) {
+    ws.stats = ws.last_stats;
+    ws.overlap = ws.last_overlap;
+    return ws.last_pens;
+  }
   ws.stats = StepStats{};
-  ws.overlap.setZero(current_overlap(d, s).size());  // out of every other object: no tolerance left
+  ws.overlap.setZero(allowance.size());  // out of every other object: no tolerance left
   const WorldOptions& o = w.options();
   std::vector<Penetration> out;
-  if (!o.collisions || d.bodies.empty()) return out;
-  ws.X_all.topRows(d.rows) = s.x;
-  const std::vector<Contact> contacts = ws.hash->find(ws.X_all, d.T_all, d.filter, o.parallel.detection_tets);
-  ws.stats.contacts = static_cast<int>(contacts.size());
-  if (contacts.empty()) return out;
-  std::vector<Penetration> pens = penetration_depths(d.scene, ws.X_all, contacts, o.parallel.border_vertices);
-  apply_overlap(d, current_overlap(d, s), pens, ws.overlap);
-  ws.stats.colliding_vertices = static_cast<int>(pens.size());
-  for (Penetration& p : pens)
-    if (p.depth > 0) {
-      ws.stats.max_depth = std::max(ws.stats.max_depth, p.depth);
-      out.push_back(std::move(p));
+  if (o.collisions && !d.bodies.empty()) {
+    ws.X_all.topRows(d.rows) = s.x;
+    const std::vector<Contact> contacts = ws.hash->find(ws.X_all, d.T_all, d.filter, o.parallel.detection_tets);
+    ws.stats.contacts = static_cast<int>(contacts.size());
+    if (!contacts.empty()) {
+      std::vector<Penetration> pens = penetration_depths(d.scene, ws.X_all, contacts, o.parallel.border_vertices);
+      apply_overlap(d, allowance, pens, ws.overlap);
+      ws.stats.colliding_vertices = static_cast<int>(pens.size());
+      for (Penetration& p : pens)
+        if (p.depth > 0) {
+          ws.stats.max_depth = std::max(ws.stats.max_depth, p.depth);
+          out.push_back(std::move(p));
+        }
     }
+  }
+  ws.last_x = s.x;
+  ws.last_allowance = allowance;
+  ws.last_overlap = ws.overlap;
+  ws.last_pens = out;
+  ws.last_stats = ws.stats;
+  ws.last_valid = true;
   return out;
 }
 

@@ -18,6 +18,7 @@
 #include <tbb/parallel_invoke.h>
 #include <spdlog/spdlog.h>
 
+#include "block_kernels.h"
 #include "squeeze/common/error.h"
 #include "squeeze/fem/block_ldlt.h"
 #include "squeeze/fem/constraints.h"
@@ -38,8 +39,6 @@ constexpr double kCarryMargin = 0.1;
 // beyond the edge; FemImplicit.ABodySlidingOffASlabFallsOffIt). 0.5 dropped most of the organs'
 // resting contacts as they sagged (221 factorisations in 2 s instead of 106); 2 keeps them.
 constexpr double kCarryDrift = 2.0;
-// An assembly in one part computes the element blocks in parallel from this many tetrahedra on.
-constexpr size_t kParallelAssemblyTets = 256;
 // A substep that halves one and moves at least this fraction of its motion is kept (substep).
 constexpr double kJumpRatio = 0.8;
 // A contact's penalty curvature is kept in the Newton matrix while its depth is above −kCurvatureBand
@@ -64,6 +63,10 @@ class BlockMatrix {
   // n blocks per side; pairs (I, J) with I > J (duplicates allowed). Returns true if the pattern
   // differs from the previous one (the factorisation must be analysed again).
   bool build(int n, std::vector<std::pair<int, int>> pairs) {
+    // The same pairs in the same order as last time (a substep without contacts after another):
+    // the same pattern, without sorting them again (1.2 % of the ball's samples, perf).
+    if (n == n_ && pairs == input_) return false;
+    input_ = pairs;
     std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
       return a.second != b.second ? a.second < b.second : a.first < b.first;  // by column, then row
     });
@@ -74,6 +77,12 @@ class BlockMatrix {
     col_start_.assign(static_cast<size_t>(n) + 1, 0);
     for (const auto& p : pairs_) ++col_start_[p.second + 1];
     for (int J = 0; J < n; ++J) col_start_[J + 1] += col_start_[J];
+    row_start_.assign(static_cast<size_t>(n) + 1, 0);
+    for (const auto& p : pairs_) ++row_start_[p.first + 1];
+    for (int I = 0; I < n; ++I) row_start_[I + 1] += row_start_[I];
+    row_pairs_.resize(pairs_.size());
+    std::vector<int> next(row_start_.begin(), row_start_.end() - 1);
+    for (size_t q = 0; q < pairs_.size(); ++q) row_pairs_[static_cast<size_t>(next[pairs_[q].first]++)] = static_cast<int>(q);
     diag_.assign(static_cast<size_t>(n), Mat3::Zero());
     off_.assign(pairs_.size(), Mat3::Zero());
     return true;
@@ -91,16 +100,35 @@ class BlockMatrix {
   }
   // Adds the symmetric block H (every element's diagonal block is symmetric by construction) to
   // the diagonal block of vertex I.
-  void add_diag(int I, const Mat3& H) { diag_[static_cast<size_t>(I)] += H; }
+  void add_diag(int I, const Mat3& H) { combine<false>(diag_[static_cast<size_t>(I)].data(), H.data(), false); }
   void add_off(int id, const Mat3& H) { off_[static_cast<size_t>(id)] += H; }
-  // out = A p (3 per block).
+  // Adds H (transposed: Hᵀ) to, or subtracts it from, the off-diagonal block id: the same entry
+  // additions as add_off(id, H.transpose()) and add_off(id, −H), in plain loops (Eigen's sum with
+  // a transpose was a call per block, 3 % of the ball's samples, perf).
+  void add_off(int id, const Mat3& H, bool transposed) { combine<false>(off_[static_cast<size_t>(id)].data(), H.data(), transposed); }
+  void subtract_off(int id, const Mat3& H, bool transposed) {
+    combine<true>(off_[static_cast<size_t>(id)].data(), H.data(), transposed);
+  }
+  // out = A p (3 per block). Row by row, each row's terms in the order of a pass over the pairs
+  // (by column, then row: first the blocks (K, J), J < K, by column, then the transposes of the
+  // blocks (I, K) of column K, by row), so the same sums as that pass, which read and wrote two
+  // rows of out per block: 51.6 → 45.1 M instructions over the ball's second (callgrind).
   void multiply(const Eigen::VectorXd& p, Eigen::VectorXd& out) const {
     out.resize(p.size());
-    for (int I = 0; I < n_; ++I) out.segment<3>(3 * I).noalias() = diag_[static_cast<size_t>(I)] * p.segment<3>(3 * I);
-    for (size_t q = 0; q < pairs_.size(); ++q) {
-      const int I = pairs_[q].first, J = pairs_[q].second;
-      out.segment<3>(3 * I).noalias() += off_[q] * p.segment<3>(3 * J);
-      out.segment<3>(3 * J).noalias() += off_[q].transpose() * p.segment<3>(3 * I);
+    const double* const pv = p.data();
+    const Mat3* const off = off_.data();
+    const std::pair<int, int>* const pairs = pairs_.data();
+    const int* const row_pairs = row_pairs_.data();
+    double* const o = out.data();
+    for (int K = 0; K < n_; ++K) {
+      blocks::product<blocks::Op::kAssign, false>(diag_[static_cast<size_t>(K)].data(), pv + 3 * K, o + 3 * K);
+      blocks::Sum3 t(o + 3 * K);
+      for (int a = row_start_[K]; a < row_start_[K + 1]; ++a) {
+        const int q = row_pairs[a];
+        t.add_product(off[q].data(), pv + 3 * pairs[q].second);
+      }
+      for (int q = col_start_[K]; q < col_start_[K + 1]; ++q) t.add_transposed_product(off[q].data(), pv + 3 * pairs[q].first);
+      t.store(o + 3 * K);
     }
   }
   int blocks() const { return n_; }
@@ -109,9 +137,21 @@ class BlockMatrix {
   const std::vector<Mat3>& off() const { return off_; }
 
  private:
+  // b ← b ± h or b ± hᵀ (3×3, column-major), entry by entry.
+  template <bool kSubtract>
+  static void combine(double* b, const double* h, bool transposed) {
+    if (transposed) {
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) b[i + 3 * j] = kSubtract ? b[i + 3 * j] - h[j + 3 * i] : b[i + 3 * j] + h[j + 3 * i];
+    } else {
+      for (int e = 0; e < 9; ++e) b[e] = kSubtract ? b[e] - h[e] : b[e] + h[e];
+    }
+  }
   int n_ = -1;
+  std::vector<std::pair<int, int>> input_;  // the pairs given to the last build, as given
   std::vector<std::pair<int, int>> pairs_;  // (I, J), I > J, sorted by column then row
   std::vector<int> col_start_;             // per block column J: its pairs [col_start_[J], col_start_[J+1])
+  std::vector<int> row_start_, row_pairs_;  // per block row I: its pairs row_pairs_[row_start_[I] .. row_start_[I+1]), by column
   std::vector<Mat3> diag_;                 // per block row: its diagonal block
   std::vector<Mat3> off_;                  // per pair (I, J): block (I, J)
 };
@@ -161,11 +201,16 @@ class ImplicitIntegrator : public TimeIntegrator {
                double parent_worst = std::numeric_limits<double>::infinity());
   void carry_contacts();
   void add_contacts(const World& w, const std::vector<Penetration>& pens, const RowMatrixX3d& x);
-  void solve(const World& w, double h, RowMatrixX3d& x);
+  // G_x: G(x) if known (the initial guess's, computed to choose it), else NaN.
+  void solve(const World& w, double h, RowMatrixX3d& x, double G_x = std::numeric_limits<double>::quiet_NaN());
   double potential(const World& w, const RowMatrixX3d& x, double h) const;
   void energy_gradient(const World& w, const RowMatrixX3d& x, double h, bool damping, RowMatrixX3d& Gr) const;
   void gradient(const World& w, const RowMatrixX3d& x, double h, Eigen::VectorXd& g);
   void assemble(const World& w, const RowMatrixX3d& x, double h, bool exact);
+  // The Newton blocks at x of the edges edges[0, ne) and the tetrahedra tets[0, nt) (element
+  // indices; null: 0, 1, …) into eH[0, ne) and tH[0, nt); in parallel if `parallel`.
+  void element_blocks(const World& w, const RowMatrixX3d& x, double h, bool exact, const int* edges, size_t ne,
+                      Mat3* eH, const int* tets, size_t nt, std::array<Mat3, 10>* tH, bool parallel);
   void build_pattern(const World& w);
   bool factorize(double h);
   bool newton_direction(const World& w, const RowMatrixX3d& x, double h, const Eigen::VectorXd& g, Eigen::VectorXd& dx);
@@ -185,6 +230,11 @@ class ImplicitIntegrator : public TimeIntegrator {
   // tet its 4 diagonal blocks and 6 blocks (b, a), a < b, computed in parallel, summed in order.
   std::vector<Mat3> edge_H_;
   std::vector<std::array<Mat3, 10>> tet_H_;
+  // An assembly in two parts: per part, its elements (those with a free row in it, ascending) and
+  // their blocks.
+  std::vector<int> part_edges_[2], part_tets_[2];
+  std::vector<Mat3> part_edge_H_[2];
+  std::vector<std::array<Mat3, 10>> part_tet_H_[2];
   std::vector<LinearContact> contacts_;
   std::vector<LinearContact> carried_;      // the last substep's contacts by vertex, offered to the next (see substep)
   bool still_holds(LinearContact& c, const RowMatrixX3d& X) const;
@@ -278,6 +328,18 @@ void ImplicitIntegrator::fit(const World& w) {
       if (f > f0 && f < static_cast<int>(free_rows_.size()) && std::max(below, total - below) <= best) {
         best = std::max(below, total - below);
         assembly_split_ = f;
+      }
+    }
+    for (int part = 0; part < 2; ++part) {
+      auto mine = [&](int row) { return free_[row] >= 0 && (free_[row] >= assembly_split_) == (part == 1); };
+      part_edges_[part].clear();
+      part_tets_[part].clear();
+      if (assembly_split_ == 0) continue;
+      for (size_t e = 0; e < d.edges.size(); ++e)
+        if (mine(d.edges[e].i) || mine(d.edges[e].j)) part_edges_[part].push_back(static_cast<int>(e));
+      for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+        const auto& T = d.tet_elems[t];
+        if (mine(T.v[0]) || mine(T.v[1]) || mine(T.v[2]) || mine(T.v[3])) part_tets_[part].push_back(static_cast<int>(t));
       }
     }
   }
@@ -425,12 +487,14 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
   // The initial guess: the inertial target y (exact in free flight) or x_n + h v_n (exact at rest
   // and in equilibrium), whichever has the lower potential. Both come from the state alone.
   RowMatrixX3d x = y_;
+  double G_x = potential(w, x, h);
   {
     RowMatrixX3d coast = xn_;
     for (int i : free_rows_) coast.row(i) += h * s.v.row(i);
-    if (potential(w, coast, h) < potential(w, x, h)) x = std::move(coast);
+    const double G_coast = potential(w, coast, h);
+    if (G_coast < G_x) x = std::move(coast), G_x = G_coast;
   }
-  solve(w, h, x);
+  solve(w, h, x, G_x);  // its first line search starts from G_x (one potential less per substep)
   for (int round = 0; round < o_.contact_rounds && o.collisions; ++round) {
     probe.x = x;
     const size_t count = contacts_.size();
@@ -593,7 +657,23 @@ double ImplicitIntegrator::potential(const World& w, const RowMatrixX3d& x, doub
   const WorldOptions& o = w.options();
   double G = 0;
   for (int i : free_rows_) G += 0.5 * d.mass(i) * (x.row(i) - y_.row(i)).squaredNorm() / (h * h);
-  for (size_t e = 0; e < d.edges.size(); ++e) {
+  size_t e = 0, t = 0;
+#if defined(__SSE2__)
+  // Two elements at a time (constraints.h, bit for bit the scalar terms below), summed in order.
+  auto add_pair = [&G](__m128d energy, __m128d damping, double kd0, double kd1) {
+    G += _mm_cvtsd_f64(energy);
+    if (kd0 > 0) G += _mm_cvtsd_f64(damping);
+    G += _mm_cvtsd_f64(_mm_unpackhi_pd(energy, energy));
+    if (kd1 > 0) G += _mm_cvtsd_f64(_mm_unpackhi_pd(damping, damping));
+  };
+  for (; e + 1 < d.edges.size(); e += 2) {
+    __m128d energy, damping;
+    edge_potential_pair(x.data(), xn_.data(), d.edges[e], d.edges[e + 1], h, edge_g_[e].data(), edge_g_[e + 1].data(),
+                        energy, damping);
+    add_pair(energy, damping, d.edges[e].kd, d.edges[e + 1].kd);
+  }
+#endif
+  for (; e < d.edges.size(); ++e) {
     const auto& E = d.edges[e];
     const Vec3 xi = x.row(E.i).transpose(), xj = x.row(E.j).transpose();
     G += distance_energy(xi, xj, E.D0, E.k);
@@ -602,7 +682,15 @@ double ImplicitIntegrator::potential(const World& w, const RowMatrixX3d& x, doub
       G += 0.5 * E.kd / h * q * q;
     }
   }
-  for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+#if defined(__SSE2__)
+  for (; t + 1 < d.tet_elems.size(); t += 2) {
+    __m128d energy, damping;
+    tet_potential_pair(x.data(), xn_.data(), d.tet_elems[t], d.tet_elems[t + 1], h, tet_g_[t][0].data(),
+                       tet_g_[t + 1][0].data(), energy, damping);
+    add_pair(energy, damping, d.tet_elems[t].kd, d.tet_elems[t + 1].kd);
+  }
+#endif
+  for (; t < d.tet_elems.size(); ++t) {
     const auto& T = d.tet_elems[t];
     Vec3 p[4];
     for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
@@ -643,7 +731,34 @@ void ImplicitIntegrator::energy_gradient(const World& w, const RowMatrixX3d& x, 
   const WorldOptions& o = w.options();
   Gr.setZero(d.rows, 3);
   auto add = [&](int row, const Vec3& v) { Gr.row(row) += v.transpose(); };
-  for (size_t e = 0; e < d.edges.size(); ++e) {
+  size_t e = 0, t = 0;
+#if defined(__SSE2__)
+  // Two elements at a time (constraints.h, bit for bit the scalar terms below), added in order.
+  double* const gr = Gr.data();
+  auto add_lane = [gr](int row, const simd::Pair3& f, int lane, bool negate) {
+    for (int c = 0; c < 3; ++c) {
+      const __m128d v = c == 0 ? f.x : c == 1 ? f.y : f.z;
+      const double value = _mm_cvtsd_f64(lane ? _mm_unpackhi_pd(v, v) : v);
+      gr[3 * row + c] += negate ? -value : value;
+    }
+  };
+  for (; e + 1 < d.edges.size(); e += 2) {
+    const simd::Pair3 f = edge_gradient_pair(x.data(), xn_.data(), d.edges[e], d.edges[e + 1], h, damping,
+                                             edge_g_[e].data(), edge_g_[e + 1].data());
+    for (int lane = 0; lane < 2; ++lane) {
+      add_lane(d.edges[e + lane].j, f, lane, false);
+      add_lane(d.edges[e + lane].i, f, lane, true);
+    }
+  }
+  for (; t + 1 < d.tet_elems.size(); t += 2) {
+    simd::Pair3 f[4];
+    tet_gradient_pair(x.data(), xn_.data(), d.tet_elems[t], d.tet_elems[t + 1], h, damping, tet_g_[t][0].data(),
+                      tet_g_[t + 1][0].data(), f);
+    for (int lane = 0; lane < 2; ++lane)
+      for (int k = 0; k < 4; ++k) add_lane(d.tet_elems[t + lane].v[k], f[k], lane, false);
+  }
+#endif
+  for (; e < d.edges.size(); ++e) {
     const auto& E = d.edges[e];
     const Vec3 xi = x.row(E.i).transpose(), xj = x.row(E.j).transpose();
     Vec3 gj;
@@ -656,7 +771,7 @@ void ImplicitIntegrator::energy_gradient(const World& w, const RowMatrixX3d& x, 
     add(E.j, f);
     add(E.i, -f);
   }
-  for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+  for (; t < d.tet_elems.size(); ++t) {
     const auto& T = d.tet_elems[t];
     Vec3 p[4], gk[4];
     for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
@@ -741,6 +856,78 @@ void ImplicitIntegrator::build_pattern(const World& w) {
   }
 }
 
+// Elements' Newton blocks at x, two at a time (constraints.h, the SSE2 pair kernels: bit for bit
+// the scalar edge_newton_block and tet_newton_blocks). The assembly in one part computes all of
+// them on the calling thread below WorldOptions::parallel.assembly_tets tetrahedra, else in
+// parallel; each of two parts computes its own on its own thread. With the pair
+// kernels a block costs half what it did, and two TBB tasks per Newton iteration cost more than
+// they save on small meshes, the more so while another process keeps the second core busy
+// (bench_integrators, implicit, load 2.3–2.7, simulated s per wall s on the calling thread /
+// parallel: the ball, 473 tetrahedra, 16.0–16.9 / 12.4–15.4; the bunny, 1,914, 3.17–3.21 /
+// 3.13–3.17; balls of 1,135, 6,216 and 24,066 tetrahedra 6.46 / 5.87, 0.251 / 0.207, 5.43 / 6.22;
+// the threshold was 256 before).
+void ImplicitIntegrator::element_blocks(const World& w, const RowMatrixX3d& x, double h, bool exact, const int* edge_ids,
+                                        size_t ne, Mat3* eH, const int* tet_ids, size_t nt, std::array<Mat3, 10>* tH,
+                                        bool parallel) {
+  const WorldData& d = w.data();
+  const double* const X = x.data();
+  // Element a of the list: ids[a], or a itself (two instantiations of each loop: the indirection
+  // cost the one-body assembly 1.5 M instructions over the ball's second).
+  auto listed = [](const int* ids) { return [ids](size_t a) { return static_cast<size_t>(ids[a]); }; };
+  auto all = [](size_t a) { return a; };
+  auto edges_of = [&](auto edge, size_t a, size_t end) {
+#if defined(__SSE2__)
+    for (; a + 1 < end; a += 2) {
+      const size_t e0 = edge(a), e1 = edge(a + 1);
+      if (!edge_newton_block_pair(X, d.edges[e0], d.edges[e1], !exact, h, edge_g_[e0].data(), edge_g_[e1].data(),
+                                  eH[a].data(), eH[a + 1].data()))
+        break;  // a zero-length edge: the scalar function from here on
+    }
+#endif
+    for (; a < end; ++a) {
+      const size_t e = edge(a);
+      const auto& E = d.edges[e];
+      eH[a] = edge_newton_block(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact, E.kd, h,
+                                edge_g_[e]);
+    }
+  };
+  auto tets_of = [&](auto tet, size_t a, size_t end) {
+#if defined(__SSE2__)
+    for (; a + 1 < end; a += 2) {
+      const size_t t0 = tet(a), t1 = tet(a + 1);
+      tet_newton_blocks_pair(X, d.tet_elems[t0], d.tet_elems[t1], exact, h, tet_g_[t0][0].data(), tet_g_[t1][0].data(),
+                             tH[a][0].data(), tH[a + 1][0].data());
+    }
+#endif
+    for (; a < end; ++a) {
+      const size_t t = tet(a);
+      const auto& T = d.tet_elems[t];
+      Vec3 p[4];
+      for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
+      tet_newton_blocks(p, T.V0, T.k, exact, T.kd, h, tet_g_[t].data(), tH[a].data(), tH[a].data() + 4);
+    }
+  };
+  auto edges = [&](size_t a, size_t end) {
+    if (edge_ids)
+      edges_of(listed(edge_ids), a, end);
+    else
+      edges_of(all, a, end);
+  };
+  auto tets = [&](size_t a, size_t end) {
+    if (tet_ids)
+      tets_of(listed(tet_ids), a, end);
+    else
+      tets_of(all, a, end);
+  };
+  if (!parallel) {
+    edges(0, ne);
+    tets(0, nt);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ne, 1024), [&](const tbb::blocked_range<size_t>& r) { edges(r.begin(), r.end()); });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nt, 256), [&](const tbb::blocked_range<size_t>& r) { tets(r.begin(), r.end()); });
+}
+
 void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double h, bool exact) {
   const WorldData& d = w.data();
   const WorldOptions& o = w.options();
@@ -786,66 +973,56 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
       if (d.any_attached) M.diagonal().array() += d.attach_k(i) + d.attach_c(i) / h;  // soft attachment
       H_.add_diag(static_cast<int>(f), M);
     }
-    auto edge_block = [&](size_t e) {
-      const auto& E = d.edges[e];
-      Mat3 He = distance_hessian(Vec3(x.row(E.i).transpose()), Vec3(x.row(E.j).transpose()), E.D0, E.k, !exact);
-      if (E.kd > 0) He += (E.kd / h) * edge_g_[e] * edge_g_[e].transpose();
-      return He;
-    };
-    auto tet_blocks = [&](size_t t, Mat3* Hd, Mat3* Hl) {  // Hd[4], Hl[6]: the blocks (b, a), a < b, in pair order
-      const auto& T = d.tet_elems[t];
-      Vec3 p[4], gk[4];
-      for (int k = 0; k < 4; ++k) p[k] = x.row(T.v[k]).transpose();
-      volume_hessian_lower(p, T.V0, T.k, exact, Hd, Hl, gk);
-      const double damp = T.kd / h;
-      if (damp > 0) {
-        const auto& tg = tet_g_[t];
-        int q = 0;
-        for (int a = 0; a < 4; ++a) {
-          Hd[a] += damp * tg[a] * tg[a].transpose();
-          for (int b = a + 1; b < 4; ++b) Hl[q++] += damp * tg[b] * tg[a].transpose();
-        }
+    if (part < 0) {  // all the blocks computed first (element_blocks), then summed in order
+      for (size_t e = 0; e < d.edges.size(); ++e) {
+        const auto& E = d.edges[e];
+        const int A = free_[E.i], B = free_[E.j], c = edge_block_[e];
+        const Mat3& He = edge_H_[e];  // the edge's blocks: He on the diagonal, −He (its transpose) off it
+        if (A >= 0) H_.add_diag(A, He);
+        if (B >= 0) H_.add_diag(B, He);
+        if (c >= 0) H_.subtract_off(c >> 1, He, c & 1);
       }
-    };
-    // One part of a large mesh: the blocks computed in parallel first (then summed in order below).
-    const bool buffered = part < 0 && d.tet_elems.size() >= kParallelAssemblyTets;
-    if (buffered) {
-      edge_H_.resize(d.edges.size());
-      tet_H_.resize(d.tet_elems.size());
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, d.edges.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t e = r.begin(); e < r.end(); ++e) edge_H_[e] = edge_block(e);
-      });
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, d.tet_elems.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t t = r.begin(); t < r.end(); ++t) tet_blocks(t, tet_H_[t].data(), tet_H_[t].data() + 4);
-      });
+      for (size_t t = 0; t < d.tet_elems.size(); ++t) {
+        const auto& T = d.tet_elems[t];
+        const Mat3* Hd = tet_H_[t].data();
+        const Mat3* Hl = Hd + 4;  // in pair order, as the codes
+        for (int k = 0; k < 4; ++k)
+          if (free_[T.v[k]] >= 0) H_.add_diag(free_[T.v[k]], Hd[k]);
+        for (int q = 0; q < 6; ++q)
+          if (const int c = tet_block_[t][q]; c >= 0) H_.add_off(c >> 1, Hl[q], c & 1);
+      }
+      return;
     }
-    for (size_t e = 0; e < d.edges.size(); ++e) {
-      const auto& E = d.edges[e];
-      if (!mine(part, free_[E.i]) && !mine(part, free_[E.j])) continue;
-      const Mat3 He = buffered ? edge_H_[e] : edge_block(e);
+    // One of two parts: its elements' blocks first (into its own buffers), then summed in order.
+    const std::vector<int>& pe = part_edges_[part];
+    const std::vector<int>& pt = part_tets_[part];
+    part_edge_H_[part].resize(pe.size());
+    part_tet_H_[part].resize(pt.size());
+    element_blocks(w, x, h, exact, pe.data(), pe.size(), part_edge_H_[part].data(), pt.data(), pt.size(),
+                   part_tet_H_[part].data(), false);
+    for (size_t a = 0; a < pe.size(); ++a) {
+      const auto& E = d.edges[static_cast<size_t>(pe[a])];
+      const Mat3& He = part_edge_H_[part][a];
       const int rows[2] = {E.i, E.j};
-      scatter(part, 2, rows, &edge_block_[e], [&](int a, int b) -> Mat3 { return a == b ? He : Mat3(-He); });
+      scatter(part, 2, rows, &edge_block_[static_cast<size_t>(pe[a])], [&](int i, int j) -> Mat3 { return i == j ? He : Mat3(-He); });
     }
-    for (size_t t = 0; t < d.tet_elems.size(); ++t) {
-      const auto& T = d.tet_elems[t];
-      if (!mine(part, free_[T.v[0]]) && !mine(part, free_[T.v[1]]) && !mine(part, free_[T.v[2]]) &&
-          !mine(part, free_[T.v[3]]))
-        continue;
-      Mat3 own[10];
-      const Mat3* Hd = own;
-      if (buffered)
-        Hd = tet_H_[t].data();
-      else
-        tet_blocks(t, own, own + 4);
+    for (size_t a = 0; a < pt.size(); ++a) {
+      const size_t t = static_cast<size_t>(pt[a]);
+      const Mat3* Hd = part_tet_H_[part][a].data();
       const Mat3* Hl = Hd + 4;  // block (b, a), a < b, at the pair's index a (7 − a) / 2 + b − a − 1
-      scatter(part, 4, T.v, tet_block_[t].data(),
-              [&](int b, int a) -> const Mat3& { return a == b ? Hd[a] : Hl[a * (7 - a) / 2 + b - a - 1]; });
+      scatter(part, 4, d.tet_elems[t].v, tet_block_[t].data(),
+              [&](int j, int i) -> const Mat3& { return i == j ? Hd[i] : Hl[i * (7 - i) / 2 + j - i - 1]; });
     }
   };
-  if (split > 0)
+  if (split > 0) {
     tbb::parallel_invoke([&] { assemble_part(0); }, [&] { assemble_part(1); });
-  else
+  } else {
+    edge_H_.resize(d.edges.size());
+    tet_H_.resize(d.tet_elems.size());
+    element_blocks(w, x, h, exact, nullptr, d.edges.size(), edge_H_.data(), nullptr, d.tet_elems.size(), tet_H_.data(),
+                   d.tet_elems.size() >= static_cast<size_t>(o.parallel.assembly_tets));
     assemble_part(-1);
+  }
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const LinearContact& c = contacts_[k];
     const double depth = c.c0 - stencil_dot(c, x);
@@ -928,7 +1105,7 @@ bool ImplicitIntegrator::newton_direction(const World& w, const RowMatrixX3d& x,
   return false;
 }
 
-void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
+void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x, double G_x) {
   if (free_rows_.empty()) return;
   build_pattern(w);
   const WorldData& d = w.data();
@@ -948,8 +1125,8 @@ void ImplicitIntegrator::solve(const World& w, double h, RowMatrixX3d& x) {
   };
   bool converged = false;
   double previous_full_step = 0;  // the last Newton step (edge lengths) if the line search took it whole, else 0
-  double Gx = 0;         // G(x)
-  bool have_Gx = false;  // Gx is known
+  double Gx = G_x;                   // G(x)
+  bool have_Gx = !std::isnan(G_x);  // Gx is known
   for (int it = 0; it < o_.max_newton_iterations; ++it) {
     gradient(w, x, h, g);
     // Converged when the residual force would move no vertex by tolerance × its edge scale.

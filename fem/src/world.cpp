@@ -39,7 +39,7 @@ void check_options(const WorldOptions& options) {
   if (options.cell_size < 0 || options.table_size < 0)
     throw InputError("fem world: cell_size and table_size must be >= 0 (0: automatic)");
   const ParallelThresholds& p = options.parallel;
-  if (p.elements < 0 || p.detection_tets < 0 || p.border_vertices < 0)
+  if (p.elements < 0 || p.detection_tets < 0 || p.border_vertices < 0 || p.assembly_tets < 0)
     throw InputError("fem world: parallel thresholds must be >= 0");
 }
 

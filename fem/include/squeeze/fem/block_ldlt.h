@@ -28,6 +28,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <algorithm>
+#include <cstddef>
 #include <utility>
 #include <vector>
 
@@ -88,11 +89,20 @@ class BlockLDLT {
 
   /// Below this many block products per factorisation analyze() keeps one part.
   static constexpr long long kParallelUpdates = 200000;
+  /// A factor (L in double) of at most this many bytes keeps its single-precision copy for
+  /// precondition() as doubles: the same values, without a conversion per block and use.
+  static constexpr size_t kRoundedInDouble = size_t{2} << 20;
+  /// Replaces kRoundedInDouble from the next factorize() on (tests and benchmarks run either path
+  /// with it; the results are the same bit for bit).
+  void set_rounded_in_double(size_t bytes) { rounded_in_double_ = bytes; }
 
  private:
   void cut(int parts, const std::vector<long long>& row_cost);
-  template <class Block>
-  void substitute(const std::vector<Block>& Lx, const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
+  // kRight: the association of the single-precision factor's products (block_ldlt.cpp).
+  // LT: the blocks' transposes (or null).
+  template <bool kRight, class Block>
+  void substitute(const std::vector<Block>& Lx, const std::vector<Mat3>* LT, const Eigen::VectorXd& b,
+                  Eigen::VectorXd& x) const;
 
   int n_ = 0;
   long long updates_ = 0;    // factor_updates()
@@ -105,7 +115,10 @@ class BlockLDLT {
   std::vector<int> Lp_;      // column starts of L (block CSC, strictly lower)
   std::vector<int> Li_;      // row of each block of L
   std::vector<Mat3> Lx_;     // blocks of L: L(Li_[p], column)
-  std::vector<Eigen::Matrix3f> Lf_;  // Lx_ in single precision (precondition)
+  std::vector<Eigen::Matrix3f> Lf_;  // Lx_ in single precision (precondition), or empty and
+  size_t rounded_in_double_ = kRoundedInDouble;
+  std::vector<Mat3> Lr_, Lrt_;       // ... the same values as doubles, and their transposes, for a factor
+                                     // of at most kRoundedInDouble bytes
   std::vector<Mat3> Dinv_;   // inverses of the pivot blocks
   // Workspace of factorize (mutable scratch of solve).
   std::vector<Mat3> y_;

@@ -44,6 +44,7 @@ struct ParallelThresholds {
   int elements = 2048;         // edges + tets of the element force pass
   int detection_tets = 1024;   // tetrahedra of the spatial hash's detection pass
   int border_vertices = 32;    // colliding vertices of the penetration depth's border pass
+  int assembly_tets = 8192;    // tetrahedra of the implicit integrator's element blocks (one body)
 };
 
 struct WorldOptions {
