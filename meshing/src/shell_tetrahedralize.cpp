@@ -9,6 +9,7 @@
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
 #include <CGAL/Random.h>
+#include <CGAL/assertions_behaviour.h>
 #include <CGAL/make_mesh_3.h>
 #include <CGAL/refine_mesh_3.h>
 #include <CGAL/perturb_mesh_3.h>
@@ -24,6 +25,7 @@
 #include <cstdlib>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <cstdint>
 #include <unordered_map>
@@ -38,6 +40,7 @@
 #include "squeeze/meshing/tet_locator.h"
 #include "squeeze/meshing/triangle_bvh.h"
 #include "squeeze/meshing/winding_number.h"
+#include "sigfpe_trap.h"
 
 namespace squeeze::meshing {
 namespace {
@@ -117,6 +120,15 @@ TetMesh to_tet_mesh(const C3t3& c3t3) {
 // against runaway refinement: memory).
 void refine_from_seeds(C3t3& c3t3, const Domain& domain, const std::vector<Eigen::Vector3d>& seeds, double size,
                        double facet_distance, unsigned seed, int max_tets) {
+  // CGAL's warnings go to the debug log, not to stderr: where no seed lies on a facet of the
+  // domain (a solid thinner than the seeds' spacing, a 1 mm bowl), refine_mesh_3 warns that it
+  // cannot start and returns nothing, which the callers report in their own words.
+  static std::once_flag quiet;
+  std::call_once(quiet, [] {
+    CGAL::set_warning_handler([](const char* what, const char* expr, const char* file, int line, const char* msg) {
+      spdlog::debug("CGAL {}: {} ({}:{}) {}", what ? what : "warning", expr ? expr : "", file ? file : "", line, msg ? msg : "");
+    });
+  });
   const auto surface_index = domain.index_from_surface_patch_index(Domain::Surface_patch_index(0, 1));
   CGAL::get_default_random() = CGAL::Random(seed);
   Tr& tr = c3t3.triangulation();
@@ -131,6 +143,17 @@ void refine_from_seeds(C3t3& c3t3, const Domain& domain, const std::vector<Eigen
   CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_lloyd(), params::no_odt(), params::no_perturb(),
                       params::no_exude(),
                       params::mesh_3_options(params::maximal_number_of_vertices = static_cast<std::size_t>(2 * max_tets)));
+}
+
+// CGAL's sliver exuder, stopped where it meets a NaN weight (detail::run_unless_sigfpe: beside a
+// numerically flat cell, CGAL 5.5's exuder compares a NaN exactly and GMP raises SIGFPE); its
+// earlier pumps are kept.
+CGAL::Mesh_optimization_return_code exude_unless_nan(C3t3& c3t3, double seconds, double sliver_bound) {
+  CGAL::Mesh_optimization_return_code code = CGAL::BOUND_REACHED;
+  if (!detail::run_unless_sigfpe(
+          [&] { code = CGAL::exude_mesh_3(c3t3, params::time_limit = seconds, params::sliver_bound = sliver_bound); }))
+    spdlog::debug("Mesh_3's sliver exuder met a NaN weight (a numerically flat cell) and stopped there");
+  return code;
 }
 
 }  // namespace
@@ -208,8 +231,7 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
       spdlog::warn("tetrahedralize: Mesh_3's sliver perturber stopped at its time limit ({} s): the mesh may differ "
                    "from run to run",
                    opt.optimize_seconds);
-    if (CGAL::exude_mesh_3(c3t3, params::time_limit = opt.optimize_seconds, params::sliver_bound = opt.sliver_bound) ==
-        CGAL::TIME_LIMIT_REACHED)
+    if (exude_unless_nan(c3t3, opt.optimize_seconds, opt.sliver_bound) == CGAL::TIME_LIMIT_REACHED)
       spdlog::warn("tetrahedralize: Mesh_3's sliver exuder stopped at its time limit ({} s): the mesh may differ "
                    "from run to run",
                    opt.optimize_seconds);
@@ -451,8 +473,7 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
     // No sliver perturbation: it moved boundary vertices enough to raise deviation_in from 0.41 to
     // 0.91 % of the diagonal on the heart, and took seconds; the exuder, then
     // relocate_sliver_vertices(), deal with the few slivers left.
-    if (CGAL::exude_mesh_3(c3t3, params::time_limit = opt.optimize_seconds, params::sliver_bound = opt.sliver_bound) ==
-        CGAL::TIME_LIMIT_REACHED)
+    if (exude_unless_nan(c3t3, opt.optimize_seconds, opt.sliver_bound) == CGAL::TIME_LIMIT_REACHED)
       st.time_limit_reached = true;
     const auto t2 = std::chrono::steady_clock::now();
     auto sec = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };

@@ -35,6 +35,7 @@
 #include "squeeze/meshing/tet_cleanup.h"
 #include "squeeze/meshing/tet_geometry.h"
 #include "squeeze/meshing/winding_number.h"
+#include "sigfpe_trap.h"
 
 namespace squeeze::meshing {
 namespace {
@@ -135,6 +136,7 @@ struct RunResult {
   int size_driven = 0;  // insertions and splits asked for by the size bound (not quality)
   bool conforming = true;
   bool recovered = true;  // the first recovery, before any refinement, made the boundary conforming
+  bool exuder_stopped = false;  // CGAL's exuder met a NaN weight and stopped (exude())
   int peeled = 0;
 };
 
@@ -180,7 +182,7 @@ class Mesher {
       spdlog::debug("tetrahedralize: some boundary faces are not faces of the triangulation; tetrahedra classified by "
                     "the winding number at their centroids");
     setup_complex();
-    if (opt_.exude) exude();
+    if (opt_.exude) r.exuder_stopped = !exude();
     r.mesh = extract();
     // Boundary tetrahedra still below the floor (flat caps over the surface that refinement could
     // not reach without splitting the surface below min_split_) are peeled off where that moves the
@@ -341,7 +343,12 @@ class Mesher {
     Eigen::RowVector3d lo, hi;
     bounding_box(s.V, lo, hi);
     const double diag = (hi - lo).norm();
-    const double tol = 1e-9 * diag;
+    // Flat within a hundred-thousandth of the diagonal: files keep few digits (an OBJ with six
+    // decimals puts the corners of a flat cap up to 8.7e-7 m off its plane), and the corners of a
+    // face that is flat in the model must make one patch, or its thin fan triangles, each a plane
+    // of its own, meet at nearly 180° and their recovery splits them without end (the legs of a
+    // spider model: 300 splits, not conforming, 4.2°). Far below the deviation bounds (1e-2).
+    const double tol = 1e-5 * diag;
     const Vec3 origin = lo.transpose();
     // Edge -> faces.
     std::unordered_map<uint64_t, std::array<int, 2>> ef;
@@ -359,8 +366,10 @@ class Mesher {
       const double len = n.norm();
       return len > 0 ? std::abs(n.dot(P_[v] - P_[s.F(f, 0)])) / len : INFINITY;
     };
-    // Patches: flood fill across edges whose two faces lie in one plane (within a billionth of
-    // the diagonal, and facing the same way).
+    // Patches: flood fill across edges whose two faces lie in one plane (within `tol`, and facing
+    // the same way), each face also within `tol` of the plane of the patch's first face, so that a
+    // finely triangulated curved surface, nearly flat from one face to the next, does not drift
+    // into one "flat" patch.
     std::vector<int> patch(static_cast<size_t>(nf), -1);
     int patches = 0;
     for (Eigen::Index f0 = 0; f0 < nf; ++f0) {
@@ -379,7 +388,7 @@ class Mesher {
             if (s.F(g, j) != s.F(f, k) && s.F(g, j) != s.F(f, (k + 1) % 3)) opp = s.F(g, j);
           int mine = s.F(f, (k + 2) % 3);
           if (opp < 0 || !(plane_distance(f, opp) <= tol && plane_distance(g, mine) <= tol) ||
-              normal(f).dot(normal(g)) <= 0)
+              normal(f).dot(normal(g)) <= 0 || !(plane_distance(f0, opp) <= tol) || normal(f0).dot(normal(g)) <= 0)
             continue;
           patch[g] = patches;
           stack.push_back(g);
@@ -536,20 +545,43 @@ class Mesher {
     const auto it = id_.find(&*v);
     return it == id_.end() ? -1 : it->second;
   }
+  // Adds point p (a surface point or not) and inserts it in the triangulation once there is one.
+  // Returns its index; or, where the triangulation already has a vertex at exactly p, that
+  // vertex's index: CGAL then returns the old vertex, and a second index for it would hide the
+  // surface faces around it from is_surface_facet (the parity flood then leaks through them and
+  // marks every cell outside). It happens where flips in a flat patch bring back a surface edge
+  // that was split before, its old midpoint left on it, and the edge is split again at the same
+  // point (a cone of 16 sides at 150 tetrahedra: no tetrahedron at all).
   int add_point(const Vec3& p, bool surface, Vh hint) {
+    if (tr_.number_of_vertices() > 0) {
+      const WPoint wp(BPoint(p(0), p(1), p(2)));
+      const Vh v = hint == Vh() ? tr_.insert(wp) : tr_.insert(wp, hint);
+      if (const auto it = id_.find(&*v); it != id_.end()) {
+        if (surface) on_surface_[static_cast<size_t>(it->second)] = 1;
+        return it->second;
+      }
+      const int i = static_cast<int>(P_.size());
+      P_.push_back(p);
+      vh_.push_back(v);
+      on_surface_.push_back(surface ? 1 : 0);
+      id_[&*v] = i;
+      return i;
+    }
     const int i = static_cast<int>(P_.size());
     P_.push_back(p);
     vh_.push_back(Vh());
     on_surface_.push_back(surface ? 1 : 0);
-    if (tr_.number_of_vertices() > 0) insert(i, hint);
     return i;
   }
-  void insert(int i, Vh hint) {
+  // Inserts point i; returns the index its vertex has: i, or the earlier point at exactly the same
+  // place (see add_point), whose index then stands for both.
+  int insert(int i, Vh hint) {
     const Vec3& p = P_[static_cast<size_t>(i)];
     const Vh v = hint == Vh() ? tr_.insert(WPoint(BPoint(p(0), p(1), p(2))))
                               : tr_.insert(WPoint(BPoint(p(0), p(1), p(2))), hint);
     vh_[static_cast<size_t>(i)] = v;
-    id_[&*v] = i;
+    const auto [it, fresh] = id_.try_emplace(&*v, i);
+    return it->second;
   }
   void build_delaunay() {
     // The surface's vertices (input vertices inside a flat patch are no longer on it).
@@ -577,9 +609,27 @@ class Mesher {
     };
     CGAL::spatial_sort(order.begin(), order.end(), Traits{&P_}, CGAL::Hilbert_sort_median_policy());
     Vh hint;
+    std::unordered_map<int, int> same;  // point -> the earlier point at exactly its place
     for (int i : order) {
-      insert(i, hint);
+      const int j = insert(i, hint);
+      if (j != i) same.emplace(i, j);
       hint = vh_[static_cast<size_t>(i)];
+    }
+    // Surface triangles name each place by one index (is_surface_facet looks them up by the
+    // vertices' indices); a triangle left with a repeated corner encloses nothing and goes.
+    if (same.empty()) return;
+    spdlog::debug("tetrahedralize: {} surface points at exactly the place of another", same.size());
+    const size_t n = tri_.size();
+    for (size_t t = 0; t < n; ++t) {
+      if (!tri_alive_[t]) continue;
+      std::array<int, 3> v = tri_[t];
+      bool changed = false;
+      for (int& x : v)
+        if (const auto it = same.find(x); it != same.end()) x = it->second, changed = true;
+      if (!changed) continue;
+      const int patch = tri_patch_[t], depth = tri_depth_[t];
+      remove_tri(static_cast<int>(t));
+      if (v[0] != v[1] && v[1] != v[2] && v[2] != v[0]) add_tri(v[0], v[1], v[2], patch, depth);
     }
   }
 
@@ -909,12 +959,23 @@ class Mesher {
   }
 
   // CGAL's exuder on the tetrahedra below sliver_bound: weights only, never a surface face.
-  void exude() {
-    if (CGAL::exude_mesh_3(c3t3_, CGAL::parameters::sliver_bound = opt_.sliver_bound,
-                           CGAL::parameters::time_limit = opt_.exude_seconds) == CGAL::TIME_LIMIT_REACHED)
+  // (Under detail::run_unless_sigfpe: beside a numerically flat cell, points split on a surface
+  // edge and collinear with it up to rounding, CGAL 5.5's exuder can take a NaN weight and die of
+  // SIGFPE; it then stops there, its earlier pumps kept.)
+  // Returns false where it stopped at a NaN weight.
+  bool exude() {
+    CGAL::Mesh_optimization_return_code code = CGAL::BOUND_REACHED;
+    const bool whole = detail::run_unless_sigfpe([&] {
+      code = CGAL::exude_mesh_3(c3t3_, CGAL::parameters::sliver_bound = opt_.sliver_bound,
+                                CGAL::parameters::time_limit = opt_.exude_seconds);
+    });
+    if (!whole)
+      spdlog::debug("tetrahedralize: CGAL's sliver exuder met a NaN weight (a numerically flat cell) and stopped there");
+    if (code == CGAL::TIME_LIMIT_REACHED)
       spdlog::warn("tetrahedralize: CGAL's sliver exuder stopped at its time limit ({} s): the mesh may differ from "
                    "run to run",
                    opt_.exude_seconds);
+    return whole;
   }
 
   TetMesh extract() {
@@ -1010,6 +1071,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
                  attempt + 1, L, r.mesh.T.rows(), r.boundary_splits, r.steiner, r.size_driven,
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     st.attempts = attempt + 1;
+    st.exuder_nan_stops += r.exuder_stopped;
     const double score = (r.conforming ? 0 : 100) + (n > 0 ? std::abs(std::log(n / target)) : 1e9);
     if (score < best_score) {
       best_score = score;

@@ -56,6 +56,8 @@ struct TetrahedralizeStats {
   int flips = 0;                 // 2-3 and 3-2 flips of interior slivers under min_dihedral at the
                                  // end (tet_cleanup.h: flip_slivers; boundary and volume unchanged)
   bool conforming = true;        // every boundary triangle (after splits) is a face of the mesh
+  int exuder_nan_stops = 0;      // attempts whose CGAL exuder met a NaN weight beside a numerically flat
+                                 // cell and stopped there, instead of the process dying of SIGFPE
 };
 
 /// Tetrahedralizes the solid bounded by `boundary`, a closed, consistently outward-oriented,
