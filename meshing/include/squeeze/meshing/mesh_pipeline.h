@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 8;  // 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
+constexpr int kMeshingAlgorithmVersion = 9;  // 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
@@ -96,6 +96,10 @@ struct MeshResult {
   int boundary_target_faces = 0;  // the face count the target asked of them, summed
   int boundary_retries = 0;     // parts' boundaries tried again (half the bounds, then the part's own
                                 // surface) after a non-conforming or sliver tetrahedralization
+  int parts_by_winding_number = 0;  // parts whose boundary still did not hold after the retries,
+                                // meshed as their winding-number solid by Mesh_3 instead
+  int cavities = 0;             // closed components the file orients inward that lie inside another
+                                // (a hollow ball's inner shell): meshed as cavities of that part
   EnvelopeStats envelope;
   TetMesh tets;                 // the coarse tetrahedral mesh: one conforming mesh per part, in part order
   TetQuality quality;
