@@ -586,9 +586,10 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
           // of the part's volume. Before an attempt is judged, so that such debris alone does not
           // send the part to the retries (a 64-sided cone at 300: 11 tetrahedra at its tip cost
           // two retries, 10 s, for the same mesh).
-          auto tetrahedralize_part = [&](const SurfaceMesh& b, TetrahedralizeStats* st, int max_tets) {
+          auto tetrahedralize_part = [&](const SurfaceMesh& b, TetrahedralizeStats* st, int max_tets, int attempts) {
             TetrahedralizeOptions tb = t;
             tb.max_tets = std::min(tb.max_tets, max_tets);
+            tb.max_attempts = std::min(tb.max_attempts, attempts);
             TetMesh m = tetrahedralize(b, tb, st, pr);
             p.exuder_nan_stops += st->exuder_nan_stops;
             if (const int debris = drop_debris_components(m, 0.005); debris > 0) {
@@ -597,7 +598,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
             }
             return m;
           };
-          p.tets = tetrahedralize_part(p.boundary, &p.tet_stats, t.max_tets);
+          p.tets = tetrahedralize_part(p.boundary, &p.tet_stats, t.max_tets, t.max_attempts);
           // A boundary whose tetrahedralization is not conforming or keeps a dihedral angle below the
           // floor (the simplification brought two sheets of a thin part close) is tried again,
           // simplified within half the bounds, then as the part's own surface (the input's
@@ -638,11 +639,12 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
               if (p.check || p.surface.F.rows() > std::max(4000, 8 * e.target_faces)) continue;
               b = p.surface;
             }
-            // A retry may not grow past four times the first attempt (at least 4,000 tetrahedra):
-            // around a sharp tip its recovery and refinement can split without end (a 96-sided
-            // cone's own surface: 19,417 tetrahedra, 72 s, still not conforming).
+            // A retry is bounded: at most twice the first attempt's tetrahedra (at least 4,000)
+            // and two edge lengths; around a sharp tip its recovery and refinement can split
+            // without end (a 96-sided cone's own surface: 19,417 tetrahedra, 72 s, still not
+            // conforming; a 64-sided one: five edge lengths, 20 s).
             TetrahedralizeStats st;
-            TetMesh m = tetrahedralize_part(b, &st, std::max(4000, 4 * static_cast<int>(first_count)));
+            TetMesh m = tetrahedralize_part(b, &st, std::max(4000, 2 * static_cast<int>(first_count)), 2);
             spdlog::debug("part {}: retry {} ({}): {} faces, {} tetrahedra, conforming {}", i, retry,
                           retry == 1 ? "half the bounds" : "its own surface", b.F.rows(), m.T.rows(), st.conforming);
             ++p.retries;

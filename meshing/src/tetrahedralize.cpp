@@ -1033,6 +1033,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
                        Progress* progress) {
   if (input_boundary.F.rows() == 0) throw InputError("tetrahedralize: the surface has no face");
   if (opt.target_tets < 1) throw InputError("--target-tets must be at least 1");
+  if (opt.max_attempts < 1) throw InputError("tetrahedralize: max_attempts must be at least 1");
   // Long edges split first (TetrahedralizeOptions::long_edge), never below a twentieth of the
   // diagonal: a large flat face beside fine detail is cut into a few hundred pieces, not millions.
   const double split_above = std::max(opt.long_edge * median_edge_length(input_boundary),
@@ -1059,7 +1060,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
   RunResult best;
   double best_score = INFINITY;
   double previous_n = INFINITY, previous_L = 0;
-  for (int attempt = 0; attempt < 6; ++attempt) {
+  for (int attempt = 0; attempt < opt.max_attempts; ++attempt) {
     const auto t0 = std::chrono::steady_clock::now();
     if (progress) progress->stage("tetrahedralizing the boundary (attempt " + std::to_string(attempt + 1) + ")");
     Mesher mesher(boundary, wn, opt, L);

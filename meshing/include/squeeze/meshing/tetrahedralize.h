@@ -40,6 +40,8 @@ struct TetrahedralizeOptions {
                                   // midpoints first (split_long_edges: the side of a cylinder of few
                                   // segments is a triangle 30 times longer than wide, which
                                   // conformity recovery cannot split down); 0: never
+  int max_attempts = 6;           // meshing runs at most, each at an interior edge length corrected
+                                  // toward target_tets (squeeze mesh's retries take 2)
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
 };
 
