@@ -52,6 +52,29 @@ Vector3d momentum(const World& w, const State& s) {
   return p;
 }
 
+// Elements for the pair-kernel tests: 300 random edges and 300 random tetrahedra over n points
+// (about a third undamped), appended to those given, and a random x_n gradient for each.
+struct Edge { int i, j; double D0, k, kd; };
+struct Tet { int v[4]; double V0, k, kd; };
+void add_random_elements(std::mt19937& g, int n, std::vector<Edge>& edges, std::vector<Tet>& tets,
+                         std::vector<Vec3>& eg, std::vector<std::array<Vec3, 4>>& tg) {
+  std::uniform_real_distribution<double> u(0.1, 3.0);
+  for (int e = 0; e < 300; ++e) {
+    const int i = static_cast<int>(g() % n), j = (i + 1 + static_cast<int>(g() % (n - 1))) % n;
+    edges.push_back({i, j, u(g), u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)});
+  }
+  for (int t = 0; t < 300; ++t) {
+    Tet T{{0, 0, 0, 0}, u(g) * 0.01, u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)};
+    for (int& c : T.v) c = static_cast<int>(g() % n);
+    tets.push_back(T);
+  }
+  eg.resize(edges.size());
+  tg.resize(tets.size());
+  for (auto& v : eg) v = rand_vec(g, 5.0);
+  for (auto& a : tg)
+    for (auto& v : a) v = rand_vec(g, 5.0);
+}
+
 }  // namespace
 
 // ∂²E_D/∂p_j² against central differences of the gradient k C ∂C/∂p_j, stretched and compressed;
@@ -136,30 +159,16 @@ TEST(FemKernels, VolumeHessianMatchesFiniteDifferences) {
 // damped or not (each lane on its own), compressed and stretched edges, inverted and flat
 // tetrahedra; a zero-length edge is refused (the scalar function takes it).
 TEST(FemKernels, NewtonBlockPairsEqualScalarBitForBit) {
-  struct Edge { int i, j; double D0, k, kd; };
-  struct Tet { int v[4]; double V0, k, kd; };
   std::mt19937 g(17);
-  std::uniform_real_distribution<double> u(0.1, 3.0);
   const int n = 40;
   RowMatrixX3d X(n, 3);
   for (int i = 0; i < n; ++i) X.row(i) = rand_vec(g).transpose();
   X.row(5) = 0.5 * (X.row(2) + X.row(3)), X.row(4) = X.row(2);  // tet (2, 3, 4, 5): flat
   std::vector<Edge> edges;
   std::vector<Tet> tets{{{2, 3, 4, 5}, 0.05, 3.0, 0.2}};
-  for (int e = 0; e < 300; ++e) {
-    const int i = static_cast<int>(g() % n), j = (i + 1 + static_cast<int>(g() % (n - 1))) % n;
-    edges.push_back({i, j, u(g), u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)});  // some undamped
-  }
-  for (int t = 0; t < 300; ++t) {
-    Tet T{{0, 0, 0, 0}, u(g) * 0.01, u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)};
-    for (int& c : T.v) c = static_cast<int>(g() % n);
-    tets.push_back(T);
-  }
-  std::vector<Vec3> eg(edges.size());
-  std::vector<std::array<Vec3, 4>> tg(tets.size());
-  for (auto& v : eg) v = rand_vec(g, 5.0);
-  for (auto& a : tg)
-    for (auto& v : a) v = rand_vec(g, 5.0);
+  std::vector<Vec3> eg;
+  std::vector<std::array<Vec3, 4>> tg;
+  add_random_elements(g, n, edges, tets, eg, tg);
   const double h = 1.0 / 30;
   const double* x = X.data();
   auto bits_equal = [](const double* a, const double* b, int m) { return std::memcmp(a, b, sizeof(double) * m) == 0; };
@@ -199,10 +208,7 @@ TEST(FemKernels, NewtonBlockPairsEqualScalarBitForBit) {
 // integrator's scalar expressions (its potential and energy_gradient), damped or not, with and
 // without the damping potential, a zero-length edge and a flat tetrahedron included.
 TEST(FemKernels, PotentialPairsEqualScalarBitForBit) {
-  struct Edge { int i, j; double D0, k, kd; };
-  struct Tet { int v[4]; double V0, k, kd; };
   std::mt19937 g(23);
-  std::uniform_real_distribution<double> u(0.1, 3.0);
   const int n = 40;
   RowMatrixX3d X(n, 3), Xn(n, 3);
   for (int i = 0; i < n; ++i) X.row(i) = rand_vec(g).transpose(), Xn.row(i) = X.row(i) + 0.1 * rand_vec(g).transpose();
@@ -210,20 +216,9 @@ TEST(FemKernels, PotentialPairsEqualScalarBitForBit) {
   X.row(5) = 0.5 * (X.row(2) + X.row(3)), X.row(4) = X.row(2);  // tet (2, 3, 4, 5): flat
   std::vector<Edge> edges{{0, 1, 0.3, 2.0, 0.1}};
   std::vector<Tet> tets{{{2, 3, 4, 5}, 0.05, 3.0, 0.2}};
-  for (int e = 0; e < 300; ++e) {
-    const int i = static_cast<int>(g() % n), j = (i + 1 + static_cast<int>(g() % (n - 1))) % n;
-    edges.push_back({i, j, u(g), u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)});
-  }
-  for (int t = 0; t < 300; ++t) {
-    Tet T{{0, 0, 0, 0}, u(g) * 0.01, u(g) * 1e3, g() % 3 == 0 ? 0.0 : u(g)};
-    for (int& c : T.v) c = static_cast<int>(g() % n);
-    tets.push_back(T);
-  }
-  std::vector<Vec3> eg(edges.size());
-  std::vector<std::array<Vec3, 4>> tg(tets.size());
-  for (auto& v : eg) v = rand_vec(g, 5.0);
-  for (auto& a : tg)
-    for (auto& v : a) v = rand_vec(g, 5.0);
+  std::vector<Vec3> eg;
+  std::vector<std::array<Vec3, 4>> tg;
+  add_random_elements(g, n, edges, tets, eg, tg);
   const double h = 1.0 / 30;
   const double *x = X.data(), *xn = Xn.data();
   auto lane = [](__m128d v, int q) { return _mm_cvtsd_f64(q ? _mm_unpackhi_pd(v, v) : v); };

@@ -176,6 +176,22 @@ SQUEEZE_FEM_INLINE simd::Pair3 distance_forces_pair(const double* x, const doubl
   return scale(s, g);
 }
 
+/// volume_constraint of two tetrahedra at once, bit for bit: returns C = (V − V0) / V0 of both and
+/// writes g[q] = ∂C/∂p_q.
+///   p   the 4 corners of both (lane 0: t0, lane 1: t1), positions (m); V0  rest volumes (m³)
+SQUEEZE_FEM_INLINE __m128d volume_constraint_pair(const simd::Pair3 p[4], __m128d V0, simd::Pair3 g[4]) {
+  using namespace simd;
+  const Pair3 a = sub(p[1], p[0]), b = sub(p[2], p[0]), c = sub(p[3], p[0]);
+  const Pair3 bc = cross(b, c);
+  const __m128d V = _mm_div_pd(dot(a, bc), _mm_set1_pd(6.0));
+  const __m128d s = _mm_div_pd(_mm_set1_pd(1.0), _mm_mul_pd(_mm_set1_pd(6.0), V0));
+  g[1] = scale(s, bc);
+  g[2] = scale(s, cross(c, a));
+  g[3] = scale(s, cross(a, b));
+  g[0] = neg(add(add(g[1], g[2]), g[3]));
+  return _mm_div_pd(_mm_sub_pd(V, V0), V0);
+}
+
 /// volume_forces of two tetrahedra at once, bit for bit: f[q] the forces (N) on corner q of
 /// both (lane 0: t0, lane 1: t1).
 ///   x, v    row-major #rows by 3 positions (m) and velocities (m/s)
@@ -191,16 +207,8 @@ SQUEEZE_FEM_INLINE void volume_forces_pair(const double* x, const double* v, con
     vel[c] = load_pair(v + 3 * t0.v[c], v + 3 * t1.v[c]);
   }
   const __m128d V0 = _mm_set_pd(t1.V0, t0.V0), k = _mm_set_pd(t1.k, t0.k), kd = _mm_set_pd(t1.kd, t0.kd);
-  const Pair3 a = sub(p[1], p[0]), b = sub(p[2], p[0]), c = sub(p[3], p[0]);
-  const Pair3 bc = cross(b, c);
-  const __m128d V = _mm_div_pd(dot(a, bc), _mm_set1_pd(6.0));
-  const __m128d s = _mm_div_pd(_mm_set1_pd(1.0), _mm_mul_pd(_mm_set1_pd(6.0), V0));
   Pair3 g[4];
-  g[1] = scale(s, bc);
-  g[2] = scale(s, cross(c, a));
-  g[3] = scale(s, cross(a, b));
-  g[0] = neg(add(add(g[1], g[2]), g[3]));
-  const __m128d C = _mm_div_pd(_mm_sub_pd(V, V0), V0);
+  const __m128d C = volume_constraint_pair(p, V0, g);
   const __m128d rate =
       _mm_add_pd(_mm_add_pd(_mm_add_pd(dot(g[0], vel[0]), dot(g[1], vel[1])), dot(g[2], vel[2])), dot(g[3], vel[3]));
   const __m128d f = _mm_xor_pd(_mm_add_pd(_mm_mul_pd(k, C), _mm_mul_pd(kd, rate)), _mm_set1_pd(-0.0));
@@ -410,17 +418,9 @@ SQUEEZE_FEM_INLINE void tet_newton_blocks_pair(const double* x, const Tet& t0, c
   Pair3 p[4];
   for (int c = 0; c < 4; ++c) p[c] = load_pair(x + 3 * t0.v[c], x + 3 * t1.v[c]);
   const __m128d V0 = _mm_set_pd(t1.V0, t0.V0), k = _mm_set_pd(t1.k, t0.k);
-  // volume_constraint
-  const Pair3 a = sub(p[1], p[0]), b = sub(p[2], p[0]), c = sub(p[3], p[0]);
-  const Pair3 bc = cross(b, c);
-  const __m128d V = _mm_div_pd(dot(a, bc), _mm_set1_pd(6.0));
-  const __m128d s = _mm_div_pd(_mm_set1_pd(1.0), _mm_mul_pd(_mm_set1_pd(6.0), V0));
   Pair3 g[4];
-  g[1] = scale(s, bc);
-  g[2] = scale(s, cross(c, a));
-  g[3] = scale(s, cross(a, b));
-  g[0] = neg(add(add(g[1], g[2]), g[3]));
-  const __m128d C = _mm_div_pd(_mm_sub_pd(V, V0), V0);
+  const __m128d C = volume_constraint_pair(p, V0, g);
+  const Pair3 a = sub(p[1], p[0]), b = sub(p[2], p[0]), c = sub(p[3], p[0]);
   // Block by block: volume_hessian_lower's k ∇_b C ∇_a Cᵀ, then its curvature's
   // cross-product term (w skew(u), skew(u) = [[0, −u_z, u_y], [u_z, 0, −u_x], [−u_y, u_x, 0]]),
   // then the damping's (kd / h) ∇_b C(x_n) ∇_a C(x_n)ᵀ.
