@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 9;  // 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
+constexpr int kMeshingAlgorithmVersion = 10;  // 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
