@@ -814,9 +814,14 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
                                 (parts.size() > 1 ? "part " + std::to_string(i + 1) : std::string("the input")));
       std::string list;
       for (size_t k = 0; k < which_parts.size(); ++k) list += (k ? ", " : "") + which_parts[k];
-      r.target_exceeded_because +=
-          "; " + list + ", whose simplified boundary could not be tetrahedralized conforming with dihedral angles of "
-          "at least 5 degrees, meshed instead as its own winding-number solid by CGAL Mesh_3 within the same bounds";
+      const std::string why =
+          "could not be tetrahedralized conforming with dihedral angles of at least 5 degrees, so it is meshed as its own "
+          "winding-number solid by CGAL Mesh_3 within the same bounds";
+      if (r.parts_by_winding_number == static_cast<int>(parts.size()))
+        r.target_exceeded_because = (parts.size() > 1 ? "each part's simplified boundary " : "the input's simplified boundary ") +
+                                    why + ", which takes " + std::to_string(r.quality.tets) + " tetrahedra";
+      else
+        r.target_exceeded_because += "; " + list + ", whose simplified boundary " + why;
     }
     timer.stop();
     return std::move(r);
