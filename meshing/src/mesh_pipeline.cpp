@@ -807,13 +807,11 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     // A part meshed as its winding-number solid (its boundary did not hold) has Mesh_3's count,
     // not the boundary's: say so.
     if (!r.target_exceeded_because.empty() && r.parts_by_winding_number > 0) {
-      std::vector<std::string> which_parts;
+      std::string list;
       for (size_t i = 0; i < parts.size(); ++i)
         if (parts[i].by_winding_number)
-          which_parts.push_back(std::to_string(parts[i].tets_count) + " of them in " +
-                                (parts.size() > 1 ? "part " + std::to_string(i + 1) : std::string("the input")));
-      std::string list;
-      for (size_t k = 0; k < which_parts.size(); ++k) list += (k ? ", " : "") + which_parts[k];
+          list += (list.empty() ? "" : ", ") + std::to_string(parts[i].tets_count) + " of them in " +
+                  (parts.size() > 1 ? "part " + std::to_string(i + 1) : std::string("the input"));
       const std::string why =
           "could not be tetrahedralized conforming with dihedral angles of at least 5 degrees, so it is meshed as its own "
           "winding-number solid by CGAL Mesh_3 within the same bounds";
@@ -943,12 +941,9 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       Part& outer = component[static_cast<size_t>(d)];
       const Part& cavity = component[static_cast<size_t>(c)];
       spdlog::info("component {} lies inside component {} and faces into itself: a cavity of it", c, d);
-      const Eigen::Index nv = outer.surface.V.rows(), nf = outer.surface.F.rows();
-      outer.surface.V.conservativeResize(nv + cavity.surface.V.rows(), 3);
-      outer.surface.V.bottomRows(cavity.surface.V.rows()) = cavity.surface.V;
-      outer.surface.F.conservativeResize(nf + cavity.surface.F.rows(), 3);
-      for (Eigen::Index f = 0; f < cavity.surface.F.rows(); ++f)  // facing into the cavity
-        outer.surface.F.row(nf + f) << cavity.surface.F(f, 0) + nv, cavity.surface.F(f, 2) + nv, cavity.surface.F(f, 1) + nv;
+      SurfaceMesh inner = cavity.surface;
+      inner.F.col(1).swap(inner.F.col(2));  // facing into the cavity
+      outer.surface = concatenate(std::vector<SurfaceMesh>{outer.surface, inner}, &SurfaceMesh::F);
       outer.volume -= cavity.volume;
       outer.check = outer.check || cavity.check || does_self_intersect(outer.surface);
       ++r.cavities;

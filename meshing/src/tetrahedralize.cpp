@@ -553,25 +553,19 @@ class Mesher {
   // that was split before, its old midpoint left on it, and the edge is split again at the same
   // point (a cone of 16 sides at 150 tetrahedra: no tetrahedron at all).
   int add_point(const Vec3& p, bool surface, Vh hint) {
-    if (tr_.number_of_vertices() > 0) {
-      const WPoint wp(BPoint(p(0), p(1), p(2)));
-      const Vh v = hint == Vh() ? tr_.insert(wp) : tr_.insert(wp, hint);
-      if (const auto it = id_.find(&*v); it != id_.end()) {
-        if (surface) on_surface_[static_cast<size_t>(it->second)] = 1;
-        return it->second;
-      }
-      const int i = static_cast<int>(P_.size());
-      P_.push_back(p);
-      vh_.push_back(v);
-      on_surface_.push_back(surface ? 1 : 0);
-      id_[&*v] = i;
-      return i;
-    }
     const int i = static_cast<int>(P_.size());
     P_.push_back(p);
     vh_.push_back(Vh());
     on_surface_.push_back(surface ? 1 : 0);
-    return i;
+    if (tr_.number_of_vertices() == 0) return i;
+    const int j = insert(i, hint);
+    if (j != i) {  // already a vertex: its index stands for p
+      P_.pop_back();
+      vh_.pop_back();
+      on_surface_.pop_back();
+      if (surface) on_surface_[static_cast<size_t>(j)] = 1;
+    }
+    return j;
   }
   // Inserts point i; returns the index its vertex has: i, or the earlier point at exactly the same
   // place (see add_point), whose index then stands for both.
@@ -580,8 +574,7 @@ class Mesher {
     const Vh v = hint == Vh() ? tr_.insert(WPoint(BPoint(p(0), p(1), p(2))))
                               : tr_.insert(WPoint(BPoint(p(0), p(1), p(2))), hint);
     vh_[static_cast<size_t>(i)] = v;
-    const auto [it, fresh] = id_.try_emplace(&*v, i);
-    return it->second;
+    return id_.try_emplace(&*v, i).first->second;
   }
   void build_delaunay() {
     // The surface's vertices (input vertices inside a flat patch are no longer on it).
