@@ -175,6 +175,13 @@ TEST_P(TargetTest, CountMetAndContractAndQualityHold) {
   if (r.method == "boundary") {
     EXPECT_LE(r.deviation_out, 0.015 * diag) << what;
     EXPECT_LE(r.deviation_in, 0.005 * diag) << what;
+  } else if (r.method == "winding_number_boundary") {
+    // Inputs that are not closed parts (meshing version 11: the organs, the dragon): their
+    // winding-number solid's boundary simplified against them, within issue 16's bounds.
+    EXPECT_FALSE(r.fallback_because.empty()) << what << ": the report says why the input's boundary was not meshed";
+    EXPECT_TRUE(r.tet_stats.conforming) << what;
+    EXPECT_LE(r.deviation_out, 0.015 * diag) << what;
+    EXPECT_LE(r.deviation_in, 0.005 * diag) << what;
   } else if (r.method == "winding_number") {
     // The winding-number route (open, welded, self-intersecting inputs): issue 16's outer bound;
     // inside, 1 % (its 0.5 % is not met yet on the heart, 0.63 %: docs/meshing.md, "What is left").

@@ -23,6 +23,7 @@
 #include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/triangle_bvh.h"
 #include "squeeze/meshing/winding_number.h"
+#include "squeeze/meshing/winding_tetrahedralize.h"
 
 namespace {
 
@@ -270,7 +271,18 @@ TEST(MeshingV4, ScanWithHolesTakesTheWindingNumberRouteAndIsClosed) {
   scan.F.resize(static_cast<Eigen::Index>(keep.size()), 3);
   for (size_t i = 0; i < keep.size(); ++i) scan.F.row(static_cast<Eigen::Index>(i)) = ball.F.row(keep[i]);
   const double diag = 0.2 * std::sqrt(3.0);
-  EXPECT_EQ(mesh(scan, 300).method, "winding_number");  // the default since meshing version 8
+  {
+    // The default since meshing version 11: the winding-number solid's boundary, simplified
+    // against the scan and tetrahedralized (version 8 to 10: Mesh_3's tetrahedra as they are).
+    const MeshResult r = mesh(scan, 300);
+    EXPECT_EQ(r.method, "winding_number_boundary") << r.fallback_because;
+    EXPECT_EQ(r.quality.components, 1);
+    EXPECT_TRUE(r.tet_stats.conforming);
+    EXPECT_GE(r.quality.min_dihedral, 5.0);
+    EXPECT_GE(tet_volume(r.tets) / full, 0.9);
+    EXPECT_LE(tet_volume(r.tets) / full, 1.2);
+    EXPECT_LE(r.deviation_in, 0.012 * diag);
+  }
   for (int target : {150, 1000}) {
     MeshOptions o;
     o.tetrahedralize.target_tets = target;
@@ -296,8 +308,9 @@ TEST(MeshingV4, ScanWithHolesTakesTheWindingNumberRouteAndIsClosed) {
 
 
 // Segments welded at a shared wall (as the lung files' lobes are: each wall's edges have three
-// faces) are not closed parts. By default they take the convex shells; with `winding` their
-// winding-number solid is meshed by Mesh_3; with `wrap` their alpha
+// faces) are not closed parts. By default (meshing version 11) their winding-number solid's
+// boundary is simplified against them and tetrahedralized; with `winding` that solid is meshed by
+// Mesh_3 as it is; with `shells_fallback` they take the convex shells; with `wrap` their alpha
 // wrap is meshed by the boundary route: one part, the union's volume (by winding number), the
 // deviation bounds held against the input.
 TEST(MeshingV4, WeldedSegmentsTakeTheAlphaWrapWhenAsked) {
@@ -309,7 +322,31 @@ TEST(MeshingV4, WeldedSegmentsTakeTheAlphaWrapWhenAsked) {
   fs::remove_all(dir);
   const double volume = box_volume(a0, a1) + box_volume(b0, b1) + box_volume(c0, c1);
   const double diag = sqt::diagonal(s.V);
-  EXPECT_EQ(mesh(s, 300).method, "convex_shells");  // the default
+  int winding_tets = 0;
+  for (int target : {150, 300, 1000}) {
+    const MeshResult r = mesh(s, target);  // the default
+    const std::string what = "target " + std::to_string(target);
+    EXPECT_EQ(r.method, "winding_number_boundary") << what << ": " << r.fallback_because;
+    EXPECT_EQ(r.parts, 1) << what;
+    EXPECT_EQ(r.quality.components, 1) << what;
+    EXPECT_TRUE(r.tet_stats.conforming) << what;
+    ASSERT_TRUE(r.volume_ratio.has_value()) << what;
+    EXPECT_GE(*r.volume_ratio, target >= 1000 ? 0.95 : 0.9) << what;
+    EXPECT_LE(*r.volume_ratio, target >= 1000 ? 1.1 : 1.2) << what;
+    EXPECT_LE(r.deviation_out, 0.015 * diag) << what;
+    EXPECT_LE(r.deviation_in, 0.005 * diag) << what;
+    EXPECT_GE(r.quality.min_dihedral, 5.0) << what;
+    std::printf("[ welded   ] default at %d: %d tets, volume ratio %.3f, dev out %.2f %%, in %.2f %%, %.1f deg\n", target,
+                r.quality.tets, *r.volume_ratio, 100 * r.deviation_out / diag, 100 * r.deviation_in / diag,
+                r.quality.min_dihedral);
+    if (target == 300) winding_tets = r.quality.tets;
+  }
+  {
+    MeshOptions o;
+    o.tetrahedralize.target_tets = 300;
+    o.shells_fallback = true;
+    EXPECT_EQ(squeeze::meshing::mesh_surface(s, o).method, "convex_shells");
+  }
   {
     // With `winding`: their winding-number solid (the union), meshed by Mesh_3.
     MeshOptions o;
@@ -328,6 +365,8 @@ TEST(MeshingV4, WeldedSegmentsTakeTheAlphaWrapWhenAsked) {
     std::printf("[ welded   ] winding route at 300: %d tets, volume ratio %.3f, dev out %.2f %%, in %.2f %%, %.1f deg\n",
                 r.quality.tets, *r.volume_ratio, 100 * r.deviation_out / diag, 100 * r.deviation_in / diag,
                 r.quality.min_dihedral);
+    // The simplified boundary needs fewer tetrahedra than Mesh_3's own within the same bounds.
+    EXPECT_LT(winding_tets, r.quality.tets);
   }
   for (int target : {300, 1000}) {
     MeshOptions o;
@@ -776,3 +815,91 @@ TEST(MeshingV4, InwardInnerShellIsACavity) {
 }
 
 }  // namespace
+
+// Meshing version 11: the boundary of a soup's winding-number solid (winding_number_surface) is a
+// closed, outward, 2-manifold surface without self-intersections around the soup (three welded
+// boxes: the corners and edges its facets cut off seeded and refined again), and
+// simplify_envelope with the soup as its target keeps the bounds against the soup itself: every
+// point of the simplified surface within max_outside of the soup's triangles, every point of the
+// soup inside it or within max_inside.
+TEST(Envelope, TargetSoupBoundsHoldAgainstTheSoup) {
+  const Vec3 a0(0, 0, 0), a1(0.2, 0.12, 0.1), b0(0.2, 0, 0), b1(0.35, 0.12, 0.1), c0(0.05, 0.12, 0), c1(0.2, 0.2, 0.1);
+  const fs::path dir = fs::temp_directory_path() / ("squeeze_soup_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  sqt::write_off(dir / "welded.off", join({box(a0, a1, {3, 3, 3}), box(b0, b1, {3, 3, 3}), box(c0, c1, {3, 3, 3})}));
+  const SurfaceMesh soup = squeeze::meshing::load_surface(dir / "welded.off");
+  fs::remove_all(dir);
+  const double diag = sqt::diagonal(soup.V);
+  squeeze::meshing::WindingTetrahedralizeOptions wo;
+  wo.facet_distance = 0.004;
+  wo.dilation = 0.0045;
+  const SurfaceMesh solid = squeeze::meshing::winding_number_surface(soup.V, soup.F, wo);
+  ASSERT_GT(solid.F.rows(), 0);
+  EXPECT_TRUE(squeeze::meshing::is_closed(solid.F));
+  EXPECT_TRUE(squeeze::meshing::is_oriented_two_manifold(solid.F, static_cast<int>(solid.V.rows())));
+  EXPECT_FALSE(squeeze::meshing::does_self_intersect(solid));
+  const double union_volume = box_volume(a0, a1) + box_volume(b0, b1) + box_volume(c0, c1);
+  EXPECT_GT(squeeze::meshing::analyse_surface(solid).volume, union_volume);  // outward, dilated
+  EXPECT_LT(squeeze::meshing::analyse_surface(solid).volume, 1.2 * union_volume);
+
+  // The largest distance of `b` from `target` (at points 0.1 % of the diagonal apart), and of
+  // `target`'s points outside `b` from it, as fractions of the diagonal.
+  auto worst = [&](const SurfaceMesh& b, const SurfaceMesh& target) {
+    const squeeze::meshing::TriangleBvh to_target(target.V, target.F), to_b(b.V, b.F);
+    const squeeze::meshing::FastWindingNumber inside_b(b.V, b.F);
+    double out = 0, in = 0;
+    for (const Vec3& x : squeeze::meshing::surface_samples(b.V, b.F, 0.001 * diag)) out = std::max(out, to_target.nearest(x));
+    for (const Vec3& x : squeeze::meshing::surface_samples(target.V, target.F, 0.001 * diag))
+      if (inside_b(x.transpose()) < 0.5) in = std::max(in, to_b.nearest(x));
+    return std::pair<double, double>(out / diag, in / diag);
+  };
+  const auto [solid_out, solid_in] = worst(solid, soup);
+  // The soup's sharp corners and edges are within the cover tolerance (0.3 %) of its solid's
+  // surface (0.55 % outside before the cover seeds).
+  EXPECT_LE(solid_in, wo.cover_tolerance + 0.0005);
+  squeeze::meshing::EnvelopeOptions e;
+  e.max_outside = 0.01 * diag;
+  e.max_inside = 0.0045 * diag;
+  e.min_triangle_angle = 25;
+  e.min_fold_angle = 45;
+  const SurfaceMesh b = squeeze::meshing::simplify_envelope(solid, soup, e);
+  const auto [out, in] = worst(b, soup);
+  std::printf("[ soup     ] solid %ld faces (out %.3f %%, in %.3f %%) -> %ld faces: out %.3f %%, in %.3f %% of the diagonal\n",
+              static_cast<long>(solid.F.rows()), 100 * solid_out, 100 * solid_in, static_cast<long>(b.F.rows()), 100 * out,
+              100 * in);
+  EXPECT_LT(b.F.rows(), solid.F.rows() / 2);
+  EXPECT_TRUE(squeeze::meshing::is_oriented_two_manifold(b.F, static_cast<int>(b.V.rows())));
+  EXPECT_FALSE(squeeze::meshing::does_self_intersect(b));
+  EXPECT_LE(out, 0.0125);  // max_outside, checked at a lattice of each new face: within a quarter more
+  EXPECT_LE(in, 0.0050);
+  EXPECT_THROW(squeeze::meshing::simplify_envelope(solid, SurfaceMesh{}, e), squeeze::InputError);
+}
+
+// The target, not the surface, is what the bounds hold against: a sphere simplified against a
+// sphere 0.45 % of the diagonal inside it stays within max_outside of the inner one (against
+// itself it goes farther out, as far as the bounds from itself allow).
+TEST(Envelope, TargetIsWhatTheBoundsHoldAgainst) {
+  const SurfaceMesh outer = sphere(Vec3(0, 0, 0), 0.1, 4);
+  const double diag = sqt::diagonal(outer.V);
+  SurfaceMesh inner = outer;
+  inner.V *= 1.0 - 0.0045 * diag / 0.1;
+  squeeze::meshing::EnvelopeOptions e;
+  e.max_outside = 0.006 * diag;
+  e.max_inside = 0.002 * diag;
+  auto farthest = [&](const SurfaceMesh& b) {
+    const squeeze::meshing::TriangleBvh to_inner(inner.V, inner.F);
+    double d = 0;
+    for (const Vec3& x : squeeze::meshing::surface_samples(b.V, b.F, 0.001 * diag)) d = std::max(d, to_inner.nearest(x));
+    return d / diag;
+  };
+  const SurfaceMesh against_inner = squeeze::meshing::simplify_envelope(outer, inner, e);
+  const SurfaceMesh against_itself = squeeze::meshing::simplify_envelope(outer, e);
+  std::printf("[ sphere   ] %ld faces -> %ld against the inner sphere (%.3f %% from it), %ld against itself (%.3f %%)\n",
+              static_cast<long>(outer.F.rows()), static_cast<long>(against_inner.F.rows()), 100 * farthest(against_inner),
+              static_cast<long>(against_itself.F.rows()), 100 * farthest(against_itself));
+  EXPECT_LT(against_inner.F.rows(), outer.F.rows() / 4);
+  // (samples 0.1 % of the diagonal apart: the largest distance found to within a few hundredths of
+  // a percent; 0.600 % and 0.662 % when written)
+  EXPECT_LE(farthest(against_inner), 0.006 * 1.03);
+  EXPECT_GT(farthest(against_itself), 0.006 * 1.03);
+}

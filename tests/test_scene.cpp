@@ -321,12 +321,13 @@ TEST_F(SceneTest, ACacheEntryReplacedByAnotherValidMeshIsNotUsed) {
 // fallback, used to give its at most 5000 tetrahedra silently for any larger `tets`).
 TEST_F(SceneTest, ATetCountThatCannotBeMetIsAnError) {
   // A unit box without its +x side and with a fin welded to its edge 0–1 (three faces there): not
-  // closed parts, and not an open scan of a solid either (welded), so the convex shells' fallback
-  // meshes it.
+  // closed parts, and not an open scan of a solid either (welded), so mesh_route "convex_shells"
+  // has the convex shells' fallback mesh it (by default, meshing version 11, its winding-number
+  // solid's boundary is tetrahedralized, which honours the target).
   write("open_box.off", "OFF\n9 11 0\n-0.5 -0.5 -0.5\n0.5 -0.5 -0.5\n0.5 0.5 -0.5\n-0.5 0.5 -0.5\n"
                         "-0.5 -0.5 0.5\n0.5 -0.5 0.5\n0.5 0.5 0.5\n-0.5 0.5 0.5\n0 -1 -0.5\n3 0 3 2\n3 0 2 1\n3 4 5 6\n"
                         "3 4 6 7\n3 0 1 5\n3 0 5 4\n3 3 7 6\n3 3 6 2\n3 0 4 7\n3 0 7 3\n3 0 1 8\n");
-  const fs::path p = write("big.json", R"({"objects": [{"name": "box", "mesh": "open_box.off", "tets": 20000}]})");
+  const fs::path p = write("big.json", R"({"objects": [{"name": "box", "mesh": "open_box.off", "tets": 20000, "mesh_route": "convex_shells"}]})");
   for (int pass = 0; pass < 2; ++pass) {  // meshed, then served by the cache: the same error
     SCOPED_TRACE(pass);
     try {

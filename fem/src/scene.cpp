@@ -225,8 +225,8 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
   for (size_t i = 0; i < objs.size(); ++i) {
     const std::string p = "objects[" + std::to_string(i) + "]";
     const json& o = objs[i];
-    c.keys(o, p, {"name", "mesh", "role", "kind", "tets", "transform", "material", "gravity", "velocity", "pinned",
-                  "color"});
+    c.keys(o, p, {"name", "mesh", "role", "kind", "tets", "mesh_route", "transform", "material", "gravity", "velocity",
+                  "pinned", "color"});
     SceneObject ob;
     if (!o.contains("name")) c.fail(p + ".name", "missing (required)");
     ob.name = c.string(o["name"], p + ".name");
@@ -258,6 +258,13 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
       const double t = c.number(o["tets"], p + ".tets");
       if (t != std::floor(t) || t < 10 || t > 100000) c.fail(p + ".tets", "must be an integer in [10, 100000], got " + num(t));
       ob.tets = static_cast<int>(t);
+    }
+    if (o.contains("mesh_route")) {
+      ob.mesh_route = c.string(o["mesh_route"], p + ".mesh_route");
+      if (ob.mesh_route != "auto" && ob.mesh_route != "convex_shells" && ob.mesh_route != "winding_number" &&
+          ob.mesh_route != "alpha_wrap")
+        c.fail(p + ".mesh_route", "must be \"auto\", \"convex_shells\", \"winding_number\" or \"alpha_wrap\", got \"" +
+                                      ob.mesh_route + "\"");
     }
     if (o.contains("transform")) {
       const json& t = o["transform"];
@@ -422,12 +429,16 @@ fs::path mesh_cache_dir() {
 }
 
 meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit, Progress* progress,
-                                 std::string* off_target) {
+                                 std::string* off_target, const std::string& route) {
   if (cache_hit) *cache_hit = false;
   if (off_target) off_target->clear();
   if (meshing::is_tet_format(mesh)) return meshing::load_tet_mesh(mesh);
   meshing::MeshOptions options;
   options.tetrahedralize.target_tets = tets;
+  if (route == "convex_shells") options.shells_fallback = true;
+  else if (route == "winding_number") options.winding = true;
+  else if (route == "alpha_wrap") options.wrap = true;
+  else if (route != "auto") throw InputError("unknown mesh route \"" + route + "\" (auto, convex_shells, winding_number, alpha_wrap)");
   // The cache key: format version, the input's extension and bytes, every meshing option.
   const std::string bytes = read_file_bytes(mesh);
   std::ostringstream opt;
@@ -445,7 +456,8 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
       << options.winding << ',' << options.winding_facet_distance << ',' << options.winding_dilation << ','
       << options.winding_mesh.max_tets << ',' << options.winding_mesh.min_dihedral << ','
       << options.winding_mesh.sliver_bound << ',' << options.winding_mesh.optimize_seconds << ',' << options.wrap
-      << ',' << options.wrap_alpha << ',' << options.wrap_offset << ',' << options.sheet_thickness << '|' << bytes.size() << '|';
+      << ',' << options.wrap_alpha << ',' << options.wrap_offset << ',' << options.sheet_thickness << ','
+      << options.shells_fallback << ',' << options.winding_mesh.facet_size << '|' << bytes.size() << '|';
   Hash128 h;
   h.add(opt.str());
   h.add(bytes);
@@ -679,7 +691,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     meshing::TetMesh m;
     std::string off_target;
     try {
-      m = object_tet_mesh(o.mesh, o.tets, nullptr, progress, &off_target);
+      m = object_tet_mesh(o.mesh, o.tets, nullptr, progress, &off_target, o.mesh_route);
     } catch (const InputError& e) {
       throw InputError(file + ": " + p + ".mesh: " + e.what());
     }

@@ -18,6 +18,8 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
+#include <memory>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -45,14 +47,19 @@ Vec3 vec(const Point& p) { return Vec3(p.x(), p.y(), p.z()); }
 // What the filter and the visitor share.
 struct State {
   const Mesh* mesh = nullptr;
-  const TriangleBvh* reference = nullptr;
+  const TriangleBvh* reference = nullptr;  // the surface simplified, as it was (gaps, caps)
+  const TriangleBvh* target = nullptr;     // the soup the bounds are measured against, when not
+                                           // the reference (simplify_envelope with a target)
   double out = 0, in = 0;          // bounds (units)
   double cos_fold = 0, cos_turn = 0;
   double min_angle = 0;            // radians
   std::vector<Vec3> samples;       // points of the reference surface
   std::vector<std::vector<int>> assigned;  // samples answerable to each face (by face index)
   std::vector<FD> sample_face;     // ... and the face each sample is answerable to
-  std::vector<double> sample_bound; // per sample: min(in, out, a third of the local gap)
+  std::vector<double> sample_bound; // per sample: min(in, out, a third of the local gap): it passes
+                                   // within this of its own face
+  std::vector<std::array<double, 3>> sample_limits;  // per sample: its distance from the new
+                                   // surface where it lies outside it, inside it, and either way
   std::vector<double> face_gap;    // per reference face: a third of the smallest gap at its corners
   std::vector<int> pending;        // samples of the region of the collapse just accepted
   std::vector<FD> region;          // its faces
@@ -170,6 +177,11 @@ struct Filter {
     auto check_point = [&](const Vec3& x) {
       int f;
       Vec3 q;
+      if (s->target) {  // within `out` of the target (either side), within the gap of the reference
+        if (!(s->target->nearest(x, nullptr, nullptr, s->out * 1.0001 + 1e-300) <= s->out)) return false;
+        const double d = s->reference->nearest(x, &f, &q);
+        return f < 0 || d <= s->face_gap[static_cast<size_t>(f)];
+      }
       const double d = s->reference->nearest(x, &f, &q, s->out * 1.0001 + 1e-300);
       if (!(d <= s->out)) return false;
       return within(d, (x - q).dot(s->reference->normal(f)), s->out, s->in, s->face_gap[static_cast<size_t>(f)]);
@@ -200,7 +212,8 @@ struct Filter {
         if (d < best) best = d, side = (x - q).dot(t.n);
         if (best <= sure) break;
       }
-      if (!within(best, side, s->in, s->out, sure)) return boost::none;
+      const auto& lim = s->sample_limits[static_cast<size_t>(i)];
+      if (!within(best, side, lim[0], lim[1], lim[2])) return boost::none;
     }
     // Points along the new edges and in the new faces, as far apart as twice the inner bound (up
     // to three per edge); where the new faces are small next to the inner bound, the reference's
@@ -215,6 +228,18 @@ struct Filter {
     }
     for (const Tri& t : tris)
       if (t.radius > s->in && !check_point(t.centre)) return boost::none;
+    // With a target, nothing else holds the new faces near it from outside (the surface's own
+    // samples keep only the gap caps): points of each larger face, about twice the inner bound
+    // apart (at most 8 along an edge).
+    if (s->target)
+      for (const Tri& t : tris) {
+        if (t.radius <= s->in) continue;
+        const int n = std::min(8, static_cast<int>(std::ceil(2.0 * t.radius / (2.0 * s->in))));
+        for (int i = 1; i < n; ++i)
+          for (int j = 1; i + j < n; ++j)
+            if (!check_point(t.a + (static_cast<double>(i) / n) * (t.b - t.a) + (static_cast<double>(j) / n) * (t.c - t.a)))
+              return boost::none;
+      }
     return op;
   }
 };
@@ -317,16 +342,22 @@ SurfaceMesh from_cgal(Mesh& m) {
 
 }  // namespace
 
-SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions& opt, EnvelopeStats* stats,
-                              Progress* progress) {
+namespace {
+
+// simplify_envelope with or without a target (nullptr: the surface is its own).
+SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surface, const EnvelopeOptions& opt,
+                     EnvelopeStats* stats, Progress* progress) {
   Mesh m = to_cgal(surface, "simplify_envelope: the surface is not a 2-manifold");
   for (HD h : m.halfedges())
     if (m.is_border(h)) throw InputError("simplify_envelope: the surface is not closed");
 
   const TriangleBvh reference(surface.V, surface.F);
+  std::unique_ptr<TriangleBvh> target;
+  if (target_surface) target = std::make_unique<TriangleBvh>(target_surface->V, target_surface->F);
   State s;
   s.mesh = &m;
   s.reference = &reference;
+  s.target = target.get();
   s.out = opt.max_outside;
   s.in = opt.max_inside;
   s.cos_fold = std::cos(opt.min_fold_angle * M_PI / 180.0);
@@ -358,6 +389,7 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
     s.face_gap[static_cast<size_t>(f)] =
         std::min({gap[static_cast<size_t>(surface.F(f, 0))], gap[static_cast<size_t>(surface.F(f, 1))],
                   gap[static_cast<size_t>(surface.F(f, 2))]}) / 3.0;
+  std::vector<double> sample_gap;  // per sample of the surface: a third of the local gap
   // Samples: every vertex (to one face around it) and points of faces larger than the inner bound,
   // spaced by about it.
   for (VD v : m.vertices()) {
@@ -367,8 +399,16 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
     s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
     s.sample_face.push_back(f);
     s.sample_bound.push_back(std::min({opt.max_inside, opt.max_outside, gap[static_cast<size_t>(v.idx())] / 3.0}));
+    sample_gap.push_back(gap[static_cast<size_t>(v.idx())] / 3.0);
     s.samples.push_back(vec(m.point(v)));
   }
+  auto add_sample = [&](const Vec3& x, FD f, double cap) {
+    s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
+    s.sample_face.push_back(f);
+    s.sample_bound.push_back(std::min({opt.max_inside, opt.max_outside, cap}));
+    sample_gap.push_back(cap);
+    s.samples.push_back(x);
+  };
   const double spacing = std::max(opt.max_inside, 1e-12);
   for (FD f : m.faces()) {
     Vec3 q[3];
@@ -379,12 +419,41 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
     for (int i = 0; i <= n; ++i)
       for (int j = 0; j <= n - i; ++j) {
         if ((i == 0 && j == 0) || (i == n && j == 0) || (i == 0 && j == n)) continue;  // corners: vertices
-        const Vec3 x = q[0] + (static_cast<double>(i) / n) * (q[1] - q[0]) + (static_cast<double>(j) / n) * (q[2] - q[0]);
-        s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
-        s.sample_face.push_back(f);
-        s.sample_bound.push_back(std::min({opt.max_inside, opt.max_outside, s.face_gap[static_cast<size_t>(f.idx())]}));
-        s.samples.push_back(x);
+        add_sample(q[0] + (static_cast<double>(i) / n) * (q[1] - q[0]) + (static_cast<double>(j) / n) * (q[2] - q[0]), f,
+                   s.face_gap[static_cast<size_t>(f.idx())]);
       }
+  }
+  // Each sample of the surface: outside the new surface by at most the inner bound, inside it by
+  // at most the outer, either way by at most its cap (a third of the local gap). With a target the
+  // surface's own samples keep only the cap (thin parts stay apart), and the target's points
+  // (its vertices and samples of its larger faces, each to the surface's face nearest it) may lie
+  // outside the new surface by at most the inner bound, inside it at any depth (its inner walls,
+  // welded segments); the outer bound is then kept by check_point against the target itself.
+  const size_t own_samples = s.samples.size();
+  s.sample_limits.resize(own_samples);
+  for (size_t i = 0; i < own_samples; ++i) {
+    if (target) {
+      s.sample_bound[i] = sample_gap[i];
+      s.sample_limits[i] = {INFINITY, INFINITY, sample_gap[i]};
+    } else {
+      s.sample_limits[i] = {opt.max_inside, opt.max_outside, s.sample_bound[i]};
+    }
+  }
+  if (target) {
+    std::vector<FD> face_index;
+    for (FD f : m.faces()) face_index.push_back(f);
+    const std::vector<Vec3> points = surface_samples(target_surface->V, target_surface->F, spacing);
+    std::vector<int> nearest_face(points.size(), -1);
+    tbb::parallel_for(size_t(0), points.size(), [&](size_t i) { reference.nearest(points[i], &nearest_face[i]); });
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (nearest_face[i] < 0) continue;
+      const FD f = face_index[static_cast<size_t>(nearest_face[i])];
+      s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
+      s.sample_face.push_back(f);
+      s.sample_bound.push_back(opt.max_inside);
+      s.sample_limits.push_back({opt.max_inside, INFINITY, INFINITY});
+      s.samples.push_back(points[i]);
+    }
   }
   s.initial_faces = m.number_of_faces();
   if (progress) progress->stage("simplifying the boundary", static_cast<double>(m.number_of_faces() / 2));
@@ -420,6 +489,19 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
     stats->bounded = out.F.rows() > std::max(4, opt.target_faces) + 2;
   }
   return out;
+}
+
+}  // namespace
+
+SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions& options, EnvelopeStats* stats,
+                              Progress* progress) {
+  return simplify(surface, nullptr, options, stats, progress);
+}
+
+SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const SurfaceMesh& target, const EnvelopeOptions& options,
+                              EnvelopeStats* stats, Progress* progress) {
+  if (target.F.rows() == 0) throw InputError("simplify_envelope: the target has no triangles");
+  return simplify(surface, &target, options, stats, progress);
 }
 
 SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int iterations) {

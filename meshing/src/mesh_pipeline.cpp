@@ -75,30 +75,6 @@ int hull_budget(const MeshOptions& opt) {
 
 namespace {
 
-// Samples of the triangles (V, F): every vertex, and points of each triangle at most `spacing`
-// apart (barycentric lattice), at most 64 along an edge.
-std::vector<Eigen::Vector3d> surface_samples(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double spacing) {
-  std::vector<Eigen::Vector3d> out;
-  out.reserve(static_cast<size_t>(V.rows()));
-  std::vector<char> used(static_cast<size_t>(V.rows()), 0);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) used[static_cast<size_t>(F(f, k))] = 1;
-  for (Eigen::Index i = 0; i < V.rows(); ++i)
-    if (used[static_cast<size_t>(i)]) out.push_back(V.row(i).transpose());
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector3d a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
-    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-    const int n = std::min(64, static_cast<int>(std::ceil(longest / spacing)));
-    if (n < 2) continue;
-    for (int i = 0; i <= n; ++i)
-      for (int j = 0; j <= n - i; ++j) {
-        if ((i == 0 && j == 0) || (i == n && j == 0) || (i == 0 && j == n)) continue;
-        out.push_back(a + (static_cast<double>(i) / n) * (b - a) + (static_cast<double>(j) / n) * (c - a));
-      }
-  }
-  return out;
-}
-
 double signed_volume(const SurfaceMesh& m) {
   if (m.V.rows() == 0) return 0;
   const Eigen::RowVector3d o = m.V.colwise().mean();
@@ -207,6 +183,8 @@ struct Part {
   SurfaceMesh sheet;          // an open sheet (sheet.h), when `surface` is its slab: meshed as one
                               // layer of prisms (sheet_tets) where it can be
   bool sheet_capped = false;  // ... with more tetrahedra than its share of the target (thinness)
+  const SurfaceMesh* target = nullptr;  // the input, when `surface` is not its own boundary but
+                              // its winding-number solid's (the bounds are the input's; version 11)
   double offset = 0;          // how far `surface` lies outside the input (units): a sheet's slab, half
                               // its thickness (sheet.h); taken off the outer bound, and the inner
                               // bound kept below half of it so that the sheet stays inside
@@ -266,6 +244,8 @@ double winding_volume(const SurfaceMesh& surface) {
 // deviation_out / deviation_in, coverage of the input's vertices.
 void measure(MeshResult& r, const MeshOptions& opt) {
   const double diag = bounding_box_diagonal(r.input.V);
+  r.deviation_in = r.max_outside_distance = 0;  // maxima below (a route may be measured twice)
+  r.volume_ratio.reset();
   r.quality = tet_quality(r.tets);
   if (r.info.closed && r.input_volume > 0) r.volume_ratio = r.quality.volume / r.input_volume;
   const TetLocator locator(r.tets);
@@ -476,6 +456,13 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   eopt.max_outside = opt.max_deviation * diag;
   eopt.max_inside = opt.inner_deviation * opt.max_deviation * diag;
 
+  // A part's boundary simplified within `bounds`: against the input where the part is its
+  // winding-number solid's boundary, else against its own surface.
+  auto simplify = [](const Part& p, const EnvelopeOptions& bounds, EnvelopeStats* stats, Progress* pr) {
+    return p.target ? simplify_envelope(p.surface, *p.target, bounds, stats, pr)
+                    : simplify_envelope(p.surface, bounds, stats, pr);
+  };
+
   // The boundary route: each part's boundary simplified within `bounds`, then
   // tetrahedralized; the parts concatenated, labelled and measured against the input. `fail` is
   // taken, with the reason, where a part cannot be meshed. `wrapped`: the parts are components of
@@ -555,13 +542,23 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
             p.check = does_self_intersect(p.surface);  // its slab, on the boundary route after all
           }
           EnvelopeOptions e = bounds;
+          // A winding-number solid's boundary (Mesh_3's facets: angles of 25° and more, creases
+          // where the dilation meets the solid) keeps its triangles that round and its folds no
+          // sharper than 45°: with the defaults (5°, 20°) the simplified left lung (500 faces, 15
+          // triangles under 10°) and heart were not tetrahedralized conforming, and the retries
+          // gave 5,000 and 17,500 tetrahedra (docs/meshing.md, version 11).
+          if (p.target) {
+            e.min_triangle_angle = std::max(e.min_triangle_angle, 25.0);
+            e.min_fold_angle = std::max(e.min_fold_angle, 45.0);
+          }
           if (p.offset > 0) {
             e.max_outside = std::max(0.25 * e.max_outside, e.max_outside - p.offset);
             e.max_inside = std::min(e.max_inside, 0.5 * p.offset);
           }
           e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
           p.target_faces = e.target_faces;
-          p.boundary = simplify_envelope(p.surface, e, &p.envelope, progress_here ? progress : nullptr);
+          p.boundary = simplify(p, e, &p.envelope, progress_here ? progress : nullptr);
+
           if (spdlog::should_log(spdlog::level::debug))
             spdlog::debug("part {}: simplified boundary of {} faces intersects itself: {}", i, p.boundary.F.rows(),
                           does_self_intersect(p.boundary));
@@ -578,7 +575,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
           // boundary by at most the inner bound (the lumbar spine at 150 had a 4.1° sliver 2 % of
           // the diagonal thick); the alpha wrap lies outside the input by its offset, and peeling
           // its slivers (up to 5 % thick on the welded boxes) moved it toward the input, so no limit.
-          if (!wrapped) t.peel_max_height = std::min(t.peel_max_height, e.max_inside);
+          if (!wrapped || p.target) t.peel_max_height = std::min(t.peel_max_height, e.max_inside);
           if (p.offset > 0) t.exude = false;  // a sheet's slab (TetrahedralizeOptions::exude)
           Progress* pr = progress_here ? progress : nullptr;
           // A part is one connected surface, so its mesh is one piece: tetrahedra hanging on by an
@@ -627,7 +624,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
               EnvelopeOptions e2 = e;
               e2.max_outside *= 0.5;
               e2.max_inside *= 0.5;
-              b = simplify_envelope(p.surface, e2, &es, nullptr);
+              b = simplify(p, e2, &es, nullptr);
               if (p.check && does_self_intersect(b)) continue;
               // Where the target's face count, not the bounds, stopped the simplification, half the
               // bounds give the same boundary, and tetrahedralizing it again gives the same mesh.
@@ -673,7 +670,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
           // 14,000, volume 1.19 → 1.09).
           const double dilation = opt.winding_dilation * opt.max_deviation * diag;
           const double growth = dilation * area(p.surface) / p.volume;  // estimated volume growth
-          if (!holds(p.tets, p.tet_stats) && p.offset == 0 && !abandoned && growth <= 0.5) {
+          if (!holds(p.tets, p.tet_stats) && p.offset == 0 && !p.target && !abandoned && growth <= 0.5) {
             const double part_diag = bounding_box_diagonal(p.surface.V);
             const double shrink = target >= 1000 && growth > 0.08 ? std::max(0.4, 0.08 / growth) : 1.0;
             WindingTetrahedralizeOptions wo = opt.winding_mesh;
@@ -760,7 +757,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       r.boundary = concatenate(b, &SurfaceMesh::F);
       r.tets = concatenate(t, &TetMesh::T);
     }
-    if (wrapped) {
+    if (wrapped && !parts.front().target) {  // (the winding-number boundary's route has it already)
       // The input's own volume: where its winding number is above ½ (the union of overlapping or
       // welded segments, each counted once).
       r.input_volume_from_winding_number = true;
@@ -873,6 +870,117 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     r.method = "alpha_wrap";
     r.fallback_because = why;
     return boundary_route(parts, e, true, [&](const std::string& w) { return shells_route(why + "; on its alpha wrap, " + w); });
+  };
+  // Inputs that are not closed parts (meshing version 11): the boundary of their winding-number
+  // solid as Mesh_3 meshed it (winding_route: closed, no self-intersection, within the facet
+  // distance and the dilation of the input) is simplified against the input itself (the outer
+  // bound to the input's nearest triangle, the inner bound at the input's own points:
+  // simplify_envelope with a target) and tetrahedralized, component by component, by the boundary
+  // route. Mesh_3 follows the surface with facets of about one size, so its mesh of the heart had
+  // 14,372 tetrahedra where a boundary within the same bounds needs a few thousand. Kept where
+  // every part holds (conforming, one piece, the dihedral floor), with fewer tetrahedra than the
+  // winding route's mesh and deviations within the bounds or no worse than its; else that mesh.
+  auto winding_boundary_route = [&](const std::string& why) -> MeshResult {
+    spdlog::info("meshing the boundary of the input's winding-number solid instead of its own: {}", why);
+    leave_boundary_route("winding_number_boundary", why, 0);
+    timer.start("winding-number surface");
+    r.input_volume_from_winding_number = true;
+    WindingTetrahedralizeOptions wo = opt.winding_mesh;
+    wo.seed = opt.tetrahedralize.seed;
+    wo.facet_distance = opt.winding_facet_distance * opt.max_deviation;
+    wo.dilation = opt.winding_dilation * opt.max_deviation;
+    // The input's volume (its winding number's, a parallel loop) beside Mesh_3 (one thread).
+    tbb::task_group volume_task;
+    volume_task.run([&] { r.input_volume = winding_volume(r.input); });
+    SurfaceMesh solid;
+    try {
+      solid = winding_number_surface(r.input.V, r.input.F, wo, &r.winding_stats);
+    } catch (...) {
+      volume_task.wait();
+      throw;
+    }
+    volume_task.wait();
+    r.info.volume = r.input_volume;
+    // At 1,000 tetrahedra and more, where the volume bound on closed inputs is
+    // [0.95, 1.1]: a solid the dilation grew by more than 8 % (the liver: 12.6 %, so 1.116 after
+    // simplification) is made again with the dilation and the facet distance scaled down in
+    // proportion, to no less than 0.4 of them (as a part's own winding-number solid is, above).
+    if (r.info.closed && opt.tetrahedralize.target_tets >= 1000 && r.input_volume > 0 && solid.F.rows() > 0) {
+      const double growth = signed_volume(solid) / r.input_volume - 1.0;
+      if (growth > 0.08) {
+        const double shrink = std::max(0.4, 0.08 / growth);
+        wo.facet_distance *= shrink;
+        wo.dilation *= shrink;
+        spdlog::debug("winding-number surface: {:.1f} % over the input's volume; again with the dilation and facet "
+                      "distance × {:.2f}", 100.0 * growth, shrink);
+        solid = winding_number_surface(r.input.V, r.input.F, wo, &r.winding_stats);
+      }
+    }
+    auto mesh3 = [&](const std::string& because) {
+      spdlog::info("meshing the winding-number solid by Mesh_3 as it is: {}", because);
+      return winding_route(why + "; its boundary " + because);
+    };
+    Eigen::VectorXi comp;
+    const int n = face_components(solid.F, comp);
+    if (n == 0) return mesh3("was not found by Mesh_3");
+    const std::vector<std::vector<int>> faces = faces_by_component(comp, n);
+    std::vector<Part> pieces(static_cast<size_t>(n));
+    for (int c = 0; c < n; ++c) {
+      Part& p = pieces[static_cast<size_t>(c)];
+      p.surface = sub_mesh(solid, faces[static_cast<size_t>(c)]);
+      p.volume = signed_volume(p.surface);
+      p.target = &r.input;
+      p.component = c;
+      spdlog::debug("winding-number surface component {}: {} faces, volume {:.4g}", c, p.surface.F.rows(), p.volume);
+      if (!is_closed(p.surface.F) || !is_oriented_two_manifold(p.surface.F, static_cast<int>(p.surface.V.rows())) ||
+          !(p.volume != 0))
+        return mesh3("(component " + std::to_string(c + 1) + " of " + std::to_string(n) +
+                     ") is not a closed oriented 2-manifold enclosing volume");
+    }
+    // A component facing inward (negative volume) bounds a void of the solid (winding number
+    // below ½ inside it) within the smallest outward component around it: a cavity of that part
+    // (as the boundary route takes a hollow part), or filled where under 1 % of the part's volume
+    // (the liver's winding-number solid has a void of 0.03 %: 112 faces that would hold as many
+    // tetrahedra, and a solid organ there is what the file means).
+    std::vector<Part> parts;
+    std::vector<int> part_of(static_cast<size_t>(n), -1);
+    for (int c = 0; c < n; ++c)
+      if (pieces[static_cast<size_t>(c)].volume > 0) {
+        part_of[static_cast<size_t>(c)] = static_cast<int>(parts.size());
+        parts.push_back(pieces[static_cast<size_t>(c)]);
+      }
+    if (parts.empty()) return mesh3("encloses no volume");
+    int filled = 0;
+    for (int c = 0; c < n; ++c) {
+      const Part& cavity = pieces[static_cast<size_t>(c)];
+      if (cavity.volume > 0) continue;
+      const Eigen::RowVector3d probe = cavity.surface.V.row(0);
+      int container = -1;
+      for (size_t i = 0; i < parts.size(); ++i) {
+        if (container >= 0 && parts[i].volume >= parts[static_cast<size_t>(container)].volume) continue;
+        if (FastWindingNumber(parts[i].surface.V, parts[i].surface.F)(probe) > 0.5) container = static_cast<int>(i);
+      }
+      if (container < 0) return mesh3("has an inward component inside no outward one");
+      Part& outer = parts[static_cast<size_t>(container)];
+      if (-cavity.volume < 0.01 * outer.volume) {
+        ++filled;
+        continue;
+      }
+      outer.surface = concatenate(std::vector<SurfaceMesh>{outer.surface, cavity.surface}, &SurfaceMesh::F);
+      outer.volume += cavity.volume;
+      ++r.cavities;
+    }
+    if (filled > 0) spdlog::debug("winding-number surface: {} voids under 1 % of their part's volume filled", filled);
+    spdlog::debug("winding-number surface: {} faces, {} components", solid.F.rows(), n);
+    timer.stop();
+    MeshResult b = boundary_route(parts, eopt, true, [&](const std::string& w) { return mesh3("could not be meshed: " + w); });
+    if (b.method != "winding_number_boundary") return b;
+    std::string worse;
+    if (!b.tet_stats.conforming) worse = "was not tetrahedralized conforming";
+    else if (b.quality.min_dihedral < opt.tetrahedralize.min_dihedral) worse = "keeps a dihedral angle below the floor";
+    if (worse.empty()) return b;
+    r = std::move(b);
+    return mesh3(worse);
   };
   // The parts: each face-connected component of the input that is a closed oriented 2-manifold
   // enclosing volume bounds its own solid and is its own boundary (when it intersects itself, only
@@ -1026,15 +1134,17 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       // number encloses, holes closed, meshed by Mesh_3 tight to the input (meshing version 8;
       // before, the convex shells: the dragon 3.8-10.9 % of the diagonal out). Welded or
       // non-manifold segments (the organs) still take the fallback below.
-      return winding_route(std::to_string(unusable) + " of the input's " + std::to_string(components) +
-                           " components are open scans of solids (holes, not welded to other components)");
+      const std::string why = std::to_string(unusable) + " of the input's " + std::to_string(components) +
+                              " components are open scans of solids (holes, not welded to other components)";
+      return opt.winding ? winding_route(why) : winding_boundary_route(why);
     }
   }
   // The route for inputs that are not closed parts, and where the boundary route fails.
   const std::function<MeshResult(const std::string&)> fallback =
       opt.wrap      ? std::function<MeshResult(const std::string&)>(wrap_route)
       : opt.winding ? std::function<MeshResult(const std::string&)>(winding_route)
-                    : std::function<MeshResult(const std::string&)>(shells_route);
+      : opt.shells_fallback ? std::function<MeshResult(const std::string&)>(shells_route)
+                    : std::function<MeshResult(const std::string&)>(winding_boundary_route);
   if (unusable > 0)
     return fallback(std::to_string(unusable) + " of the input's " + std::to_string(components) +
                     " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, "

@@ -89,6 +89,10 @@ struct SceneObject {
   bool robot = false;                     // role: "robot" | "obstacle" (default)
   bool rigid = false;                     // kind: "rigid" | "deformable" (default)
   int tets = 500;                         // meshing target (ignored when `mesh` is a tet mesh)
+  std::string mesh_route = "auto";        // inputs that are not closed parts (welded, non-manifold or
+                                          // open segments): "auto" (meshing version 11: their
+                                          // winding-number solid's boundary), "convex_shells",
+                                          // "winding_number" (Mesh_3 as it is) or "alpha_wrap"
   SceneTransform transform;
   std::string preset;                     // material.preset ("" if none): it set density and youngs_modulus
   double density = 1000.0;                // kg/m³ (material.density, else the preset's)
@@ -160,8 +164,10 @@ std::filesystem::path mesh_cache_dir();
 /// again with a warning and overwritten. `cache_hit` (optional) tells whether the cache served it;
 /// `off_target` (optional) gets why the count is more than 35% off `tets`
 /// (MeshResult::target_exceeded_because), or "". Throws InputError "PATH: problem".
+///   route  SceneObject::mesh_route ("auto", "convex_shells", "winding_number", "alpha_wrap")
 meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bool* cache_hit = nullptr,
-                                 Progress* progress = nullptr, std::string* off_target = nullptr);
+                                 Progress* progress = nullptr, std::string* off_target = nullptr,
+                                 const std::string& route = "auto");
 
 /// The automatic time step of a world and what sets it (scene key `time_step`: "auto").
 struct TimeStepChoice {

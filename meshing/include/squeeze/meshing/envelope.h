@@ -53,4 +53,17 @@ struct EnvelopeStats {
 SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions& options, EnvelopeStats* stats = nullptr,
                               Progress* progress = nullptr);
 
+/// The same with the bounds measured against `target`, a triangle soup the closed `surface` was
+/// made from (open, welded, non-manifold or self-intersecting segments: its winding-number solid's
+/// boundary, say; meshing version 11). A collapse is accepted only when points of the new faces
+/// (as above) lie within max_outside of the target, on either side, and every point of the target
+/// (its vertices and samples of its larger faces, each answerable to the face of the simplified
+/// surface nearest it) lies outside the new faces by at most max_inside; inside them at any depth
+/// (the target's inner walls). `surface` keeps the thin-part caps (a third of the local gap
+/// between its sides) and is what is simplified. Points of the target already farther out than
+/// max_inside keep their faces as they are. Throws InputError as above, and when `target` is empty.
+///   target  V #V by 3, F #F by 3 (units; orientation not used)
+SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const SurfaceMesh& target, const EnvelopeOptions& options,
+                              EnvelopeStats* stats = nullptr, Progress* progress = nullptr);
+
 }  // namespace squeeze::meshing

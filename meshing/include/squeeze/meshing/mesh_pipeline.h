@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 10;  // 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
+constexpr int kMeshingAlgorithmVersion = 11;  // 11: inputs that are not closed parts by their winding-number solid's boundary, simplified against the input; 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
@@ -46,13 +46,15 @@ struct MeshOptions {
                                         // solid meshed with Mesh_3 (winding_tetrahedralize.h); its
                                         // target_tets and seed are taken from tetrahedralize, its
                                         // facet_distance and dilation from max_deviation (below)
-  bool winding = false;                 // inputs with welded, non-manifold or self-intersecting
-                                        // segments: mesh their winding-number solid with Mesh_3
+  bool winding = false;                 // inputs that are not closed parts (welded, non-manifold
+                                        // or self-intersecting segments; open scans of solids):
+                                        // their winding-number solid meshed by Mesh_3 as it is
                                         // (true: tight, but 3–20k tetrahedra on the organs,
-                                        // docs/meshing.md); or their convex shells (false, the
-                                        // default until the scenes that mesh the organs simulate
-                                        // fast enough with it). Open scans of solids (holes, not
-                                        // welded) take the winding-number route either way (version 8)
+                                        // docs/meshing.md). False (version 11): the boundary of
+                                        // that mesh simplified against the input and tetrahedralized
+                                        // by the boundary route, Mesh_3's mesh kept where that fails
+  bool shells_fallback = false;         // welded, non-manifold or self-intersecting segments: their
+                                        // convex shells meshed with Mesh_3, as before version 11
   bool wrap = false;                    // the same inputs: mesh their alpha wrap (alpha_wrap.h) by
                                         // the boundary route (true; before `winding`); the convex
                                         // shells only where either fails
@@ -108,11 +110,14 @@ struct MeshResult {
                                     // "alpha_wrap": the same of the input's alpha wrap, where the
                                     // input is not closed parts and wrap is asked for;
                                     // "winding_number": the input's winding-number solid meshed
-                                    // by Mesh_3 (with `winding`); "convex_shells": the fallback
+                                    // by Mesh_3 (with `winding`, or where the next fails);
+                                    // "winding_number_boundary": that mesh's boundary simplified
+                                    // against the input and tetrahedralized (inputs that are not
+                                    // closed parts, version 11); "convex_shells": the fallback
                                     // (see fallback_because)
   std::string fallback_because;     // empty, or why the boundary route was not taken
   ShellTetrahedralizeStats shell_stats;  // method "convex_shells"
-  WindingTetrahedralizeStats winding_stats;  // method "winding_number"
+  WindingTetrahedralizeStats winding_stats;  // methods "winding_number" and "winding_number_boundary"
   WrapStats wrap;                   // method "alpha_wrap" (or the shells after it failed)
   int target_tets = 0;
   int sheets = 0;                   // open sheets meshed as slabs (sheet.h; method "boundary")

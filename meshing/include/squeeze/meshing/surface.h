@@ -1,6 +1,7 @@
 // squeeze::meshing — a triangle surface as libigl-style matrices.
 #pragma once
 #include <Eigen/Core>
+#include <vector>
 
 namespace squeeze::meshing {
 
@@ -17,5 +18,11 @@ void bounding_box(const Eigen::MatrixX3d& V, Eigen::RowVector3d& lo, Eigen::RowV
 
 /// Length of the bounding-box diagonal of V (0 for an empty V).
 double bounding_box_diagonal(const Eigen::MatrixX3d& V);
+
+/// Points of the triangles (V, F): every vertex a face uses, and points of each triangle at most
+/// `spacing` apart (a barycentric lattice, at most 64 points along an edge). Deterministic order:
+/// the vertices, then each face's lattice in face order.
+///   spacing  units, > 0
+std::vector<Eigen::Vector3d> surface_samples(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double spacing);
 
 }  // namespace squeeze::meshing

@@ -4,6 +4,7 @@
 #pragma once
 #include <Eigen/Core>
 
+#include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/tet_mesh.h"
 
 namespace squeeze {
@@ -25,6 +26,11 @@ struct WindingTetrahedralizeOptions {
   double min_dihedral = 5.0;     // degrees; boundary tetrahedra below it are peeled off
   double sliver_bound = 10.0;    // degrees; what Mesh_3's sliver exuder works on
   double optimize_seconds = 4.0; // time limit of the exuder (0: none); reaching it is warned
+  double facet_size = 0.1;       // fraction of the diagonal: winding_number_surface's largest facet
+                                 // (tetrahedralize_winding_number sizes facets by target_tets)
+  double cover_tolerance = 0.003; // fraction of the diagonal: winding_number_surface seeds the
+                                 // input's points left outside its surface by more than this (sharp
+                                 // corners and edges the facets cut off) and refines again (0: not)
 
   unsigned seed = 1;             // CGAL's random generator: same input, same mesh
 };
@@ -59,5 +65,21 @@ struct WindingTetrahedralizeStats {
 TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double volume,
                                       const WindingTetrahedralizeOptions& options = {},
                                       WindingTetrahedralizeStats* stats = nullptr, Progress* progress = nullptr);
+
+/// The boundary of the same solid (the points whose winding number is at least ½, dilated by
+/// `dilation`) as a closed surface: the facets of Mesh_3's restricted Delaunay surface within
+/// `facet_distance`, at most `facet_size` across, refined until the surface is a 2-manifold
+/// (Mesh_3's manifold option: where two parts of the solid touch at a point or an edge it refines
+/// until they part or join). Oriented outward (the faces of the cells inside the solid), no
+/// self-intersection (faces of one Delaunay triangulation). The surface of meshing version 11's
+/// route for inputs that are not closed parts, simplified against the input afterwards
+/// (simplify_envelope with a target). Uses target_tets, min_dihedral, sliver_bound and
+/// optimize_seconds not at all. Empty when Mesh_3 found no surface; the caller checks that it is a
+/// closed 2-manifold (a refinement stopped by the max_tets net may leave it not).
+///   V  #V by 3 input positions (units), F  #F by 3 triangles
+/// Throws InputError on an empty input or options out of range.
+SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                                   const WindingTetrahedralizeOptions& options = {},
+                                   WindingTetrahedralizeStats* stats = nullptr);
 
 }  // namespace squeeze::meshing
