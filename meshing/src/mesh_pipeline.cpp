@@ -558,7 +558,6 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
           e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
           p.target_faces = e.target_faces;
           p.boundary = simplify(p, e, &p.envelope, progress_here ? progress : nullptr);
-
           if (spdlog::should_log(spdlog::level::debug))
             spdlog::debug("part {}: simplified boundary of {} faces intersects itself: {}", i, p.boundary.F.rows(),
                           does_self_intersect(p.boundary));
@@ -872,14 +871,14 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     return boundary_route(parts, e, true, [&](const std::string& w) { return shells_route(why + "; on its alpha wrap, " + w); });
   };
   // Inputs that are not closed parts (meshing version 11): the boundary of their winding-number
-  // solid as Mesh_3 meshed it (winding_route: closed, no self-intersection, within the facet
-  // distance and the dilation of the input) is simplified against the input itself (the outer
-  // bound to the input's nearest triangle, the inner bound at the input's own points:
-  // simplify_envelope with a target) and tetrahedralized, component by component, by the boundary
-  // route. Mesh_3 follows the surface with facets of about one size, so its mesh of the heart had
-  // 14,372 tetrahedra where a boundary within the same bounds needs a few thousand. Kept where
-  // every part holds (conforming, one piece, the dihedral floor), with fewer tetrahedra than the
-  // winding route's mesh and deviations within the bounds or no worse than its; else that mesh.
+  // solid, as Mesh_3 finds it (winding_number_surface: a closed 2-manifold without
+  // self-intersection, within the facet distance and the dilation of the input), is simplified
+  // against the input itself (the outer bound to the input's nearest triangle, the inner bound at
+  // the input's own points: simplify_envelope with a target) and tetrahedralized, component by
+  // component, by the boundary route. Mesh_3's own tetrahedra follow the surface with facets of
+  // about one size (the heart: 14,372 tetrahedra, where a boundary within the same bounds needs
+  // 10,600 and the lungs half of Mesh_3's). Where that surface cannot be had or a part does not
+  // hold (conforming, the dihedral floor), Mesh_3's tetrahedra of the solid (winding_route).
   auto winding_boundary_route = [&](const std::string& why) -> MeshResult {
     spdlog::info("meshing the boundary of the input's winding-number solid instead of its own: {}", why);
     leave_boundary_route("winding_number_boundary", why, 0);
@@ -943,12 +942,8 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     // (the liver's winding-number solid has a void of 0.03 %: 112 faces that would hold as many
     // tetrahedra, and a solid organ there is what the file means).
     std::vector<Part> parts;
-    std::vector<int> part_of(static_cast<size_t>(n), -1);
-    for (int c = 0; c < n; ++c)
-      if (pieces[static_cast<size_t>(c)].volume > 0) {
-        part_of[static_cast<size_t>(c)] = static_cast<int>(parts.size());
-        parts.push_back(pieces[static_cast<size_t>(c)]);
-      }
+    for (const Part& p : pieces)
+      if (p.volume > 0) parts.push_back(p);
     if (parts.empty()) return mesh3("encloses no volume");
     int filled = 0;
     for (int c = 0; c < n; ++c) {
@@ -1131,9 +1126,9 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       unusable = 0;
     } else if (others == 0 && scans == static_cast<int>(candidates.size()) && !opt.wrap) {
       // Open scans of solids (a scan with holes, not welded to anything): the solid their winding
-      // number encloses, holes closed, meshed by Mesh_3 tight to the input (meshing version 8;
-      // before, the convex shells: the dragon 3.8-10.9 % of the diagonal out). Welded or
-      // non-manifold segments (the organs) still take the fallback below.
+      // number encloses, holes closed (meshing version 8: Mesh_3's tetrahedra of it; before, the
+      // convex shells: the dragon 3.8-10.9 % of the diagonal out; version 11: its boundary
+      // simplified against the scan, as for welded segments below, whatever --shells-fallback).
       const std::string why = std::to_string(unusable) + " of the input's " + std::to_string(components) +
                               " components are open scans of solids (holes, not welded to other components)";
       return opt.winding ? winding_route(why) : winding_boundary_route(why);
