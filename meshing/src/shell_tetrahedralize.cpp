@@ -401,6 +401,38 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
 
 namespace {
 
+// Points, with a hash grid of cells `apart` wide to tell whether a point has one within `apart`.
+class SpacedPoints {
+ public:
+  SpacedPoints(const Eigen::Vector3d& origin, double apart) : origin_(origin), apart_(apart) {}
+  bool near(const Eigen::Vector3d& p) const {
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto it = grid_.find(key(p, dx, dy, dz));
+          if (it == grid_.end()) continue;
+          for (int s : it->second)
+            if ((points[static_cast<size_t>(s)] - p).norm() < apart_) return true;
+        }
+    return false;
+  }
+  void add(const Eigen::Vector3d& p) {
+    grid_[key(p, 0, 0, 0)].push_back(static_cast<int>(points.size()));
+    points.push_back(p);
+  }
+  std::vector<Eigen::Vector3d> points;  // in the order added
+
+ private:
+  std::int64_t key(const Eigen::Vector3d& p, int dx, int dy, int dz) const {
+    const Eigen::Vector3d c = ((p - origin_) / apart_).array().floor();
+    return ((static_cast<std::int64_t>(c(0)) + dx + 1) * 2097152 + static_cast<std::int64_t>(c(1)) + dy + 1) * 2097152 +
+           static_cast<std::int64_t>(c(2)) + dz + 1;
+  }
+  Eigen::Vector3d origin_;
+  double apart_;
+  std::unordered_map<std::int64_t, std::vector<int>> grid_;
+};
+
 // The winding-number solid of (V, F), dilated, as Mesh_3's implicit domain, and the surface
 // points it is refined from (tetrahedralize_winding_number and winding_number_surface).
 class WindingSolid {
@@ -430,6 +462,15 @@ class WindingSolid {
     return winding_(p.transpose()) >= 0.5;
   }
 
+  // The point of the solid's surface between a (inside) and b (outside): 40 bisections.
+  Eigen::Vector3d bisect(Eigen::Vector3d a, Eigen::Vector3d b) const {
+    for (int it = 0; it < 40; ++it) {
+      const Eigen::Vector3d m = 0.5 * (a + b);
+      (inside(m) ? a : b) = m;
+    }
+    return a;
+  }
+
   Domain domain() const {
     std::function<double(const Point&)> fn = [this](const Point& p) {
       return inside(Eigen::Vector3d(p.x(), p.y(), p.z())) ? -1.0 : 1.0;
@@ -443,37 +484,18 @@ class WindingSolid {
   // along the vertex normal (bisected between a point inside and one outside; vertices of inner
   // walls, inside on both sides, give none). Every part of the solid with a vertex is seeded.
   std::vector<Eigen::Vector3d> seeds(double spacing) const {
-    std::vector<Eigen::Vector3d> seeds;
-    std::unordered_map<std::int64_t, std::vector<int>> grid;
-    auto key = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {
-      const Eigen::Vector3d c = ((p - lo_) / spacing).array().floor();
-      return ((static_cast<std::int64_t>(c(0)) + dx + 1) * 2097152 + static_cast<std::int64_t>(c(1)) + dy + 1) * 2097152 +
-             static_cast<std::int64_t>(c(2)) + dz + 1;
-    };
+    SpacedPoints seeds(lo_, spacing);
     const double probe = dil_ + 2e-3 * diag_;
     for (Eigen::Index i = 0; i < V_.rows(); ++i) {
       const double len = N_.row(i).norm();
       if (!(len > 0)) continue;
       const Eigen::Vector3d p = V_.row(i).transpose(), n = N_.row(i).transpose() / len;
-      bool near = false;
-      for (int dx = -1; dx <= 1 && !near; ++dx)
-        for (int dy = -1; dy <= 1 && !near; ++dy)
-          for (int dz = -1; dz <= 1 && !near; ++dz) {
-            auto it = grid.find(key(p, dx, dy, dz));
-            if (it == grid.end()) continue;
-            for (int s : it->second) near = near || (seeds[static_cast<size_t>(s)] - p).norm() < spacing;
-          }
-      if (near) continue;
-      Eigen::Vector3d a = p - probe * n, b = p + probe * n;
+      if (seeds.near(p)) continue;
+      const Eigen::Vector3d a = p - probe * n, b = p + probe * n;
       if (!inside(a) || inside(b)) continue;
-      for (int it = 0; it < 40; ++it) {
-        const Eigen::Vector3d m = 0.5 * (a + b);
-        (inside(m) ? a : b) = m;
-      }
-      grid[key(a, 0, 0, 0)].push_back(static_cast<int>(seeds.size()));
-      seeds.push_back(a);
+      seeds.add(bisect(a, b));
     }
-    return seeds;
+    return seeds.points;
   }
 
   // Surface points for the input's points that a surface mesh leaves outside (`covered` false):
@@ -484,34 +506,16 @@ class WindingSolid {
   // off (three welded boxes: corners and edges 0.55 % of the diagonal outside without them).
   std::vector<Eigen::Vector3d> cover_seeds(const std::function<bool(const Eigen::Vector3d&)>& covered, double spacing,
                                            double apart) const {
-    std::vector<Eigen::Vector3d> out;
-    std::unordered_map<std::int64_t, std::vector<int>> grid;
-    auto key = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {
-      const Eigen::Vector3d c = ((p - lo_) / apart).array().floor();
-      return ((static_cast<std::int64_t>(c(0)) + dx + 1) * 2097152 + static_cast<std::int64_t>(c(1)) + dy + 1) * 2097152 +
-             static_cast<std::int64_t>(c(2)) + dz + 1;
-    };
+    SpacedPoints out(lo_, apart);
     const double probe = dil_ + 2e-3 * diag_;
     auto take = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& normal) {
       if (covered(x) || !(normal.norm() > 0) || !inside(x)) return;
-      Eigen::Vector3d n = normal.normalized(), b = x + probe * n;
+      const Eigen::Vector3d n = normal.normalized();
+      Eigen::Vector3d b = x + probe * n;
       if (inside(b)) b = x - probe * n;  // a face the file orients inward
       if (inside(b)) return;
-      Eigen::Vector3d a = x;
-      for (int it = 0; it < 40; ++it) {
-        const Eigen::Vector3d m = 0.5 * (a + b);
-        (inside(m) ? a : b) = m;
-      }
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            auto it = grid.find(key(a, dx, dy, dz));
-            if (it == grid.end()) continue;
-            for (int s : it->second)
-              if ((out[static_cast<size_t>(s)] - a).norm() < apart) return;
-          }
-      grid[key(a, 0, 0, 0)].push_back(static_cast<int>(out.size()));
-      out.push_back(a);
+      const Eigen::Vector3d a = bisect(x, b);
+      if (!out.near(a)) out.add(a);
     };
     for (Eigen::Index i = 0; i < V_.rows(); ++i) take(V_.row(i).transpose(), N_.row(i).transpose());
     for (Eigen::Index f = 0; f < F_.rows(); ++f) {
@@ -526,7 +530,7 @@ class WindingSolid {
           take(a + (static_cast<double>(i) / n) * (b - a) + (static_cast<double>(j) / n) * (c - a), fn);
         }
     }
-    return out;
+    return out.points;
   }
 
  private:
