@@ -70,12 +70,13 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                 "Mesh_3 (the paper's method, before meshing version 11): a few hundred tetrahedra, but 1.1-1.6 "
                 "times their volume and several % of the diagonal out");
   cmd->add_option("--winding-facet-distance", args->options.winding_facet_distance,
-                  "With --winding: Mesh_3's facet distance, as a multiple of --max-deviation (smaller: closer to the "
-                  "input inside, more tetrahedra)")
+                  "Inputs that are not closed parts: Mesh_3's facet distance on their winding-number solid, as a "
+                  "multiple of --max-deviation (smaller: closer to the input inside, more tetrahedra and seconds)")
       ->capture_default_str();
   cmd->add_option("--winding-dilation", args->options.winding_dilation,
-                  "With --winding: how far the solid is grown around the input surface, as a multiple of "
-                  "--max-deviation (larger: boundary chords stay outside the input, deviation_out grows by as much)")
+                  "Inputs that are not closed parts: how far their winding-number solid is grown around the input "
+                  "surface, as a multiple of --max-deviation (larger: boundary chords stay outside the input, "
+                  "deviation_out and the volume grow by as much)")
       ->capture_default_str();
   cmd->add_flag("--wrap", args->options.wrap,
                 "Inputs that are not closed parts: mesh their alpha wrap (closed, just outside them) instead of "
