@@ -903,3 +903,20 @@ TEST(Envelope, TargetIsWhatTheBoundsHoldAgainst) {
   EXPECT_LE(farthest(against_inner), 0.006 * 1.03);
   EXPECT_GT(farthest(against_itself), 0.006 * 1.03);
 }
+
+// Three triangles welded along one edge (a fan: no volume, and not open sheets either, as each is
+// welded to the others) are an error naming what is wrong, at once: before meshing version 11
+// the convex shells of the flat input grew a blob for minutes (Mesh_3's perturber at its limit).
+TEST(MeshingV4, WeldedFanEnclosingNoVolumeIsAnErrorAtOnce) {
+  SurfaceMesh fan;
+  fan.V.resize(5, 3);
+  fan.V << 0, 0, 0, 1, 0, 0, 0.5, 1, 0, 0.5, -1, 0.2, 0.5, 0, 1;
+  fan.F.resize(3, 3);
+  fan.F << 0, 1, 2, 0, 1, 3, 0, 1, 4;
+  try {
+    mesh(fan, 300);
+    FAIL() << "no error";
+  } catch (const squeeze::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("encloses no volume"), std::string::npos) << e.what();
+  }
+}

@@ -919,6 +919,11 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
       spdlog::info("meshing the winding-number solid by Mesh_3 as it is: {}", because);
       return winding_route(why + "; its boundary " + because);
     };
+    // No solid at all (triangles welded into a fan, say: no volume, and not open sheets either):
+    // the convex shells of a flat input took minutes to grow a blob around it.
+    if (solid.F.rows() == 0 && !(std::abs(r.input_volume) > 1e-9 * diag * diag * diag))
+      throw InputError("the surface encloses no volume (winding number above 1/2 nowhere) and is not open sheets "
+                       "(one layer of triangles, each sheet on its own: these are welded to each other)");
     Eigen::VectorXi comp;
     const int n = face_components(solid.F, comp);
     if (n == 0) return mesh3("was not found by Mesh_3");
