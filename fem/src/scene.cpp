@@ -457,7 +457,8 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
       << options.winding_mesh.max_tets << ',' << options.winding_mesh.min_dihedral << ','
       << options.winding_mesh.sliver_bound << ',' << options.winding_mesh.optimize_seconds << ',' << options.wrap
       << ',' << options.wrap_alpha << ',' << options.wrap_offset << ',' << options.sheet_thickness << ','
-      << options.shells_fallback << ',' << options.winding_mesh.facet_size << '|' << bytes.size() << '|';
+      << options.shells_fallback << ',' << options.winding_mesh.facet_size << ',' << options.winding_surface_dilation << ','
+      << options.winding_mesh.cover_tolerance << '|' << bytes.size() << '|';
   Hash128 h;
   h.add(opt.str());
   h.add(bytes);

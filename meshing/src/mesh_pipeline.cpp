@@ -301,6 +301,8 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     throw InputError("--winding-facet-distance must be positive and, times --max-deviation, below 1");
   if (!(opt.winding_dilation >= 0 && opt.winding_dilation * opt.max_deviation < 1))
     throw InputError("--winding-dilation must be at least 0 and, times --max-deviation, below 1");
+  if (!(opt.winding_surface_dilation >= 0 && opt.winding_surface_dilation * opt.max_deviation < 1))
+    throw InputError("--winding-surface-dilation must be at least 0 and, times --max-deviation, below 1");
   MeshResult r;
   r.target_tets = opt.tetrahedralize.target_tets;
   StageTimer timer(r, progress);
@@ -887,7 +889,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     WindingTetrahedralizeOptions wo = opt.winding_mesh;
     wo.seed = opt.tetrahedralize.seed;
     wo.facet_distance = opt.winding_facet_distance * opt.max_deviation;
-    wo.dilation = opt.winding_dilation * opt.max_deviation;
+    wo.dilation = opt.winding_surface_dilation * opt.max_deviation;
     // The input's volume (its winding number's, a parallel loop) beside Mesh_3 (one thread).
     tbb::task_group volume_task;
     volume_task.run([&] { r.input_volume = winding_volume(r.input); });
@@ -1269,8 +1271,8 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"relocated_sliver_vertices", r.tet_stats.relocated},  // 0 unless tetrahedralize() meshed it
         {"flipped_slivers", r.tet_stats.flips},
         {"exuder_nan_stops", r.tet_stats.exuder_nan_stops}}},
-      {"winding_number",
-       r.method == "winding_number"
+      {"winding_number",  // Mesh_3 of the winding-number solid: its tetrahedra, or its boundary's surface
+       r.method == "winding_number" || r.method == "winding_number_boundary"
            ? json{{"attempts", r.winding_stats.attempts},
                   {"cell_size", r.winding_stats.cell_size},
                   {"facet_distance", frac(r.winding_stats.facet_distance)},

@@ -53,6 +53,13 @@ struct MeshOptions {
                                         // docs/meshing.md). False (version 11): the boundary of
                                         // that mesh simplified against the input and tetrahedralized
                                         // by the boundary route, Mesh_3's mesh kept where that fails
+  double winding_surface_dilation = 0.3; // the dilation of the winding-number solid whose boundary
+                                        // the default route for inputs that are not closed parts
+                                        // simplifies (version 11), as a multiple of max_deviation:
+                                        // less than winding_dilation, as the input's points its
+                                        // facets leave outside are seeded (winding_tetrahedralize.h
+                                        // cover_tolerance); at 0.45 two touching organs' coarse
+                                        // meshes overlapped 3.24 points more than their surfaces
   bool shells_fallback = false;         // welded, non-manifold or self-intersecting segments: their
                                         // convex shells meshed with Mesh_3, as before version 11
   bool wrap = false;                    // the same inputs: mesh their alpha wrap (alpha_wrap.h) by
