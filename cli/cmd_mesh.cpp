@@ -74,14 +74,15 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                   "multiple of --max-deviation (smaller: closer to the input inside, more tetrahedra and seconds)")
       ->capture_default_str();
   cmd->add_option("--winding-dilation", args->options.winding_dilation,
-                  "With --winding (and a closed part meshed as its own winding-number solid): how far the solid is "
-                  "grown around the input surface, as a multiple of --max-deviation (larger: boundary chords stay "
-                  "outside the input, deviation_out and the volume grow by as much)")
+                  "Open scans of solids, --winding, and a closed part meshed as its own winding-number solid: how far "
+                  "the solid is grown around the input surface, as a multiple of --max-deviation (larger: boundary "
+                  "chords stay outside the input, deviation_out and the volume grow by as much)")
       ->capture_default_str();
   cmd->add_option("--winding-surface-dilation", args->options.winding_surface_dilation,
-                  "Inputs that are not closed parts (the default route): how far their winding-number solid, whose "
-                  "boundary is simplified and tetrahedralized, is grown around the input surface, as a multiple of "
-                  "--max-deviation (larger: fewer tetrahedra and seconds, more volume and overlap with touching parts)")
+                  "Welded, non-manifold or self-intersecting segments (the default route): how far their winding-number "
+                  "solid, whose boundary is simplified and tetrahedralized, is grown around the input surface, as a "
+                  "multiple of --max-deviation (larger: fewer tetrahedra and seconds, more volume and overlap with "
+                  "touching parts)")
       ->capture_default_str();
   cmd->add_flag("--wrap", args->options.wrap,
                 "Inputs that are not closed parts: mesh their alpha wrap (closed, just outside them) instead of "

@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 11;  // 11: inputs that are not closed parts by their winding-number solid's boundary, simplified against the input; 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
+constexpr int kMeshingAlgorithmVersion = 12;  // 12: version 11 with open scans at winding_dilation (a commit of 11 gave them 0.3; the key tells cached meshes apart); 11: inputs that are not closed parts by their winding-number solid's boundary, simplified against the input; 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
@@ -53,13 +53,15 @@ struct MeshOptions {
                                         // docs/meshing.md). False (version 11): the boundary of
                                         // that mesh simplified against the input and tetrahedralized
                                         // by the boundary route, Mesh_3's mesh kept where that fails
-  double winding_surface_dilation = 0.3; // the dilation of the winding-number solid whose boundary
-                                        // the default route for inputs that are not closed parts
-                                        // simplifies (version 11), as a multiple of max_deviation:
-                                        // less than winding_dilation, as the input's points its
-                                        // facets leave outside are seeded (winding_tetrahedralize.h
-                                        // cover_tolerance); at 0.45 two touching organs' coarse
-                                        // meshes overlapped 3.24 points more than their surfaces
+  double winding_surface_dilation = 0.3; // the dilation of the winding-number solid of welded,
+                                        // non-manifold or self-intersecting segments whose boundary
+                                        // the default route simplifies (version 11), as a multiple
+                                        // of max_deviation: less than winding_dilation, as the
+                                        // input's points its facets leave outside are seeded
+                                        // (winding_tetrahedralize.h cover_tolerance); at 0.45 two
+                                        // touching organs' coarse meshes overlapped 3.24 points
+                                        // more than their surfaces. Open scans of solids keep
+                                        // winding_dilation (their hole rims are creases)
   bool shells_fallback = false;         // welded, non-manifold or self-intersecting segments: their
                                         // convex shells meshed with Mesh_3, as before version 11
   bool wrap = false;                    // the same inputs: mesh their alpha wrap (alpha_wrap.h) by
