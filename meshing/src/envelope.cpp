@@ -389,71 +389,49 @@ SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surfa
     s.face_gap[static_cast<size_t>(f)] =
         std::min({gap[static_cast<size_t>(surface.F(f, 0))], gap[static_cast<size_t>(surface.F(f, 1))],
                   gap[static_cast<size_t>(surface.F(f, 2))]}) / 3.0;
-  std::vector<double> sample_gap;  // per sample of the surface: a third of the local gap
-  // Samples: every vertex (to one face around it) and points of faces larger than the inner bound,
-  // spaced by about it.
+  // Samples: each passes within `sure` of its own face; else its nearest new face decides, by
+  // side: limits {outside, inside, either way}. The surface's own (every vertex, to one face
+  // around it, and points of faces larger than the inner bound, spaced by about it): outside the
+  // new surface by at most the inner bound, inside it by at most the outer, either way by at most
+  // its cap (a third of the local gap). With a target they keep only the cap (thin parts stay
+  // apart), and the target's points (its vertices and samples of its larger faces, each to the
+  // surface's face nearest it) may lie outside the new surface by at most the inner bound, inside
+  // it at any depth (its inner walls, welded segments); the outer bound is then kept by
+  // check_point against the target itself.
+  auto add_sample = [&](const Vec3& x, FD f, double sure, const std::array<double, 3>& limits) {
+    s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
+    s.sample_face.push_back(f);
+    s.sample_bound.push_back(sure);
+    s.sample_limits.push_back(limits);
+    s.samples.push_back(x);
+  };
+  auto add_own_sample = [&](const Vec3& x, FD f, double cap) {
+    if (target) return add_sample(x, f, cap, {INFINITY, INFINITY, cap});
+    const double sure = std::min({opt.max_inside, opt.max_outside, cap});
+    add_sample(x, f, sure, {opt.max_inside, opt.max_outside, sure});
+  };
   for (VD v : m.vertices()) {
     FD f = Mesh::null_face();
     for (HD h : CGAL::halfedges_around_target(m.halfedge(v), m))
       if (m.face(h) != Mesh::null_face() && (f == Mesh::null_face() || m.face(h) < f)) f = m.face(h);
-    s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
-    s.sample_face.push_back(f);
-    s.sample_bound.push_back(std::min({opt.max_inside, opt.max_outside, gap[static_cast<size_t>(v.idx())] / 3.0}));
-    sample_gap.push_back(gap[static_cast<size_t>(v.idx())] / 3.0);
-    s.samples.push_back(vec(m.point(v)));
+    add_own_sample(vec(m.point(v)), f, gap[static_cast<size_t>(v.idx())] / 3.0);
   }
-  auto add_sample = [&](const Vec3& x, FD f, double cap) {
-    s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
-    s.sample_face.push_back(f);
-    s.sample_bound.push_back(std::min({opt.max_inside, opt.max_outside, cap}));
-    sample_gap.push_back(cap);
-    s.samples.push_back(x);
-  };
   const double spacing = std::max(opt.max_inside, 1e-12);
   for (FD f : m.faces()) {
     Vec3 q[3];
     int k = 0;
     for (VD v : CGAL::vertices_around_face(m.halfedge(f), m)) q[k++] = vec(m.point(v));
-    const double longest = std::max({(q[1] - q[0]).norm(), (q[2] - q[1]).norm(), (q[0] - q[2]).norm()});
-    const int n = std::min(64, static_cast<int>(std::ceil(longest / spacing)));
-    for (int i = 0; i <= n; ++i)
-      for (int j = 0; j <= n - i; ++j) {
-        if ((i == 0 && j == 0) || (i == n && j == 0) || (i == 0 && j == n)) continue;  // corners: vertices
-        add_sample(q[0] + (static_cast<double>(i) / n) * (q[1] - q[0]) + (static_cast<double>(j) / n) * (q[2] - q[0]), f,
-                   s.face_gap[static_cast<size_t>(f.idx())]);
-      }
-  }
-  // Each sample of the surface: outside the new surface by at most the inner bound, inside it by
-  // at most the outer, either way by at most its cap (a third of the local gap). With a target the
-  // surface's own samples keep only the cap (thin parts stay apart), and the target's points
-  // (its vertices and samples of its larger faces, each to the surface's face nearest it) may lie
-  // outside the new surface by at most the inner bound, inside it at any depth (its inner walls,
-  // welded segments); the outer bound is then kept by check_point against the target itself.
-  const size_t own_samples = s.samples.size();
-  s.sample_limits.resize(own_samples);
-  for (size_t i = 0; i < own_samples; ++i) {
-    if (target) {
-      s.sample_bound[i] = sample_gap[i];
-      s.sample_limits[i] = {INFINITY, INFINITY, sample_gap[i]};
-    } else {
-      s.sample_limits[i] = {opt.max_inside, opt.max_outside, s.sample_bound[i]};
-    }
+    for_each_lattice_point(q[0], q[1], q[2], spacing,
+                           [&](const Vec3& x) { add_own_sample(x, f, s.face_gap[static_cast<size_t>(f.idx())]); });
   }
   if (target) {
-    std::vector<FD> face_index;
-    for (FD f : m.faces()) face_index.push_back(f);
     const std::vector<Vec3> points = surface_samples(target_surface->V, target_surface->F, spacing);
-    std::vector<int> nearest_face(points.size(), -1);
+    std::vector<int> nearest_face(points.size(), -1);  // faces of `surface`: the Mesh's in the same order
     tbb::parallel_for(size_t(0), points.size(), [&](size_t i) { reference.nearest(points[i], &nearest_face[i]); });
-    for (size_t i = 0; i < points.size(); ++i) {
-      if (nearest_face[i] < 0) continue;
-      const FD f = face_index[static_cast<size_t>(nearest_face[i])];
-      s.assigned[static_cast<size_t>(f.idx())].push_back(static_cast<int>(s.samples.size()));
-      s.sample_face.push_back(f);
-      s.sample_bound.push_back(opt.max_inside);
-      s.sample_limits.push_back({opt.max_inside, INFINITY, INFINITY});
-      s.samples.push_back(points[i]);
-    }
+    for (size_t i = 0; i < points.size(); ++i)
+      if (nearest_face[i] >= 0)
+        add_sample(points[i], FD(static_cast<Mesh::size_type>(nearest_face[i])), opt.max_inside,
+                   {opt.max_inside, INFINITY, INFINITY});
   }
   s.initial_faces = m.number_of_faces();
   if (progress) progress->stage("simplifying the boundary", static_cast<double>(m.number_of_faces() / 2));

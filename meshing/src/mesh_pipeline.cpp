@@ -214,6 +214,27 @@ std::vector<std::vector<int>> faces_by_component(const Eigen::VectorXi& C, int n
   return faces;
 }
 
+// The face-connected components of `s` as parts (surface, signed volume, component); the index
+// of the first that is not a closed oriented 2-manifold, or that `encloses` says does not enclose
+// volume (its signed volume), or -1.
+std::vector<Part> closed_components(const SurfaceMesh& s, const std::function<bool(double)>& encloses, int* bad) {
+  Eigen::VectorXi comp;
+  const int n = face_components(s.F, comp);
+  const std::vector<std::vector<int>> faces = faces_by_component(comp, n);
+  std::vector<Part> parts(static_cast<size_t>(n));
+  *bad = -1;
+  for (int c = 0; c < n; ++c) {
+    Part& p = parts[static_cast<size_t>(c)];
+    p.surface = sub_mesh(s, faces[static_cast<size_t>(c)]);
+    p.volume = signed_volume(p.surface);
+    p.component = c;
+    if (*bad < 0 && (!is_closed(p.surface.F) || !is_oriented_two_manifold(p.surface.F, static_cast<int>(p.surface.V.rows())) ||
+                     !encloses(p.volume)))
+      *bad = c;
+  }
+  return parts;
+}
+
 // The volume of the solid {x : winding number of `surface` at x > ½}, the union of overlapping
 // or welded segments with each point counted once: the divergence theorem over the faces where the
 // solid's indicator jumps, each face's cone volume weighted by the jump across it (+1 where it is
@@ -850,19 +871,12 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     r.wrap.alpha = wo.alpha;
     r.wrap.offset = wo.offset;
     r.wrap.faces = static_cast<int>(wrap.F.rows());
-    Eigen::VectorXi comp;
-    const int n = face_components(wrap.F, comp);
-    const std::vector<std::vector<int>> faces = faces_by_component(comp, n);
-    std::vector<Part> parts(static_cast<size_t>(n));
-    for (int c = 0; c < n; ++c) {
-      Part& p = parts[static_cast<size_t>(c)];
-      p.surface = sub_mesh(wrap, faces[static_cast<size_t>(c)]);
-      p.volume = signed_volume(p.surface);
-      if (!is_closed(p.surface.F) || !is_oriented_two_manifold(p.surface.F, static_cast<int>(p.surface.V.rows())) ||
-          !(p.volume > 0))
-        return shells_route(why + "; component " + std::to_string(c + 1) + " of its alpha wrap is not a closed "
-                            "oriented 2-manifold enclosing volume");
-    }
+    int bad;
+    std::vector<Part> parts = closed_components(wrap, [](double v) { return v > 0; }, &bad);
+    const int n = static_cast<int>(parts.size());
+    if (bad >= 0)
+      return shells_route(why + "; component " + std::to_string(bad + 1) + " of its alpha wrap is not a closed "
+                          "oriented 2-manifold enclosing volume");
     spdlog::debug("alpha wrap: alpha {:.3g}, offset {:.3g}: {} faces, {} components, {:.3g} from the input", wo.alpha * diag,
                   wo.offset * diag, wrap.F.rows(), n, r.wrap.deviation);
     EnvelopeOptions e = eopt;  // max_inside not widened by the offset: the wrap's faces cut chords
@@ -928,22 +942,16 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     if (solid.F.rows() == 0 && !(std::abs(r.input_volume) > 1e-9 * diag * diag * diag))
       throw InputError("the surface encloses no volume (winding number above 1/2 nowhere) and is not open sheets "
                        "(one layer of triangles, each sheet on its own: these are welded to each other)");
-    Eigen::VectorXi comp;
-    const int n = face_components(solid.F, comp);
+    int bad;
+    std::vector<Part> pieces = closed_components(solid, [](double v) { return v != 0; }, &bad);
+    const int n = static_cast<int>(pieces.size());
     if (n == 0) return mesh3("was not found by Mesh_3");
-    const std::vector<std::vector<int>> faces = faces_by_component(comp, n);
-    std::vector<Part> pieces(static_cast<size_t>(n));
-    for (int c = 0; c < n; ++c) {
-      Part& p = pieces[static_cast<size_t>(c)];
-      p.surface = sub_mesh(solid, faces[static_cast<size_t>(c)]);
-      p.volume = signed_volume(p.surface);
+    if (bad >= 0)
+      return mesh3("(component " + std::to_string(bad + 1) + " of " + std::to_string(n) +
+                   ") is not a closed oriented 2-manifold enclosing volume");
+    for (Part& p : pieces) {
       p.target = &r.input;
-      p.component = c;
-      spdlog::debug("winding-number surface component {}: {} faces, volume {:.4g}", c, p.surface.F.rows(), p.volume);
-      if (!is_closed(p.surface.F) || !is_oriented_two_manifold(p.surface.F, static_cast<int>(p.surface.V.rows())) ||
-          !(p.volume != 0))
-        return mesh3("(component " + std::to_string(c + 1) + " of " + std::to_string(n) +
-                     ") is not a closed oriented 2-manifold enclosing volume");
+      spdlog::debug("winding-number surface component {}: {} faces, volume {:.4g}", p.component, p.surface.F.rows(), p.volume);
     }
     // A component facing inward (negative volume) bounds a void of the solid (winding number
     // below ½ inside it) within the smallest outward component around it: a cavity of that part

@@ -519,16 +519,9 @@ class WindingSolid {
     };
     for (Eigen::Index i = 0; i < V_.rows(); ++i) take(V_.row(i).transpose(), N_.row(i).transpose());
     for (Eigen::Index f = 0; f < F_.rows(); ++f) {
-      const Eigen::Vector3d a = V_.row(F_(f, 0)).transpose(), b = V_.row(F_(f, 1)).transpose(), c = V_.row(F_(f, 2)).transpose();
-      const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-      const int n = std::min(64, static_cast<int>(std::ceil(longest / spacing)));
-      if (n < 2) continue;
       const Eigen::Vector3d fn = FN_.row(f).transpose();
-      for (int i = 0; i <= n; ++i)
-        for (int j = 0; j <= n - i; ++j) {
-          if ((i == 0 && j == 0) || (i == n && j == 0) || (i == 0 && j == n)) continue;
-          take(a + (static_cast<double>(i) / n) * (b - a) + (static_cast<double>(j) / n) * (c - a), fn);
-        }
+      for_each_lattice_point(V_.row(F_(f, 0)).transpose(), V_.row(F_(f, 1)).transpose(), V_.row(F_(f, 2)).transpose(),
+                             spacing, [&](const Eigen::Vector3d& x) { take(x, fn); });
     }
     return out.points;
   }

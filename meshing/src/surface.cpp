@@ -23,17 +23,9 @@ std::vector<Eigen::Vector3d> surface_samples(const Eigen::MatrixX3d& V, const Ei
     for (int k = 0; k < 3; ++k) used[static_cast<size_t>(F(f, k))] = 1;
   for (Eigen::Index i = 0; i < V.rows(); ++i)
     if (used[static_cast<size_t>(i)]) out.push_back(V.row(i).transpose());
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector3d a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
-    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-    const int n = std::min(64, static_cast<int>(std::ceil(longest / spacing)));
-    if (n < 2) continue;
-    for (int i = 0; i <= n; ++i)
-      for (int j = 0; j <= n - i; ++j) {
-        if ((i == 0 && j == 0) || (i == n && j == 0) || (i == 0 && j == n)) continue;
-        out.push_back(a + (static_cast<double>(i) / n) * (b - a) + (static_cast<double>(j) / n) * (c - a));
-      }
-  }
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for_each_lattice_point(V.row(F(f, 0)).transpose(), V.row(F(f, 1)).transpose(), V.row(F(f, 2)).transpose(), spacing,
+                           [&](const Eigen::Vector3d& x) { out.push_back(x); });
   return out;
 }
 
