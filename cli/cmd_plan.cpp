@@ -15,6 +15,7 @@
 #include "squeeze/common/error.h"
 #include "squeeze/common/json_check.h"
 #include "squeeze/common/progress.h"
+#include "squeeze/fem/integrator.h"
 #include "squeeze/fem/scene.h"
 #include "squeeze/plan/plan_io.h"
 #include "squeeze/plan/planner.h"
@@ -128,6 +129,7 @@ ReplayOutput write_replay(const fem::SceneWorld& world, const plan::PlanFile& f,
   progress.finish();
   writer.commit();
   out.hash = plan::state_hash(ends.empty() ? s0 : ends.back());
+  out.integrator_stats = fem::describe_integrator_stats(p.world().world);
   out.matches = out.hash == f.final_state_hash;
   out.final_distance = scene.goal ? (p.goal_com(settled) - scene.goal->position).norm() : 0.0;
   out.duration = duration;
@@ -242,6 +244,7 @@ Runner add_replay_command(CLI::App& app, const Global& global) {
     FolderReplacement out(a.output);  // the new output beside the old one, swapped in whole
     const ReplayOutput r = write_replay(world, f, a.plan, out.staging(), a.fps, settle_steps, progress);
     out.commit();
+    spdlog::info("{}", r.integrator_stats);
     if (!global.quiet) {
       double worst = 0;
       for (double v : r.max_volume_change) worst = std::max(worst, v);

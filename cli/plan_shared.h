@@ -41,6 +41,7 @@ struct ReplayOutput {
   std::vector<double> max_volume_change;  // per object: max |V/V0 − 1| over every step (0 for rigid)
   std::uint64_t hash = 0;                 // state_hash at the end of the last path segment
   bool matches = false;                   // hash equals the plan's final_state_hash
+  std::string integrator_stats;           // fem::describe_integrator_stats of the replay (path and settling)
 };
 
 /// Re-simulates plan `f` in the built scene `world` (path, then `settle_steps` of settling) and
