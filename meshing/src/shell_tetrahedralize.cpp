@@ -631,6 +631,8 @@ SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::Matri
   const auto t0 = std::chrono::steady_clock::now();
   const double size = opt.facet_size * solid.diag();
   refine_from_seeds(c3t3, domain, seeds, size, fd, opt.seed, opt.max_tets, true);
+  spdlog::debug("Mesh_3 (winding number, surface): {} seeds refined in {:.2f} s", seeds.size(),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   // The input's points left outside the surface (sharp corners and edges cut off): their surface
   // points as more seeds, and the refinement resumed; twice at most.
   const Tr& tr = c3t3.triangulation();
@@ -645,8 +647,8 @@ SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::Matri
       return c3t3.is_in_complex(hint) || boundary.nearest(x, nullptr, nullptr, tolerance) <= tolerance;
     };
     const std::vector<Eigen::Vector3d> more = solid.cover_seeds(covered, fd, (pass == 0 ? 4.0 : 2.0) * fd);
-    spdlog::debug("Mesh_3 (winding number, surface): {} more seeds where the input lies outside by more than {:.3g}",
-                  more.size(), tolerance);
+    spdlog::debug("Mesh_3 (winding number, surface): {} more seeds where the input lies outside by more than {:.3g} "
+                  "({:.2f} s)", more.size(), tolerance, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     if (more.empty()) break;
     st.seeds += static_cast<int>(more.size());
     ++st.attempts;

@@ -22,6 +22,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <memory>
 #include <deque>
 #include <map>
 #include <queue>
@@ -138,6 +139,12 @@ struct RunResult {
   bool recovered = true;  // the first recovery, before any refinement, made the boundary conforming
   bool exuder_stopped = false;  // CGAL's exuder met a NaN weight and stopped (exude())
   int peeled = 0;
+  // Whether the interior edge length shaped the run beyond its starting points (crease and lattice
+  // points, Mesher::same_start): quality splits bounded by it (it was below the surface's median
+  // edge) or a point inserted for size. Where neither, a run at a longer length from the same
+  // starting points is the same run: its size bound finds a subset of the same cells too large,
+  // and those found now inserted nothing (tetrahedralize skips it).
+  bool length_bound = false;
 };
 
 class Mesher {
@@ -145,6 +152,14 @@ class Mesher {
   Mesher(const SurfaceMesh& s, const FastWindingNumber& wn, const TetrahedralizeOptions& opt, double edge_length)
       : opt_(opt), L_(edge_length), wn_(wn), tr_(c3t3_.triangulation()) {
     build_surface(s);
+    start_points_ = P_.size();
+  }
+
+  // Whether this mesher starts from the same points as `other` (the surface's, and the crease and
+  // lattice points its edge length puts on it), in the same order.
+  bool same_start(const Mesher& other) const {
+    return start_points_ == other.start_points_ &&
+           std::equal(P_.begin(), P_.begin() + static_cast<long>(start_points_), other.P_.begin());
   }
 
   RunResult run(Progress* progress) {
@@ -160,6 +175,7 @@ class Mesher {
     for (const auto& [k, ts] : edge_tris_) len.push_back(edge_length(k));
     std::nth_element(len.begin(), len.begin() + static_cast<long>(len.size() / 2), len.end());
     min_split_ = std::min(L_, len.empty() ? L_ : len[len.size() / 2]) / 3.0;
+    if (!len.empty() && L_ < len[len.size() / 2]) length_bound_ = true;
     const int max_vertices = std::max(64, opt_.max_tets / 3);
     // Refinement leans on the surface faces being faces of the triangulation; where they are not
     // (a failed recovery), it runs for a few rounds only. Where a refinement round loses them (its
@@ -193,6 +209,7 @@ class Mesher {
     r.boundary_splits = splits_;
     r.steiner = steiner_;
     r.size_driven = size_driven_;
+    r.length_bound = length_bound_ || size_driven_ > 0;
     return r;
   }
 
@@ -233,6 +250,8 @@ class Mesher {
   std::unordered_map<uint64_t, std::array<int, 2>> edge_tris_;
   std::unordered_map<Key3, int, Key3Hash> face_;
   int splits_ = 0, steiner_ = 0, size_driven_ = 0;
+  bool length_bound_ = false;      // RunResult::length_bound
+  size_t start_points_ = 0;        // P_'s points before run() (same_start)
   double min_split_ = 0;           // quality does not split surface edges shorter than this
 
   int count_inside() const {
@@ -1053,13 +1072,14 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
   RunResult best;
   double best_score = INFINITY;
   double previous_n = INFINITY, previous_L = 0;
+  std::unique_ptr<Mesher> mesher;  // the next attempt's, made before it where it decides whether to run it
   for (int attempt = 0; attempt < opt.max_attempts; ++attempt) {
     const auto t0 = std::chrono::steady_clock::now();
     if (progress) progress->stage("tetrahedralizing the boundary (attempt " + std::to_string(attempt + 1) + ")");
-    Mesher mesher(boundary, wn, opt, L);
-    RunResult r = mesher.run(progress);
+    if (!mesher) mesher = std::make_unique<Mesher>(boundary, wn, opt, L);
+    RunResult r = mesher->run(progress);
     const double n = static_cast<double>(r.mesh.T.rows());
-    const bool recovered = r.recovered;
+    const bool recovered = r.recovered, length_bound = r.length_bound;
     spdlog::debug("tetrahedralize attempt {}: edge length {:.4g}: {} tetrahedra, {} boundary splits, {} Steiner points "
                  "({} for size), {:.2f} s",
                  attempt + 1, L, r.mesh.T.rows(), r.boundary_splits, r.steiner, r.size_driven,
@@ -1088,6 +1108,13 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
     previous_n = n;
     previous_L = L;
     L *= n > 0 ? std::clamp(std::cbrt(n / target), 0.5, 2.0) : 1.0;
+    // Nor where the length shaped nothing in this run but its starting points, and the longer one
+    // starts from the same points (RunResult::length_bound): it would give the same mesh (the
+    // heart's second attempt did, 0.7 s).
+    if (attempt + 1 >= opt.max_attempts) break;
+    std::unique_ptr<Mesher> next = std::make_unique<Mesher>(boundary, wn, opt, L);
+    if (n > target && !length_bound && next->same_start(*mesher)) break;
+    mesher = std::move(next);
   }
   // Slivers left in the mesh kept (four corners on the boundary, where neither refinement nor
   // exudation reaches them, or boundary ones too thick to peel): their vertices are moved
