@@ -22,9 +22,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <memory>
 #include <deque>
 #include <map>
+#include <memory>
 #include <queue>
 #include <unordered_map>
 #include <vector>
@@ -175,7 +175,7 @@ class Mesher {
     for (const auto& [k, ts] : edge_tris_) len.push_back(edge_length(k));
     std::nth_element(len.begin(), len.begin() + static_cast<long>(len.size() / 2), len.end());
     min_split_ = std::min(L_, len.empty() ? L_ : len[len.size() / 2]) / 3.0;
-    if (!len.empty() && L_ < len[len.size() / 2]) length_bound_ = true;
+    const bool split_bound = !len.empty() && L_ < len[len.size() / 2];  // RunResult::length_bound
     const int max_vertices = std::max(64, opt_.max_tets / 3);
     // Refinement leans on the surface faces being faces of the triangulation; where they are not
     // (a failed recovery), it runs for a few rounds only. Where a refinement round loses them (its
@@ -209,7 +209,7 @@ class Mesher {
     r.boundary_splits = splits_;
     r.steiner = steiner_;
     r.size_driven = size_driven_;
-    r.length_bound = length_bound_ || size_driven_ > 0;
+    r.length_bound = split_bound || size_driven_ > 0;
     return r;
   }
 
@@ -250,7 +250,6 @@ class Mesher {
   std::unordered_map<uint64_t, std::array<int, 2>> edge_tris_;
   std::unordered_map<Key3, int, Key3Hash> face_;
   int splits_ = 0, steiner_ = 0, size_driven_ = 0;
-  bool length_bound_ = false;      // RunResult::length_bound
   size_t start_points_ = 0;        // P_'s points before run() (same_start)
   double min_split_ = 0;           // quality does not split surface edges shorter than this
 
