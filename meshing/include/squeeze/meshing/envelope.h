@@ -62,6 +62,9 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
 /// (the target's inner walls). `surface` keeps the thin-part caps (a third of the local gap
 /// between its sides) and is what is simplified. Points of the target already farther out than
 /// max_inside keep their faces as they are. Throws InputError as above, and when `target` is empty.
+/// The bounds make an envelope of the soup itself, as fTetWild's (Y. Hu, T. Schneider, B. Wang,
+/// D. Zorin, D. Panozzo, "Fast tetrahedral meshing in the wild", ACM TOG 39(4), 2020,
+/// doi:10.1145/3386569.3392385), here two-sided with different widths.
 ///   target  V #V by 3, F #F by 3 (units; orientation not used)
 SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const SurfaceMesh& target, const EnvelopeOptions& options,
                               EnvelopeStats* stats = nullptr, Progress* progress = nullptr);

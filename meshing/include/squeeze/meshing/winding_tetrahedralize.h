@@ -76,8 +76,12 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
 /// (simplify_envelope with a target). Uses target_tets, min_dihedral, sliver_bound and
 /// optimize_seconds not at all. Empty when Mesh_3 found no surface; the caller checks that it is a
 /// closed 2-manifold (a refinement stopped by the max_tets net may leave it not).
-///   V  #V by 3 input positions (units), F  #F by 3 triangles
+///   V  #V by 3 input positions (units), F  #F by 3 triangles; the result is in the same units,
+///   the options' lengths are fractions of V's bounding-box diagonal
 /// Throws InputError on an empty input or options out of range.
+/// Source: Mesh_3's restricted Delaunay refinement (Jamin et al. 2015, above), whose facet
+/// criteria follow J.-D. Boissonnat, S. Oudot, "Provably good sampling and meshing of surfaces",
+/// Graphical Models 67(5), 2005, doi:10.1016/j.gmod.2005.01.004.
 SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
                                    const WindingTetrahedralizeOptions& options = {},
                                    WindingTetrahedralizeStats* stats = nullptr);
