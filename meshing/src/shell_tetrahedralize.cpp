@@ -40,6 +40,7 @@
 #include "squeeze/meshing/tet_locator.h"
 #include "squeeze/meshing/triangle_bvh.h"
 #include "squeeze/meshing/winding_number.h"
+#include "label_memo.h"
 #include "sigfpe_trap.h"
 
 namespace squeeze::meshing {
@@ -457,10 +458,14 @@ class WindingSolid {
   double facet_distance() const { return fd_; }  // units
 
   // Inside: near the input surface (the dilation: a cheap, pruned BVH query), else by winding number.
+  // Remembered per point (label_memo.h): Mesh_3 asks about the same points again and again.
   bool inside(const Eigen::Vector3d& p) const {
-    if (dil_ > 0 && bvh_.nearest(p, nullptr, nullptr, dil_) < dil_) return true;
-    return winding_(p.transpose()) >= 0.5;
+    return memo_(p, [this](const Eigen::Vector3d& q) {
+      if (dil_ > 0 && bvh_.nearest(q, nullptr, nullptr, dil_) < dil_) return true;
+      return winding_(q.transpose()) >= 0.5;
+    });
   }
+  const detail::LabelMemo& memo() const { return memo_; }
 
   // The point of the solid's surface between a (inside) and b (outside): 40 bisections.
   Eigen::Vector3d bisect(Eigen::Vector3d a, Eigen::Vector3d b) const {
@@ -531,6 +536,7 @@ class WindingSolid {
   const Eigen::MatrixX3i& F_;
   FastWindingNumber winding_;
   TriangleBvh bvh_;
+  mutable detail::LabelMemo memo_;  // inside()'s answers; one thread (Mesh_3 is Sequential_tag here)
   Eigen::MatrixX3d FN_, N_;
   Eigen::Vector3d lo_, centre_;
   double diag_ = 0, dil_ = 0, fd_ = 0;
@@ -670,8 +676,10 @@ SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::Matri
     out.V.resize(static_cast<Eigen::Index>(pts.size()), 3);
     for (size_t i = 0; i < pts.size(); ++i) out.V.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
   }
-  spdlog::debug("Mesh_3 (winding number, surface): {} seeds, {} facets, {:.2f} s", st.seeds, out.F.rows(),
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  spdlog::debug("Mesh_3 (winding number, surface): {} seeds, {} facets, {:.2f} s; {} points tested, {} repeats "
+                "answered from memory", st.seeds, out.F.rows(),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), solid.memo().remembered(),
+                solid.memo().hits());
   if (stats) *stats = st;
   return out;
 }
