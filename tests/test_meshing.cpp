@@ -24,6 +24,8 @@
 #include "squeeze/meshing/tet_locator.h"
 #include "squeeze/meshing/tet_quality.h"
 #include "squeeze/meshing/winding_number.h"
+// Internal: the memo of Mesh_3's inside test (not installed; tested white-box).
+#include "../meshing/src/label_memo.h"
 
 namespace {
 using namespace sqt;
@@ -1125,3 +1127,34 @@ TEST(MeshingNormals, AreaWeightedNormalsSumTheFacesAreaVectors) {
 }
 
 }  // namespace
+
+// The memo of an inside test answers as the test does, asks the test once per distinct point (bit
+// pattern), grows past its first table, and once full still answers right without remembering.
+TEST(MeshingLabelMemo, AnswersAsTheTestAndAsksItOncePerPoint) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Eigen::Vector3d> points(20000);
+  for (auto& p : points) p = Eigen::Vector3d(u(rng), u(rng), u(rng));
+  points.push_back(Eigen::Vector3d(0.0, 0.0, 0.0));
+  points.push_back(Eigen::Vector3d(-0.0, 0.0, 0.0));  // another bit pattern: another entry, same answer
+  auto ball = [](const Eigen::Vector3d& p) { return p.squaredNorm() < 0.5; };
+  for (std::size_t max_slots : {std::size_t{1} << 22, std::size_t{1} << 13}) {
+    squeeze::meshing::detail::LabelMemo memo(max_slots);
+    long asked = 0;
+    auto counted = [&](const Eigen::Vector3d& p) { ++asked; return ball(p); };
+    std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
+    for (const auto& p : points) ASSERT_EQ(memo(p, counted), ball(p));
+    for (int i = 0; i < 50000; ++i) {
+      const Eigen::Vector3d& p = points[pick(rng)];
+      ASSERT_EQ(memo(p, counted), ball(p));
+    }
+    EXPECT_EQ(static_cast<std::size_t>(asked) + memo.hits(), points.size() + 50000u);  // every call asked or hit
+    if (max_slots == (std::size_t{1} << 22)) {
+      EXPECT_EQ(asked, static_cast<long>(points.size()));  // once each
+      EXPECT_EQ(memo.remembered(), points.size());
+    } else {  // full at half of 2^13 slots: the rest asked every time, still right
+      EXPECT_EQ(memo.remembered(), std::size_t{1} << 12);
+      EXPECT_GT(asked, static_cast<long>(points.size()));
+    }
+  }
+}
