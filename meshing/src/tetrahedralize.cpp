@@ -1112,7 +1112,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
     // heart's second attempt did, 0.7 s).
     if (attempt + 1 >= opt.max_attempts) break;
     std::unique_ptr<Mesher> next = std::make_unique<Mesher>(boundary, wn, opt, L);
-    if (n > target && !length_bound && next->same_start(*mesher)) break;
+    if (opt.skip_repeated_attempts && n > target && !length_bound && next->same_start(*mesher)) break;
     mesher = std::move(next);
   }
   // Slivers left in the mesh kept (four corners on the boundary, where neither refinement nor

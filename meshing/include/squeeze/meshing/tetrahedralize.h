@@ -42,6 +42,11 @@ struct TetrahedralizeOptions {
                                   // conformity recovery cannot split down); 0: never
   int max_attempts = 6;           // meshing runs at most, each at an interior edge length corrected
                                   // toward target_tets (squeeze mesh's retries take 2)
+  bool skip_repeated_attempts = true;  // skip the next attempt where it would repeat the last: the
+                                  // last one's edge length shaped nothing but its starting points
+                                  // and the next starts from the same points (same mesh, since
+                                  // every step is deterministic); false runs it (tests pin that it
+                                  // gives the same mesh kept)
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
 };
 
