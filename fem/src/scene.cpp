@@ -261,10 +261,13 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
     }
     if (o.contains("mesh_route")) {
       ob.mesh_route = c.string(o["mesh_route"], p + ".mesh_route");
-      if (ob.mesh_route != "auto" && ob.mesh_route != "convex_shells" && ob.mesh_route != "winding_number" &&
-          ob.mesh_route != "alpha_wrap")
-        c.fail(p + ".mesh_route", "must be \"auto\", \"convex_shells\", \"winding_number\" or \"alpha_wrap\", got \"" +
-                                      ob.mesh_route + "\"");
+      const std::vector<std::string>& routes = meshing::mesh_route_names();
+      if (std::find(routes.begin(), routes.end(), ob.mesh_route) == routes.end()) {
+        std::string list;  // "a", "b", "c" or "d"
+        for (size_t i = 0; i < routes.size(); ++i)
+          list += (i == 0 ? "" : i + 1 == routes.size() ? " or " : ", ") + ("\"" + routes[i] + "\"");
+        c.fail(p + ".mesh_route", "must be " + list + ", got \"" + ob.mesh_route + "\"");
+      }
     }
     if (o.contains("transform")) {
       const json& t = o["transform"];
@@ -435,10 +438,7 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
   if (meshing::is_tet_format(mesh)) return meshing::load_tet_mesh(mesh);
   meshing::MeshOptions options;
   options.tetrahedralize.target_tets = tets;
-  if (route == "convex_shells") options.shells_fallback = true;
-  else if (route == "winding_number") options.winding = true;
-  else if (route == "alpha_wrap") options.wrap = true;
-  else if (route != "auto") throw InputError("unknown mesh route \"" + route + "\" (auto, convex_shells, winding_number, alpha_wrap)");
+  meshing::set_mesh_route(options, route);
   // The cache key: format version, the input's extension and bytes, every meshing option.
   const std::string bytes = read_file_bytes(mesh);
   std::ostringstream opt;

@@ -74,6 +74,23 @@ int hull_budget(const MeshOptions& opt) {
   return static_cast<int>(std::clamp(n, 1.0, static_cast<double>(std::max(1, opt.decomposition.max_hulls))));
 }
 
+const std::vector<std::string>& mesh_route_names() {
+  static const std::vector<std::string> names = {"auto", "convex_shells", "winding_number", "alpha_wrap"};
+  return names;
+}
+
+void set_mesh_route(MeshOptions& options, const std::string& name) {
+  const std::vector<std::string>& names = mesh_route_names();
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    throw InputError("unknown mesh route \"" + name + "\" (" + list + ")");
+  }
+  options.shells_fallback = name == "convex_shells";
+  options.winding = name == "winding_number";
+  options.wrap = name == "alpha_wrap";
+}
+
 namespace {
 
 double signed_volume(const SurfaceMesh& m) {

@@ -93,6 +93,7 @@ struct SceneObject {
                                           // open segments): "auto" (meshing version 11: their
                                           // winding-number solid's boundary), "convex_shells",
                                           // "winding_number" (Mesh_3 as it is) or "alpha_wrap"
+                                          // (meshing::mesh_route_names, set_mesh_route)
   SceneTransform transform;
   std::string preset;                     // material.preset ("" if none): it set density and youngs_modulus
   double density = 1000.0;                // kg/m³ (material.density, else the preset's)
@@ -164,7 +165,8 @@ std::filesystem::path mesh_cache_dir();
 /// again with a warning and overwritten. `cache_hit` (optional) tells whether the cache served it;
 /// `off_target` (optional) gets why the count is more than 35% off `tets`
 /// (MeshResult::target_exceeded_because), or "". Throws InputError "PATH: problem".
-///   route  SceneObject::mesh_route ("auto", "convex_shells", "winding_number", "alpha_wrap")
+///   route  SceneObject::mesh_route (meshing::mesh_route_names: "auto", "convex_shells",
+///          "winding_number", "alpha_wrap"); InputError for another
 meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bool* cache_hit = nullptr,
                                  Progress* progress = nullptr, std::string* off_target = nullptr,
                                  const std::string& route = "auto");

@@ -150,6 +150,17 @@ struct MeshResult {
 /// tets_per_hull))), or decomposition.max_hulls when tets_per_hull is 0.
 int hull_budget(const MeshOptions& options);
 
+/// The routes of inputs that are not closed parts (welded, non-manifold or self-intersecting
+/// segments; open scans), by name, as scenes ask for them (objects[].mesh_route) and as the
+/// flags of `squeeze mesh` set them: "auto" (the default: the boundary of the winding-number
+/// solid, simplified and tetrahedralized), "convex_shells" (shells_fallback), "winding_number"
+/// (winding), "alpha_wrap" (wrap). One table for every caller.
+const std::vector<std::string>& mesh_route_names();
+
+/// Sets the options of the route `name` (mesh_route_names) on `options`, the other routes' flags
+/// cleared. Throws InputError "unknown mesh route "NAME" (auto, convex_shells, ...)".
+void set_mesh_route(MeshOptions& options, const std::string& name);
+
 /// Runs the pipeline on an already loaded surface (faces need not be consistently oriented).
 /// Throws InputError on bad options or an input that yields no volume at all.
 MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& options, Progress* progress = nullptr);
