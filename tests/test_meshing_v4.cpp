@@ -533,6 +533,57 @@ TEST(MeshingV4, ThinShellRefinementStopsWhereConformityIsLost) {
 }
 
 
+// The attempt tetrahedralize skips (TetrahedralizeOptions::skip_repeated_attempts) would have
+// repeated the last one: run anyway, the mesh kept is the same, bit for bit. Over the corpus sphere
+// and finely divided boxes at targets their boundaries exceed; at least one of them must skip.
+TEST(MeshingV4, SkippedAttemptWouldHaveGivenTheSameMesh) {
+  std::vector<std::pair<std::string, SurfaceMesh>> inputs;
+  inputs.emplace_back("sphere", squeeze::meshing::load_surface(sqt::data("sphere.off")));
+  inputs.emplace_back("box 8", box(Vec3(0, 0, 0), Vec3(1, 0.7, 0.4), {8, 8, 8}));
+  inputs.emplace_back("plate 12", box(Vec3(0, 0, 0), Vec3(1, 0.05, 0.6), {12, 2, 12}));
+  int skipped = 0;
+  for (const auto& [name, s] : inputs)
+    for (int target : {10, 40, 150}) {
+      squeeze::meshing::TetrahedralizeOptions t;
+      t.target_tets = target;
+      squeeze::meshing::TetrahedralizeStats with, without;
+      const squeeze::meshing::TetMesh a = squeeze::meshing::tetrahedralize(s, t, &with);
+      t.skip_repeated_attempts = false;
+      const squeeze::meshing::TetMesh b = squeeze::meshing::tetrahedralize(s, t, &without);
+      SCOPED_TRACE(name + " at " + std::to_string(target));
+      EXPECT_LE(with.attempts, without.attempts);
+      skipped += with.attempts < without.attempts;
+      ASSERT_EQ(a.V.rows(), b.V.rows());
+      ASSERT_EQ(a.T.rows(), b.T.rows());
+      EXPECT_TRUE(a.V == b.V);
+      EXPECT_TRUE(a.T == b.T);
+      EXPECT_EQ(with.edge_length, without.edge_length);
+    }
+  EXPECT_GT(skipped, 0) << "no input skipped an attempt: the test no longer tests the skip";
+}
+
+// One table of mesh routes: each name sets exactly its own flag, an unknown one is an error that
+// lists them all.
+TEST(MeshingV4, MeshRoutesByName) {
+  const std::vector<std::string>& names = squeeze::meshing::mesh_route_names();
+  ASSERT_EQ(names.size(), 4u);
+  for (const std::string& n : names) {
+    MeshOptions o;
+    o.winding = o.wrap = o.shells_fallback = true;  // cleared by every route but its own
+    squeeze::meshing::set_mesh_route(o, n);
+    EXPECT_EQ(o.shells_fallback, n == "convex_shells") << n;
+    EXPECT_EQ(o.winding, n == "winding_number") << n;
+    EXPECT_EQ(o.wrap, n == "alpha_wrap") << n;
+  }
+  MeshOptions o;
+  try {
+    squeeze::meshing::set_mesh_route(o, "shells");
+    FAIL() << "an unknown route was taken";
+  } catch (const squeeze::InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "unknown mesh route \"shells\" (auto, convex_shells, winding_number, alpha_wrap)");
+  }
+}
+
 /// A closed cylinder from p0 to p1 of radius r with n segments: each cap a fan around its centre,
 /// each side quad two triangles as long as the cylinder (2n + 2 vertices, 4n faces, outward).
 SurfaceMesh cylinder(const Vec3& p0, const Vec3& p1, double r, int n) {
