@@ -7,8 +7,8 @@ Prints one row per (file, target): tets, volume ratio, deviation_out / deviation
 bounding-box diagonal), min dihedral, seconds, and pass/fail with the failed criteria named:
   exit 0; volume ratio in [0.9, 1.2] for closed inputs ([0.95, 1.1] at 1000 tets and above);
   deviation_out <= 1.5 %, deviation_in <= 0.5 %; min dihedral >= 5 degrees; as many tet-mesh
-  components as connected input parts; tets within +-35 % of the target unless the report's
-  target_exceeded_because says why; at most 15 s.
+  components as connected input parts, each conforming (the report's tets.conforming); tets within
+  +-35 % of the target unless the report's target_exceeded_because says why; at most 15 s.
 """
 import argparse
 import json
@@ -36,6 +36,8 @@ def check(r, target, seconds):
         fails.append("dihedral")
     if r["tets"]["components"] != r["input"]["connected_parts"]:
         fails.append("components")
+    if not r["tets"].get("conforming", True):  # "one conforming mesh per connected input part"
+        fails.append("conforming")
     n = r["tets"]["tets"]
     if not (0.65 * t <= n <= 1.35 * t) and not r["target_exceeded_because"]:
         fails.append("count")
