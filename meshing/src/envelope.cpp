@@ -6,6 +6,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/Euler_operations.h>
 #include <CGAL/Surface_mesh_simplification/Edge_collapse_visitor_base.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_cost.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_stop_predicate.h>
@@ -499,6 +500,30 @@ SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int itera
   }
   CGAL::Polygon_mesh_processing::isotropic_remeshing(
       faces(m), edge_length, m, CGAL::parameters::number_of_iterations(iterations).vertex_is_constrained_map(corner));
+  // Border edges under a quarter of the edge length that the remeshing kept (between two corners,
+  // or a corner and a border vertex: a jagged outline, as models in integer coordinates have,
+  // turns by more than 20° at nearly every vertex) make needle triangles, and the slab's prisms
+  // over them slivers. They are collapsed, shortest first: to their midpoint between two corners,
+  // else onto the corner (the caller measures how far the remeshed sheet strays from the input).
+  std::vector<std::pair<double, HD>> short_border;
+  for (HD h : m.halfedges())
+    if (m.is_border(h)) {
+      const double len = (vec(m.point(m.source(h))) - vec(m.point(m.target(h)))).norm();
+      if (len < 0.25 * edge_length) short_border.emplace_back(len, h);
+    }
+  std::sort(short_border.begin(), short_border.end());
+  for (const auto& [len, h] : short_border) {
+    if (m.is_removed(h) || !m.is_border(h)) continue;
+    const VD a = m.source(h), b = m.target(h);
+    if (!((vec(m.point(a)) - vec(m.point(b))).norm() < 0.25 * edge_length)) continue;
+    if (!CGAL::Euler::does_satisfy_link_condition(m.edge(h), m)) continue;
+    const bool ca = corner[a], cb = corner[b];
+    const Point at = ca == cb ? CGAL::midpoint(m.point(a), m.point(b)) : ca ? m.point(a) : m.point(b);
+    const VD kept = CGAL::Euler::collapse_edge(m.edge(h), m);
+    m.point(kept) = at;
+    corner[kept] = ca || cb;
+  }
+  m.collect_garbage();
   return from_cgal(m);
 }
 

@@ -562,10 +562,18 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
           apart = 0.8 * h / 0.49;  // folded: the next attempt 0.63 times as long
           continue;
         }
+        // Prisms over flat or needle triangles of the remeshed sheet (a jagged outline keeps every
+        // vertex as a corner) are slivers: their vertices moved, then flipped, as the boundary
+        // route's are (nothing changes where no tetrahedron is under the floor).
+        const int relocated = relocate_sliver_vertices(m, opt.tetrahedralize.min_dihedral);
+        const int flips = flip_slivers(m, opt.tetrahedralize.min_dihedral);
+        slab.V = m.V;
         p.sheet_capped = Ls < wanted;
         p.boundary = std::move(slab);
         p.tets = std::move(m);
         p.tet_stats = TetrahedralizeStats{};
+        p.tet_stats.relocated = relocated;
+        p.tet_stats.flips = flips;
         p.tet_stats.attempts = attempt;
         p.tet_stats.edge_length = Ls;
         p.tet_stats.conforming = true;

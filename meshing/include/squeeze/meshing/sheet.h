@@ -52,7 +52,11 @@ SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness);
 
 /// The sheet remeshed to triangles of about `edge_length` (near-equilateral), vertices on the input
 /// sheet, boundary vertices on its boundary polylines: CGAL's isotropic remeshing (Botsch and
-/// Kobbelt, "A remeshing approach to multiresolution modeling", SGP 2004), `iterations` rounds.
+/// Kobbelt, "A remeshing approach to multiresolution modeling", SGP 2004), `iterations` rounds,
+/// the outline's corners (turns over 20°) kept. Outline edges still under a quarter of
+/// `edge_length` (corners a pixel apart on a staircase outline) are then collapsed, shortest
+/// first, to their midpoint or onto their corner: the outline may move by up to an eighth of
+/// `edge_length`, which the caller measures.
 ///   sheet        an open, oriented 2-manifold (units); edge_length > 0 (units)
 /// Throws InputError if edge_length is not positive or the sheet is not an oriented 2-manifold.
 /// (Implemented in envelope.cpp, the CGAL surface-mesh translation unit.)
