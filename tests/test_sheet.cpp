@@ -56,6 +56,34 @@ SurfaceMesh quad() {  // a 1 × 0.6 m curtain as two triangles
 
 double diagonal(const SurfaceMesh& m) { return (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm(); }
 
+/// A flat sheet of the nx × ny pixels (squares of `pixel` units, two triangles each, in integer
+/// coordinates) whose centres lie in the inscribed ellipse: its outline a staircase that turns by
+/// 90° at every vertex, as an outline traced from an image or a model in integer coordinates has.
+SurfaceMesh pixel_ellipse(int nx, int ny, double pixel) {
+  std::map<std::array<int, 2>, int> id;
+  std::vector<Vec3> V;
+  std::vector<std::array<int, 3>> F;
+  auto vertex = [&](int i, int j) {
+    auto [it, fresh] = id.try_emplace({i, j}, static_cast<int>(V.size()));
+    if (fresh) V.emplace_back(i * pixel, j * pixel, 0.0);
+    return it->second;
+  };
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < ny; ++j) {
+      const double x = (i + 0.5 - 0.5 * nx) / (0.5 * nx), y = (j + 0.5 - 0.5 * ny) / (0.5 * ny);
+      if (x * x + y * y > 1) continue;
+      const int a = vertex(i, j), b = vertex(i + 1, j), c = vertex(i + 1, j + 1), d = vertex(i, j + 1);
+      F.push_back({a, b, c});
+      F.push_back({a, c, d});
+    }
+  SurfaceMesh m;
+  m.V.resize(static_cast<Eigen::Index>(V.size()), 3);
+  for (size_t i = 0; i < V.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = V[i].transpose();
+  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t i = 0; i < F.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
+  return m;
+}
+
 struct SheetCase {
   const char* name;
   SurfaceMesh surface;
@@ -94,6 +122,11 @@ std::vector<SheetCase> cases() {
     box.F << 0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4, 2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5;
     c.push_back({"closed box beside a curtain", sqt::join({box, grid(21, 13, [](double u, double v) { return Vec3(u, 0.6 * v, 0); })}), 2});
   }
+  // Staircase outlines: every outline vertex a corner a pixel from the next; the slab kept 0.0-1.8°
+  // tetrahedra over the needle and flat triangles between them (remesh_sheet now collapses
+  // outline edges under a quarter of its edge length; the slab's slivers are moved and flipped).
+  c.push_back({"pixel ellipse, 60 x 24 pixels of 4 units", pixel_ellipse(60, 24, 4.0), 1});
+  c.push_back({"pixel ellipse, 120 x 40 pixels of 2 units", pixel_ellipse(120, 40, 2.0), 1});
   return c;
 }
 
