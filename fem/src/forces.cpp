@@ -182,15 +182,31 @@ void collect_contact_forces(const WorldData& d, const World& w, const State& s, 
   const Eigen::VectorXd& allowance = current_overlap(d, s);
   ws.overlap.setZero(allowance.size());
   if (!o.collisions || d.bodies.empty()) return;
-  const int rows = d.rows;
-  ws.X_all.topRows(rows) = s.x;
+  d.collision_positions(s.x, ws.X_all);
   const std::vector<Contact> contacts = ws.hash->find(ws.X_all, d.T_all, d.filter, o.parallel.detection_tets);
   ws.stats.contacts = static_cast<int>(contacts.size());
   if (contacts.empty()) return;
   std::vector<Penetration> pens = penetration_depths(d.scene, ws.X_all, contacts, o.parallel.border_vertices);
   apply_overlap(d, allowance, pens, ws.overlap);
   ws.stats.colliding_vertices = static_cast<int>(pens.size());
-  auto velocity = [&](int g) -> Vec3 { return g < rows ? Vec3(s.v.row(g).transpose()) : Vec3::Zero(); };
+  // A collision vertex follows the state rows coll_row[a, b) with the weights coll_w (one row of
+  // weight 1 for a vertex of the simulation mesh itself, none for a rigid one; embed).
+  auto single = [&](int g) {
+    return d.coll_start[g + 1] - d.coll_start[g] == 1 && d.coll_w[d.coll_start[g]] == 1.0;
+  };
+  auto velocity = [&](int g) -> Vec3 {
+    if (single(g)) return Vec3(s.v.row(d.coll_row[d.coll_start[g]]).transpose());
+    Vec3 u = Vec3::Zero();
+    for (int c = d.coll_start[g]; c < d.coll_start[g + 1]; ++c) u += d.coll_w[c] * Vec3(s.v.row(d.coll_row[c]).transpose());
+    return u;
+  };
+  auto followed = [&](int g) { return d.coll_start[g + 1] > d.coll_start[g]; };  // not rigid
+  auto weighted = [&](int g, const Eigen::VectorXd& per_row) {  // Σ w per_row over g's rows
+    if (single(g)) return per_row(d.coll_row[d.coll_start[g]]);
+    double q = 0;
+    for (int c = d.coll_start[g]; c < d.coll_start[g + 1]; ++c) q += d.coll_w[c] * per_row(d.coll_row[c]);
+    return q * d.coll_share[g];
+  };
   auto add = [&](int row, const Vec3& f) {  // appended: applied in the order found
     const int id = static_cast<int>(ws.contact_f.size());
     ws.contact_f.push_back(f);
@@ -202,6 +218,14 @@ void collect_contact_forces(const WorldData& d, const World& w, const State& s, 
       ws.contact_next[ws.contact_tail[row]] = id;
     }
     ws.contact_tail[row] = id;
+  };
+  // f at collision vertex g, times `scale`, onto its rows by their weights.
+  auto spread = [&](int g, double scale, const Vec3& f) {
+    if (single(g)) {
+      add(d.coll_row[d.coll_start[g]], scale == 1.0 ? f : Vec3(scale * f));
+      return;
+    }
+    for (int c = d.coll_start[g]; c < d.coll_start[g + 1]; ++c) add(d.coll_row[c], (scale * d.coll_w[c]) * f);
   };
   for (const Penetration& p : pens) {  // fixed order: sequential
     if (!(p.depth > 0)) continue;
@@ -215,23 +239,27 @@ void collect_contact_forces(const WorldData& d, const World& w, const State& s, 
     if (!o.cap_contact_stiffness) {
       kc = o.contact_stiffness;
       cc = o.contact_damping;
-    } else if (p.vertex < rows) {
-      kc = d.contact_k(p.vertex);
-      cc = d.contact_c(p.vertex);
+    } else if (followed(p.vertex)) {
+      kc = weighted(p.vertex, d.contact_k);
+      cc = weighted(p.vertex, d.contact_c);
     } else {
       kc = cc = 0;
       for (int k = 0; k < 4; ++k) {
         const int g = d.T_all(p.tet, k);
-        if (g < rows) kc += p.bary[k] * d.contact_k(g), cc += p.bary[k] * d.contact_c(g);
+        if (followed(g)) kc += p.bary[k] * weighted(g, d.contact_k), cc += p.bary[k] * weighted(g, d.contact_c);
       }
     }
     const Vec3 f = (kc * p.depth - cc * closing) * r;
-    if (p.vertex < rows) {
-      add(p.vertex, f);
+    if (followed(p.vertex)) {
+      spread(p.vertex, 1.0, f);
     } else {  // rigid vertex inside a deformable tet: the reaction acts on the tet
       for (int k = 0; k < 4; ++k) {
         const int g = d.T_all(p.tet, k);
-        if (g < rows) add(g, -(p.bary[k] * f));
+        if (!followed(g)) continue;
+        if (single(g))
+          add(d.coll_row[d.coll_start[g]], -(p.bary[k] * f));
+        else
+          spread(g, -p.bary[k], f);
       }
     }
   }
@@ -303,7 +331,7 @@ std::vector<Penetration> find_penetrations(const World& w, const State& s, Force
   const WorldOptions& o = w.options();
   std::vector<Penetration> out;
   if (o.collisions && !d.bodies.empty()) {
-    ws.X_all.topRows(d.rows) = s.x;
+    d.collision_positions(s.x, ws.X_all);
     const std::vector<Contact> contacts = ws.hash->find(ws.X_all, d.T_all, d.filter, o.parallel.detection_tets);
     ws.stats.contacts = static_cast<int>(contacts.size());
     if (!contacts.empty()) {
@@ -329,20 +357,24 @@ std::vector<Penetration> find_penetrations(const World& w, const State& s, Force
 int collision_vertex_body(const World& w, int g) {
   const WorldData& d = w.data();
   if (g < 0 || g >= static_cast<int>(d.filter.vertex_group.size())) return -1;
-  return static_cast<int>(d.scene.bodies[d.filter.vertex_group[g]] - d.bodies.data());
+  return d.group_body[static_cast<size_t>(d.filter.vertex_group[g])];
 }
 
 int collision_tet_body(const World& w, int tet) {
   const WorldData& d = w.data();
   if (tet < 0 || tet >= static_cast<int>(d.filter.tet_group.size())) return -1;
-  return static_cast<int>(d.scene.bodies[d.filter.tet_group[tet]] - d.bodies.data());
+  return d.group_body[static_cast<size_t>(d.filter.tet_group[tet])];
 }
 
 Eigen::Vector4i collision_tet(const World& w, int tet) { return w.data().T_all.row(tet).transpose(); }
 
 Eigen::Vector3d collision_vertex_position(const World& w, const State& s, int g) {
   const WorldData& d = w.data();
-  return g < d.rows ? Eigen::Vector3d(s.x.row(g).transpose()) : Eigen::Vector3d(d.X_rest_all.row(g).transpose());
+  if (d.coll_start[g + 1] == d.coll_start[g]) return d.X_rest_all.row(g).transpose();  // rigid
+  if (!d.any_embedded) return s.x.row(g).transpose();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int c = d.coll_start[g]; c < d.coll_start[g + 1]; ++c) p += d.coll_w[c] * s.x.row(d.coll_row[c]).transpose();
+  return p;
 }
 
 void detect_contacts(const World& w, const State& s, ForceWorkspace& workspace) {

@@ -160,9 +160,14 @@ class BlockMatrix {
 // vertex p and the 4 corners of the penetrated tet) with weights w = (1, −b_0, …, −b_3), the depth
 // is d(x) = c0 − Σ_s w_s r·x_s over the free rows of the stencil (fixed ones, rigid or pinned, are
 // folded into c0). Its energy is ½ k max(0, d)², its dissipation ½ (c / h) (Σ_s w_s r·(x_s − x_s^n))².
+// Where p or the corners are vertices of embedded collision meshes (World::embed), each stands
+// for the 4 state rows it follows, weighted by its barycentric coordinates: up to 20 rows, a row
+// met twice counted once with the sum of its weights.
+constexpr int kMaxStencil = 20;
 struct LinearContact {
-  int row[5];           // state rows of the stencil, −1 where fixed
-  double w[5];          // 1, −b_0, …, −b_3
+  int n = 5;                 // rows in the stencil
+  int row[kMaxStencil];      // state rows of the stencil, −1 where fixed
+  double w[kMaxStencil];     // 1, −b_0, …, −b_3 (times the embedding's weights)
   Vec3 r;               // unit direction out of the penetrated object
   double c0 = 0;        // m
   double k = 0, c = 0;  // N/m, N·s/m
@@ -170,13 +175,13 @@ struct LinearContact {
   int body = -1;        // the penetrated object
   double scale = 0;     // m: mean edge length of the object of its first free row (the curvature band
                         // of assemble, the carry limits of carry_contacts)
-  Vec3 at[5];           // positions of the stencil's free rows where the contact was linearised
+  Vec3 at[kMaxStencil];  // positions of the stencil's free rows where the contact was linearised
 };
 
 // Σ_s w_s r·X_s over the free rows of a contact's stencil.
 inline double stencil_dot(const LinearContact& c, const RowMatrixX3d& X) {
   double q = 0;
-  for (int s = 0; s < 5; ++s)
+  for (int s = 0; s < c.n; ++s)
     if (c.row[s] >= 0) q += c.w[s] * c.r.dot(Vec3(X.row(c.row[s]).transpose()));
   return q;
 }
@@ -245,7 +250,7 @@ class ImplicitIntegrator : public TimeIntegrator {
   // 2·block + (1 if the block is stored transposed), or −1 where a vertex is fixed.
   std::vector<int> edge_block_;
   std::vector<std::array<int, 6>> tet_block_;
-  std::vector<std::array<int, 10>> contact_block_;
+  std::vector<int> contact_block_, contact_block_start_;  // per contact its pairs' codes (n (n − 1) / 2)
   BlockLDLT ldlt_;
   // Parallel assembly (assemble): rows of free index below it are one part, the others the other;
   // a boundary between bodies, 0 if no such boundary halves the elements well enough.
@@ -287,7 +292,7 @@ void ImplicitIntegrator::fit(const World& w) {
   for (size_t b = 0; b < d.bodies.size(); ++b)
     if (d.state_row[b] < 0)
       for (int k = 0; k < d.bodies[b].vertices(); ++k)
-        rigid_box_[b].extend(Vec3(d.X_rest_all.row(d.scene.first_vertex[b] + k).transpose()));
+        rigid_box_[b].extend(Vec3(d.bodies[b].rest.row(k).transpose()));  // (rigid: rest is where it is)
   vertex_stiffness_.setZero(d.rows);
   for (const auto& E : d.edges) {
     const double K = E.k / (E.D0 * E.D0);
@@ -580,7 +585,7 @@ bool ImplicitIntegrator::still_holds(LinearContact& c, const RowMatrixX3d& X) co
   const double depth = c.c0 - stencil_dot(c, X);
   if (!(depth > -kCarryMargin * c.scale)) return false;
   Vec3 drift = Vec3::Zero();  // Σ_s w_s (x_s − at_s): the vertex's motion relative to the tet's point
-  for (int k = 0; k < 5; ++k)
+  for (int k = 0; k < c.n; ++k)
     if (c.row[k] >= 0) drift += c.w[k] * (Vec3(X.row(c.row[k]).transpose()) - c.at[k]);
   if (!((drift - c.r * c.r.dot(drift)).norm() < kCarryDrift * c.scale)) return false;
   if (depth <= 0) c.c = 0;
@@ -604,24 +609,57 @@ void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetrat
     have[p.vertex] = 1;
     LinearContact c;
     const int g[5] = {p.vertex, d.T_all(p.tet, 0), d.T_all(p.tet, 1), d.T_all(p.tet, 2), d.T_all(p.tet, 3)};
-    c.w[0] = 1;
-    for (int k = 0; k < 4; ++k) c.w[k + 1] = -p.bary[k];
+    const double wg[5] = {1.0, -p.bary[0], -p.bary[1], -p.bary[2], -p.bary[3]};
     c.r = p.direction;
+    // Collision vertex g follows the state rows coll_row[a, b) by coll_w (one of weight 1 for a
+    // vertex of the simulation mesh, none for a rigid one).
+    auto single = [&](int v) { return d.coll_start[v + 1] - d.coll_start[v] == 1 && d.coll_w[d.coll_start[v]] == 1.0; };
+    auto followed = [&](int v) { return d.coll_start[v + 1] > d.coll_start[v]; };
+    auto weighted = [&](int v, const Eigen::VectorXd& per_row) {
+      if (single(v)) return per_row(d.coll_row[d.coll_start[v]]);
+      double q = 0;
+      for (int k = d.coll_start[v]; k < d.coll_start[v + 1]; ++k) q += d.coll_w[k] * per_row(d.coll_row[k]);
+      return q * d.coll_share[v];
+    };
     // Coefficients as the explicit contact force takes them (World::contact_scale).
     if (!o.cap_contact_stiffness) {
       c.k = o.contact_stiffness;
       c.c = o.contact_damping;
-    } else if (p.vertex < rows) {
-      c.k = d.contact_k(p.vertex);
-      c.c = d.contact_c(p.vertex);
+    } else if (followed(p.vertex)) {
+      c.k = weighted(p.vertex, d.contact_k);
+      c.c = weighted(p.vertex, d.contact_c);
     } else {
       for (int k = 0; k < 4; ++k)
-        if (g[k + 1] < rows) c.k += p.bary[k] * d.contact_k(g[k + 1]), c.c += p.bary[k] * d.contact_c(g[k + 1]);
+        if (followed(g[k + 1])) c.k += p.bary[k] * weighted(g[k + 1], d.contact_k), c.c += p.bary[k] * weighted(g[k + 1], d.contact_c);
+    }
+    // The stencil: as (p, the tet's corners), one slot each, without embedded meshes; else the
+    // free rows they follow, merged.
+    if (!d.any_embedded) {
+      c.n = 5;
+      for (int s = 0; s < 5; ++s) {
+        c.w[s] = wg[s];
+        c.row[s] = g[s] < rows && free_[g[s]] >= 0 ? g[s] : -1;
+      }
+    } else {
+      c.n = 0;
+      for (int s = 0; s < 5; ++s)
+        for (int k = d.coll_start[g[s]]; k < d.coll_start[g[s] + 1]; ++k) {
+          const int row = d.coll_row[k];
+          if (free_[row] < 0) continue;
+          const double wk = single(g[s]) ? wg[s] : wg[s] * d.coll_w[k];
+          int t = 0;
+          while (t < c.n && c.row[t] != row) ++t;
+          if (t < c.n) {
+            c.w[t] += wk;
+          } else {
+            c.row[c.n] = row;
+            c.w[c.n++] = wk;
+          }
+        }
     }
     bool any_free = false;
     double q = 0;  // Σ w r·x over the free rows of the stencil, at the detection point
-    for (int s = 0; s < 5; ++s) {
-      c.row[s] = g[s] < rows && free_[g[s]] >= 0 ? g[s] : -1;
+    for (int s = 0; s < c.n; ++s) {
       if (c.row[s] >= 0) {
         any_free = true;
         c.at[s] = x.row(c.row[s]).transpose();
@@ -629,7 +667,7 @@ void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetrat
       }
     }
     if (!any_free) continue;
-    for (int s = 0; s < 5; ++s)
+    for (int s = 0; s < c.n; ++s)
       if (c.row[s] >= 0) {
         c.scale = edge_scale_(c.row[s]);
         break;
@@ -790,7 +828,7 @@ void ImplicitIntegrator::energy_gradient(const World& w, const RowMatrixX3d& x, 
     double a = depth > 0 ? -c.k * depth : 0.0;
     if (damping) a += c.c / h * (stencil_dot(c, x) - stencil_dot(c, xn_));
     if (a != 0)
-      for (int s = 0; s < 5; ++s)
+      for (int s = 0; s < c.n; ++s)
         if (c.row[s] >= 0) add(c.row[s], (a * c.w[s]) * c.r);
   }
   for (int i : free_rows_) {
@@ -820,7 +858,7 @@ void ImplicitIntegrator::gradient(const World& w, const RowMatrixX3d& x, double 
 void ImplicitIntegrator::build_pattern(const World& w) {
   const WorldData& d = w.data();
   std::vector<std::pair<int, int>> pairs;
-  pairs.reserve(d.edges.size() + 10 * contacts_.size());
+  pairs.reserve(d.edges.size() + 10 * contacts_.size());  // (more where meshes are embedded)
   auto pair = [&](int ri, int rj) {
     const int a = ri >= 0 ? free_[ri] : -1, b = rj >= 0 ? free_[rj] : -1;
     if (a < 0 || b < 0 || a == b) return;
@@ -828,8 +866,8 @@ void ImplicitIntegrator::build_pattern(const World& w) {
   };
   for (const auto& E : d.edges) pair(E.i, E.j);  // every pair of a tet's corners is an edge
   for (const LinearContact& c : contacts_)
-    for (int s = 0; s < 5; ++s)
-      for (int t = s + 1; t < 5; ++t) pair(c.row[s], c.row[t]);
+    for (int s = 0; s < c.n; ++s)
+      for (int t = s + 1; t < c.n; ++t) pair(c.row[s], c.row[t]);
   const bool changed = H_.build(static_cast<int>(free_rows_.size()), std::move(pairs));
   if (changed) analysed_ = false;
   // Each element pair's block: (row vertex b, column vertex a) for a < b.
@@ -848,11 +886,12 @@ void ImplicitIntegrator::build_pattern(const World& w) {
         for (int b = a + 1; b < 4; ++b) tet_block_[t][q++] = code(d.tet_elems[t].v[a], d.tet_elems[t].v[b]);
     }
   }
-  contact_block_.resize(contacts_.size());
-  for (size_t k = 0; k < contacts_.size(); ++k) {
-    int q = 0;
-    for (int a = 0; a < 5; ++a)
-      for (int b = a + 1; b < 5; ++b) contact_block_[k][q++] = code(contacts_[k].row[a], contacts_[k].row[b]);
+  contact_block_.clear();
+  contact_block_start_.assign(1, 0);
+  for (const LinearContact& c : contacts_) {
+    for (int a = 0; a < c.n; ++a)
+      for (int b = a + 1; b < c.n; ++b) contact_block_.push_back(code(c.row[a], c.row[b]));
+    contact_block_start_.push_back(static_cast<int>(contact_block_.size()));
   }
 }
 
@@ -1029,7 +1068,7 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
     const double kc = (depth > -kCurvatureBand * c.scale ? c.k : 0.0) + c.c / h;
     if (!(kc > 0)) continue;
     const Mat3 rr = c.r * c.r.transpose();
-    scatter(-1, 5, c.row, contact_block_[k].data(), [&](int a, int b) -> Mat3 { return (kc * c.w[a] * c.w[b]) * rr; });
+    scatter(-1, c.n, c.row, contact_block_.data() + contact_block_start_[k], [&](int a, int b) -> Mat3 { return (kc * c.w[a] * c.w[b]) * rr; });
   }
 }
 

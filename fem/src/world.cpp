@@ -11,6 +11,7 @@
 #include "squeeze/common/error.h"
 #include "squeeze/fem/constraints.h"
 #include "squeeze/fem/integrator.h"
+#include "squeeze/ffd/ffd.h"
 #include "world_data.h"
 
 namespace squeeze::fem {
@@ -161,7 +162,10 @@ WorldData::WorldData(const WorldData& o)
       contact_scale(o.contact_scale),
       pinned(o.pinned),
       attach_k(o.attach_k),
-      attach_c(o.attach_c) {}
+      attach_c(o.attach_c),
+      attach_weight(o.attach_weight),
+      embedding(o.embedding),
+      embedded(o.embedded) {}
 
 World::World(const WorldOptions& options)
     : options_(options), data_(std::make_shared<WorldData>()), integrator_(make_integrator(options.integrator)) {
@@ -236,7 +240,36 @@ int World::add_body(Body body) {
     d.rows += n;
   }
   d.bodies.push_back(std::move(body));
+  d.embedding.push_back(-1);
   return b;
+}
+
+void World::embed(int b, const meshing::TetMesh& mesh) {
+  if (b < 0 || b >= bodies()) throw InputError("fem world: embed: object " + std::to_string(b) + " out of range");
+  const Body& host = data_->bodies[static_cast<size_t>(b)];
+  const std::string name = "fem world: the collision mesh of object " + std::to_string(b);
+  if (host.rigid) throw InputError(name + ": a rigid object collides with its own mesh (it never deforms)");
+  WorldData::Embedded e{Body(mesh, host.material, false), {}, {}};  // throws on an empty or inverted mesh
+  meshing::TetMesh rest;
+  rest.V = host.rest;
+  rest.T = host.T;
+  const ffd::Binding bind = ffd::bind_surface(e.mesh.rest, rest, {}, nullptr, name);
+  e.tet = bind.tet;
+  e.bary = bind.bary;
+  WorldData& d = mutable_data();
+  if (d.embedding[static_cast<size_t>(b)] >= 0) {
+    d.embedded[static_cast<size_t>(d.embedding[static_cast<size_t>(b)])] = std::move(e);
+  } else {
+    d.embedding[static_cast<size_t>(b)] = static_cast<int>(d.embedded.size());
+    d.embedded.push_back(std::move(e));
+  }
+}
+
+bool World::embedded(int b) const { return data_->embedding[static_cast<size_t>(b)] >= 0; }
+
+const Body& World::collision_body(int b) const {
+  const int e = data_->embedding[static_cast<size_t>(b)];
+  return e >= 0 ? data_->embedded[static_cast<size_t>(e)].mesh : data_->bodies[static_cast<size_t>(b)];
 }
 
 int World::pin(const Eigen::AlignedBox3d& box) {
@@ -326,37 +359,51 @@ void World::prepare() {
       d.any_gravity_off = true;
     }
   build_element_groups(d);
-  // Collision numbering: deformables in state order, then rigid objects.
+  // Collision numbering: deformables in state order, then rigid objects; an object with an
+  // embedded collision mesh (embed) is that mesh there.
   d.scene = CollisionScene{};
   d.filter = CollisionFilter{};
+  d.group_body.clear();
   d.filter.self_collision = options_.self_collision;
   std::vector<int> order;
   for (int b = 0; b < bodies(); ++b)
     if (d.state_row[b] >= 0) order.push_back(b);
   for (int b = 0; b < bodies(); ++b)
     if (d.state_row[b] < 0) order.push_back(b);
+  auto collider = [&](int b) -> const Body& {
+    const int e = d.embedding[static_cast<size_t>(b)];
+    return e >= 0 ? d.embedded[static_cast<size_t>(e)].mesh : d.bodies[static_cast<size_t>(b)];
+  };
   int nv_all = 0, nt_all = 0;
   double edge_sum = 0;
   long long edge_count = 0;
+  d.any_embedded = false;
   for (int b : order) {
-    d.scene.bodies.push_back(&d.bodies[b]);
+    const Body& C = collider(b);
+    d.any_embedded = d.any_embedded || d.embedding[static_cast<size_t>(b)] >= 0;
+    d.scene.bodies.push_back(&C);
+    d.group_body.push_back(b);
     d.scene.first_vertex.push_back(nv_all);
     d.scene.first_tet.push_back(nt_all);
-    nv_all += d.bodies[b].vertices();
-    nt_all += d.bodies[b].tets();
-    if (!d.bodies[b].rigid || rows == 0) {  // rigid obstacles' (often long) edges do not set the cell
-      edge_sum += d.bodies[b].D0.sum();
-      edge_count += d.bodies[b].D0.size();
+    nv_all += C.vertices();
+    nt_all += C.tets();
+    if (!C.rigid || rows == 0) {  // rigid obstacles' (often long) edges do not set the cell
+      edge_sum += C.D0.sum();
+      edge_count += C.D0.size();
     }
   }
-  // Groups are bodies in the collision order; map penetrated-body indices back when used.
   d.T_all.resize(nt_all, 4);
   d.X_rest_all.resize(nv_all, 3);
   d.filter.vertex_group.resize(static_cast<size_t>(nv_all));
   d.filter.tet_group.resize(static_cast<size_t>(nt_all));
   d.filter.vertex_on_surface.resize(static_cast<size_t>(nv_all));
+  d.coll_start.assign(static_cast<size_t>(nv_all) + 1, 0);
+  d.coll_row.clear();
+  d.coll_w.clear();
+  d.coll_share.clear();
   for (size_t g = 0; g < order.size(); ++g) {
-    const Body& B = d.bodies[order[g]];
+    const int b = order[g];
+    const Body& B = collider(b);
     const int fv = d.scene.first_vertex[g], ft = d.scene.first_tet[g];
     d.T_all.middleRows(ft, B.tets()) = B.T.array() + fv;
     d.X_rest_all.middleRows(fv, B.vertices()) = B.rest;
@@ -364,10 +411,35 @@ void World::prepare() {
     std::copy(B.on_boundary.begin(), B.on_boundary.end(), d.filter.vertex_on_surface.begin() + fv);
     std::fill(d.filter.tet_group.begin() + ft, d.filter.tet_group.begin() + ft + B.tets(), static_cast<int>(g));
     d.filter.group_rigid.push_back(B.rigid ? 1 : 0);
+    // The state rows of each collision vertex.
+    const int r0 = d.state_row[static_cast<size_t>(b)], e = d.embedding[static_cast<size_t>(b)];
+    double share = 1.0;
+    if (r0 >= 0 && e >= 0) {
+      const auto& own = d.bodies[static_cast<size_t>(b)].on_boundary;
+      const double cage = static_cast<double>(std::count(own.begin(), own.end(), 1));
+      const double embedded = static_cast<double>(std::count(B.on_boundary.begin(), B.on_boundary.end(), 1));
+      share = std::min(1.0, cage / std::max(1.0, embedded));
+    }
+    d.coll_share.resize(static_cast<size_t>(fv + B.vertices()), share);
+    for (int k = 0; k < B.vertices(); ++k) {
+      if (r0 >= 0 && e >= 0) {
+        const WorldData::Embedded& E = d.embedded[static_cast<size_t>(e)];
+        const Body& host = d.bodies[static_cast<size_t>(b)];
+        for (int j = 0; j < 4; ++j) {
+          d.coll_row.push_back(r0 + host.T(E.tet(k), j));
+          d.coll_w.push_back(E.bary(k, j));
+        }
+      } else if (r0 >= 0) {
+        d.coll_row.push_back(r0 + k);
+        d.coll_w.push_back(1.0);
+      }
+      d.coll_start[static_cast<size_t>(fv + k) + 1] = static_cast<int>(d.coll_row.size());
+    }
   }
-  // Attachment anchors: the rest positions (deformables come first in X_rest_all, in state order),
-  // raised by m g / k where the attachment carries the weight.
-  d.attach_anchor = d.X_rest_all.topRows(rows);
+  // Attachment anchors: the rest positions, raised by m g / k where the attachment carries the weight.
+  d.attach_anchor.resize(rows, 3);
+  for (size_t b = 0; b < d.bodies.size(); ++b)
+    if (d.state_row[b] >= 0) d.attach_anchor.middleRows(d.state_row[b], d.bodies[b].vertices()) = d.bodies[b].rest;
   for (size_t b = 0; b < d.bodies.size(); ++b) {
     if (d.state_row[b] < 0) continue;
     const Eigen::Vector3d g = gravity_of(static_cast<int>(b));
@@ -391,7 +463,7 @@ void World::prepare() {
       if (d.state_row[b] >= 0) rest.x.middleRows(d.state_row[b], d.bodies[b].vertices()) = d.bodies[b].rest;
     ForceWorkspace ws;
     const std::vector<Penetration> pens = find_penetrations(*this, rest, ws);
-    auto body_of = [&](int group) { return static_cast<int>(d.scene.bodies[group] - d.bodies.data()); };
+    auto body_of = [&](int group) { return d.group_body[static_cast<size_t>(group)]; };
     for (const Penetration& p : pens)
       d.overlaps.push_back({p.vertex, body_of(d.filter.vertex_group[p.vertex]), body_of(p.body), p.depth});
     std::sort(d.overlaps.begin(), d.overlaps.end(),
@@ -464,10 +536,29 @@ double World::gravity_energy(const State& s) const {
   return e;
 }
 
+RowMatrixX3d World::collision_positions(const State& s, int b) const {
+  const WorldData& d = *data_;
+  const int r0 = d.state_row[static_cast<size_t>(b)], e = d.embedding[static_cast<size_t>(b)];
+  if (r0 < 0) return d.bodies[static_cast<size_t>(b)].rest;
+  if (e < 0) return s.x.middleRows(r0, d.bodies[static_cast<size_t>(b)].vertices());
+  const WorldData::Embedded& E = d.embedded[static_cast<size_t>(e)];
+  const Body& host = d.bodies[static_cast<size_t>(b)];
+  RowMatrixX3d X(E.mesh.vertices(), 3);
+  for (int k = 0; k < E.mesh.vertices(); ++k) {
+    Eigen::RowVector3d p = Eigen::RowVector3d::Zero();
+    for (int j = 0; j < 4; ++j) p += E.bary(k, j) * s.x.row(r0 + host.T(E.tet(k), j));
+    X.row(k) = p;
+  }
+  return X;
+}
+
 double World::body_volume(const State& s, int b) const {
   const WorldData& d = *data_;
   if (d.state_row[b] < 0) return d.bodies[b].total_volume();
-  return volume(d.bodies[b], s.x.middleRows(d.state_row[b], d.bodies[b].vertices()));
+  const int e = d.embedding[static_cast<size_t>(b)];
+  if (e < 0) return volume(d.bodies[b], s.x.middleRows(d.state_row[b], d.bodies[b].vertices()));
+  // The embedded mesh's volume at its vertices' positions W·x.
+  return volume(d.embedded[static_cast<size_t>(e)].mesh, collision_positions(s, b));
 }
 
 }  // namespace squeeze::fem

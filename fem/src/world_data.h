@@ -22,6 +22,17 @@ struct WorldData {
   // zero-length spring to the row's rest position (X_rest_all.row(row)); 0 and 0: none.
   Eigen::VectorXd attach_k, attach_c;
   std::vector<char> attach_weight;  // per state row: its attachment carries the row's weight
+  // Embedded collision meshes (World::embed): per body, its index in `embedded` or −1. An embedded
+  // mesh stands for its body in the collision numbering (detection, penetration depth, rest
+  // overlaps) and in body_volume; its vertices follow the body's tetrahedra by barycentric
+  // coordinates (extrapolated outside them), so its positions are a linear map W of the state.
+  struct Embedded {
+    Body mesh;                 // rest data of the collision mesh (world positions at rest)
+    Eigen::VectorXi tet;       // #Vc: the body's tetrahedron each vertex follows
+    Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> bary;  // #Vc by 4, rows sum to 1
+  };
+  std::vector<int> embedding;
+  std::vector<Embedded> embedded;
 
   // --- derived by prepare() ---
   bool prepared = false;
@@ -51,8 +62,20 @@ struct WorldData {
   // Per state row: its slots, group order: gather[gather_start[r] .. gather_start[r + 1]),
   // offsets in doubles into the accumulator.
   std::vector<int> gather_start, gather;
-  // Collision numbering: all vertices (deformables in state order, then rigid), all tets.
-  CollisionScene scene;     // bodies point into `bodies` (valid while this WorldData lives)
+  // Collision numbering: all vertices (deformables in state order, then rigid), all tets; an
+  // embedded body's collision mesh in its place.
+  CollisionScene scene;     // bodies point into `bodies` or `embedded` (valid while this WorldData lives)
+  std::vector<int> group_body;  // per group of the collision numbering: its body
+  // Per collision vertex g, the state rows its position is a combination of:
+  // coll_row/coll_w[coll_start[g] .. coll_start[g + 1]) (weights sum to 1); none for rigid
+  // vertices. Without embedded meshes the first `rows` collision vertices are the state rows.
+  std::vector<int> coll_start, coll_row;
+  std::vector<double> coll_w;
+  // Per collision vertex: the share of its rows' contact coefficients it takes: 1, or on an
+  // embedded mesh the cage's surface vertices over the embedded mesh's (many embedded surface
+  // vertices press on one cage vertex: together they are as stiff as the cage's own surface).
+  std::vector<double> coll_share;
+  bool any_embedded = false;
   CollisionFilter filter;
   Eigen::MatrixX4i T_all;
   RowMatrixX3d X_rest_all;  // rest positions in the collision numbering (rigid rows stay so)
@@ -63,6 +86,23 @@ struct WorldData {
   std::vector<int> overlap_slot;
   double cell = 1.0;        // spatial hash cell (m)
   int table = 97;           // spatial hash entries
+
+  /// Positions of the collision vertices that follow the state (x: #rows by 3) into X_all (rigid
+  /// vertices keep what X_all holds: their rest positions).
+  void collision_positions(const Eigen::Ref<const RowMatrixX3d>& x, RowMatrixX3d& X_all) const {
+    if (!any_embedded) {
+      X_all.topRows(rows) = x;
+      return;
+    }
+    const int n = static_cast<int>(coll_start.size()) - 1;
+    for (int g = 0; g < n; ++g) {
+      const int a = coll_start[static_cast<size_t>(g)], b = coll_start[static_cast<size_t>(g) + 1];
+      if (a == b) continue;
+      Eigen::RowVector3d p = Eigen::RowVector3d::Zero();
+      for (int c = a; c < b; ++c) p += coll_w[static_cast<size_t>(c)] * x.row(coll_row[static_cast<size_t>(c)]);
+      X_all.row(g) = p;
+    }
+  }
 
   WorldData() = default;
   WorldData(const WorldData& o);  // copies the build data; the copy must be prepared again

@@ -86,8 +86,10 @@ void detect_contacts(const World& world, const State& s, ForceWorkspace& ws);
 /// (collision.h, Penetration), in detection order; ws.stats() as detect_contacts. Depths are
 /// beyond the vertex's rest-overlap tolerance (State::overlap; ws.overlap() gets the shrunk
 /// tolerances). Indices are in
-/// the world's collision numbering: vertex and tet-corner indices below world.state_rows() are
-/// state rows, the others rigid vertices (collision_vertex_positions gives every position).
+/// the world's collision numbering: the deformable objects' collision meshes (their own, or the
+/// mesh embedded in them, World::embed), then the rigid objects'. Without embedded meshes, vertex
+/// and tet-corner indices below world.state_rows() are state rows, the others rigid vertices;
+/// collision_vertex_position gives every position.
 std::vector<Penetration> find_penetrations(const World& world, const State& s, ForceWorkspace& ws);
 
 /// Corners of tet `tet` (collision numbering) and the position of collision vertex `g` in state s.

@@ -89,6 +89,24 @@ class World {
 
   /// Adds an object; returns its index. States made before no longer fit (step() throws on them).
   int add_body(Body body);
+  /// Gives deformable object b a collision mesh of its own: `mesh` (world positions at rest, m;
+  /// positively oriented tetrahedra) then stands for b in collision detection, penetration depth,
+  /// rest overlaps and body_volume, while b's own tetrahedra carry its mass and elasticity. Each
+  /// vertex of `mesh` follows b's tetrahedron that contains it (or the nearest one) by its
+  /// barycentric coordinates, extrapolated outside (ffd::bind_surface; the paper's FFD, Section
+  /// VI-A), so contact forces reach b's vertices by the same weights. The use: a coarse simulation
+  /// mesh (few degrees of freedom) around the tight mesh of the object's surface (the geometry
+  /// that touches), as a cage around an embedded mesh (Sacht et al., "Nested Cages", 2015).
+  /// Calling it again replaces the mesh. Throws InputError if b is out of range or rigid, or the
+  /// mesh is empty, not finite or has a tetrahedron of non-positive volume.
+  void embed(int b, const meshing::TetMesh& mesh);
+  /// Whether object b has an embedded collision mesh (embed).
+  bool embedded(int b) const;
+  /// The mesh object b collides with: its embedded mesh, else its own rest data.
+  const Body& collision_body(int b) const;
+  /// Positions (m) of the vertices of collision_body(b) in state s: W·x for an embedded mesh, the
+  /// object's own rows else (rigid objects: their rest positions).
+  RowMatrixX3d collision_positions(const State& s, int b) const;
   /// Pins every vertex of every deformable object whose rest position lies in box (m). Returns
   /// how many vertices are pinned now in total.
   int pin(const Eigen::AlignedBox3d& box);
