@@ -69,6 +69,10 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                 "Inputs with welded, non-manifold or self-intersecting segments: mesh their convex shells with "
                 "Mesh_3 (the paper's method, before meshing version 11): a few hundred tetrahedra, but 1.1-1.6 "
                 "times their volume and several % of the diagonal out");
+  cmd->add_flag("--shells-only", args->options.shells_only,
+                "Mesh every input, closed parts too, as its convex shells with Mesh_3 (the paper's coarse meshes, "
+                "looser than the deviation bounds): a simulation cage for a tight mesh embedded in it (scene key "
+                "objects[].simulation_mesh)");
   cmd->add_option("--winding-facet-distance", args->options.winding_facet_distance,
                   "Inputs that are not closed parts: Mesh_3's facet distance on their winding-number solid, as a "
                   "multiple of --max-deviation (smaller: closer to the input inside, more tetrahedra and seconds)")

@@ -566,12 +566,13 @@ TEST(MeshingV4, SkippedAttemptWouldHaveGivenTheSameMesh) {
 // lists them all.
 TEST(MeshingV4, MeshRoutesByName) {
   const std::vector<std::string>& names = squeeze::meshing::mesh_route_names();
-  ASSERT_EQ(names.size(), 4u);
+  ASSERT_EQ(names.size(), 5u);
   for (const std::string& n : names) {
     MeshOptions o;
-    o.winding = o.wrap = o.shells_fallback = true;  // cleared by every route but its own
+    o.winding = o.wrap = o.shells_fallback = o.shells_only = true;  // cleared by every route but its own
     squeeze::meshing::set_mesh_route(o, n);
     EXPECT_EQ(o.shells_fallback, n == "convex_shells") << n;
+    EXPECT_EQ(o.shells_only, n == "all_convex_shells") << n;
     EXPECT_EQ(o.winding, n == "winding_number") << n;
     EXPECT_EQ(o.wrap, n == "alpha_wrap") << n;
   }
@@ -580,7 +581,7 @@ TEST(MeshingV4, MeshRoutesByName) {
     squeeze::meshing::set_mesh_route(o, "shells");
     FAIL() << "an unknown route was taken";
   } catch (const squeeze::InputError& e) {
-    EXPECT_EQ(std::string(e.what()), "unknown mesh route \"shells\" (auto, convex_shells, winding_number, alpha_wrap)");
+    EXPECT_EQ(std::string(e.what()), "unknown mesh route \"shells\" (auto, convex_shells, winding_number, alpha_wrap, all_convex_shells)");
   }
 }
 

@@ -160,7 +160,7 @@ TEST_F(SceneTest, BadScenesNameTheKeyPath) {
       {R"({"objects": [{)" + cube + R"(, "gravity": 1}]})", "objects[0].gravity: must be true or false"},
       {R"({"objects": [{)" + cube + R"(, "tets": 12.5}]})", "objects[0].tets: must be an integer"},
       {R"({"objects": [{)" + cube + R"(, "mesh_route": "shells"}]})",
-       "objects[0].mesh_route: must be \"auto\", \"convex_shells\", \"winding_number\" or \"alpha_wrap\", got \"shells\""},
+       "objects[0].mesh_route: must be \"auto\", \"convex_shells\", \"winding_number\", \"alpha_wrap\" or \"all_convex_shells\", got \"shells\""},
       {R"({"objects": [{)" + cube + R"(, "mesh_route": 3}]})", "objects[0].mesh_route: must be a string"},
       {R"({"objects": [{)" + cube + R"(, "transform": {"scale": -1}}]})", "objects[0].transform.scale: must be > 0"},
       {R"({"objects": [{)" + cube + R"(, "transform": {"scale": [1, 0, 1]}}]})", "objects[0].transform.scale[1]: must be > 0"},
@@ -702,4 +702,52 @@ TEST_F(SceneTest, SagAttachmentHoldsTheSameAtEveryResolution) {
     EXPECT_NE(what.find("objects[0].pinned[0].sag: no gravity acts on 'ball'"), std::string::npos) << what;
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
   }
+}
+
+class SceneEmbedTest : public SceneTest {
+ protected:
+  fs::path sphere_scene(const std::string& name, const std::string& object_keys, const std::string& scene_keys) {
+    return write(name, "{" + scene_keys + "\"objects\": [{\"name\": \"ball\", \"mesh\": \"" + data("sphere.off").string() +
+                           "\", \"tets\": 300" + object_keys + "}]}");
+  }
+};
+
+// simulation_mesh "convex_shells": the object moves on its convex shells at `tets` (the world's
+// body), collides and measures its volume with the mesh of its mesh_route embedded (the world's
+// collision body), and weighs what that mesh holds.
+TEST_F(SceneEmbedTest, ConvexShellsSimulationMeshEmbedsTheTightMesh) {
+  const fs::path p = sphere_scene("embed.json", ", \"simulation_mesh\": \"convex_shells\"", "\"floor\": null, ");
+  const SceneWorld w = build_scene(load_scene(p));
+  ASSERT_TRUE(w.world.embedded(0));
+  const squeeze::meshing::TetMesh tight = object_tet_mesh(data("sphere.off"), 300);
+  const squeeze::meshing::TetMesh shells = object_tet_mesh(data("sphere.off"), 300, nullptr, nullptr, nullptr, "all_convex_shells");
+  EXPECT_EQ(w.world.body(0).tets(), shells.T.rows());
+  EXPECT_EQ(w.world.collision_body(0).tets(), tight.T.rows());
+  EXPECT_EQ(w.meshes[0].T.rows(), shells.T.rows());  // what the FFD binds to and renders as "coarse"
+  const State s = w.initial_state();
+  const double V = w.world.body_volume(s, 0);
+  EXPECT_NEAR(V, w.rest_volume[0], 1e-12 * V);
+  EXPECT_LT(V, w.world.body(0).total_volume());  // the shells hold more than the sphere
+  const Body& b = w.world.body(0);
+  EXPECT_NEAR(b.mass.sum() - b.added_mass, 1000.0 * V, 1e-9 * 1000.0 * V);  // density × the object's volume
+  // Without the key: one mesh, the tight one.
+  const SceneWorld plain = build_scene(load_scene(sphere_scene("plain.json", "", "\"floor\": null, ")));
+  EXPECT_FALSE(plain.world.embedded(0));
+  EXPECT_EQ(plain.world.body(0).tets(), tight.T.rows());
+}
+
+TEST_F(SceneEmbedTest, ConvexShellsSimulationMeshRefusesWhatItCannotDo) {
+  auto error = [&](const fs::path& p) -> std::string {
+    try {
+      build_scene(load_scene(p));
+    } catch (const squeeze::InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string bad = error(sphere_scene("bad.json", ", \"simulation_mesh\": \"cage\"", ""));
+  EXPECT_NE(bad.find("objects[0].simulation_mesh: must be \"tight\" or \"convex_shells\", got \"cage\""), std::string::npos) << bad;
+  const std::string floor = error(sphere_scene("floor.json", ", \"simulation_mesh\": \"convex_shells\"", ""));
+  EXPECT_NE(floor.find("objects[0].simulation_mesh: \"convex_shells\" needs a scene without a floor"), std::string::npos) << floor;
+  EXPECT_EQ(floor.find('\n'), std::string::npos);
 }

@@ -225,8 +225,8 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
   for (size_t i = 0; i < objs.size(); ++i) {
     const std::string p = "objects[" + std::to_string(i) + "]";
     const json& o = objs[i];
-    c.keys(o, p, {"name", "mesh", "role", "kind", "tets", "mesh_route", "transform", "material", "gravity", "velocity",
-                  "pinned", "color"});
+    c.keys(o, p, {"name", "mesh", "role", "kind", "tets", "mesh_route", "simulation_mesh", "transform", "material", "gravity",
+                  "velocity", "pinned", "color"});
     SceneObject ob;
     if (!o.contains("name")) c.fail(p + ".name", "missing (required)");
     ob.name = c.string(o["name"], p + ".name");
@@ -268,6 +268,11 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
           list += (i == 0 ? "" : i + 1 == routes.size() ? " or " : ", ") + ("\"" + routes[i] + "\"");
         c.fail(p + ".mesh_route", "must be " + list + ", got \"" + ob.mesh_route + "\"");
       }
+    }
+    if (o.contains("simulation_mesh")) {
+      ob.simulation_mesh = c.string(o["simulation_mesh"], p + ".simulation_mesh");
+      if (ob.simulation_mesh != "tight" && ob.simulation_mesh != "convex_shells")
+        c.fail(p + ".simulation_mesh", "must be \"tight\" or \"convex_shells\", got \"" + ob.simulation_mesh + "\"");
     }
     if (o.contains("transform")) {
       const json& t = o["transform"];
@@ -458,7 +463,7 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
       << options.winding_mesh.sliver_bound << ',' << options.winding_mesh.optimize_seconds << ',' << options.wrap
       << ',' << options.wrap_alpha << ',' << options.wrap_offset << ',' << options.sheet_thickness << ','
       << options.shells_fallback << ',' << options.winding_mesh.facet_size << ',' << options.winding_surface_dilation << ','
-      << options.winding_mesh.cover_tolerance << '|' << bytes.size() << '|';
+      << options.winding_mesh.cover_tolerance << (options.shells_only ? ",shells_only" : "") << '|' << bytes.size() << '|';
   Hash128 h;
   h.add(opt.str());
   h.add(bytes);
@@ -670,6 +675,14 @@ std::string TimeStepChoice::describe(const Scene& scene) const {
   return s + detail + ")";
 }
 
+namespace {
+
+// Whether deformable object o is simulated on its convex shells with the mesh of its mesh_route
+// embedded (SceneObject::simulation_mesh).
+bool simulate_on_shells(const SceneObject& o) { return o.simulation_mesh == "convex_shells"; }
+
+}  // namespace
+
 SceneWorld build_scene(const Scene& scene, Progress* progress) {
   const std::string file = scene.file.string();
   WorldOptions wo;
@@ -696,6 +709,32 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     } catch (const InputError& e) {
       throw InputError(file + ": " + p + ".mesh: " + e.what());
     }
+    if (o.simulation_mesh == "convex_shells" && meshing::is_tet_format(o.mesh))
+      throw InputError(file + ": " + p + ".simulation_mesh: \"convex_shells\" needs a surface to mesh; " +
+                       o.mesh.filename().string() + " is a tetrahedral mesh (used as it is)");
+    if (o.simulation_mesh == "convex_shells" && o.rigid)
+      spdlog::warn("{}: {}.simulation_mesh: '{}' is rigid (it never deforms): it collides with its mesh as it is", file, p, o.name);
+    // A deformable object simulated on a cage (simulation_mesh): its convex shells at `tets`, the
+    // mesh above (tight to its surface) embedded for contact and volume.
+    std::optional<Body> embedded;
+    if (!o.rigid && !meshing::is_tet_format(o.mesh) && simulate_on_shells(o)) {
+      // The floor acts on the simulation mesh's vertices (a cage would rest on the floor by its
+      // shells, not by the object's surface).
+      if (scene.floor)
+        throw InputError(file + ": " + p + ".simulation_mesh: \"convex_shells\" needs a scene without a floor (\"floor\": "
+                         "null): the floor holds the simulation mesh's vertices, not the embedded mesh's; use \"tight\"");
+      meshing::TetMesh shells;
+      try {
+        Material any;
+        embedded.emplace(m, any, false, o.transform.affine());
+        shells = object_tet_mesh(o.mesh, o.tets, nullptr, progress, &off_target, "all_convex_shells");
+      } catch (const InputError& e) {
+        throw InputError(file + ": " + p + ".mesh: " + e.what());
+      }
+      spdlog::debug("{}: {}: simulated on its convex shells ({} tetrahedra), its {} tetrahedra embedded", file, p,
+                    shells.T.rows(), m.T.rows());
+      m = std::move(shells);
+    }
     // The tet count is a target met within about ±35%. Far fewer than asked cannot honour the
     // request: an error; more than asked (the surface needs them): a warning that says so.
     if (!off_target.empty() && !meshing::is_tet_format(o.mesh)) {
@@ -716,6 +755,9 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
       throw InputError(file + ": " + p + ".mesh: " + e.what());
     }
     const double V = body->total_volume();
+    // On a cage, the object's mass is its own (the embedded mesh's volume), spread over the cage.
+    const double V_object = embedded ? embedded->total_volume() : V;
+    if (embedded) mat.density = o.density * V_object / V;
     mat.k_distance = o.k_distance.value_or(o.youngs_modulus * V / std::max<Eigen::Index>(1, body->E.rows()));
     mat.k_volume = o.k_volume.value_or(3.0 * o.youngs_modulus * V / std::max(1, body->tets()));
     mat.mass_scaling = o.rigid ? 0.0 : o.mass_scaling;
@@ -753,9 +795,19 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     rest.T = body->T;
     rest.label = m.label;
     meshes.push_back(std::move(rest));
-    rest_volume.push_back(V);
+    rest_volume.push_back(V_object);
     body->gravity = o.gravity;
-    world.add_body(std::move(*body));
+    const int b = world.add_body(std::move(*body));
+    if (embedded) {
+      meshing::TetMesh collision;
+      collision.V = embedded->rest;
+      collision.T = embedded->T;
+      try {
+        world.embed(b, collision);
+      } catch (const InputError& e) {
+        throw InputError(file + ": " + p + ".simulation_mesh: " + e.what());
+      }
+    }
   }
   // Pins and soft attachments: per object, on rest positions in world coordinates.
   std::vector<std::vector<int>> pin_counts(scene.objects.size());

@@ -75,7 +75,7 @@ int hull_budget(const MeshOptions& opt) {
 }
 
 const std::vector<std::string>& mesh_route_names() {
-  static const std::vector<std::string> names = {"auto", "convex_shells", "winding_number", "alpha_wrap"};
+  static const std::vector<std::string> names = {"auto", "convex_shells", "winding_number", "alpha_wrap", "all_convex_shells"};
   return names;
 }
 
@@ -87,6 +87,7 @@ void set_mesh_route(MeshOptions& options, const std::string& name) {
     throw InputError("unknown mesh route \"" + name + "\" (" + list + ")");
   }
   options.shells_fallback = name == "convex_shells";
+  options.shells_only = name == "all_convex_shells";
   options.winding = name == "winding_number";
   options.wrap = name == "alpha_wrap";
 }
@@ -1027,6 +1028,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
     r = std::move(b);
     return mesh3(worse);
   };
+  if (opt.shells_only) return shells_route("the convex shells were asked for (MeshOptions::shells_only)");
   // The parts: each face-connected component of the input that is a closed oriented 2-manifold
   // enclosing volume bounds its own solid and is its own boundary (when it intersects itself, only
   // if its simplified boundary no longer does: slivers of zero area, say, collapse away). Parts are

@@ -94,6 +94,11 @@ struct SceneObject {
                                           // winding-number solid's boundary), "convex_shells",
                                           // "winding_number" (Mesh_3 as it is) or "alpha_wrap"
                                           // (meshing::mesh_route_names, set_mesh_route)
+  std::string simulation_mesh = "tight";  // deformable objects meshed from a surface: "tight" (simulate
+                                          // on the mesh of mesh_route) or "convex_shells" (simulate on
+                                          // the convex shells at `tets`, few degrees of freedom, with the
+                                          // mesh of mesh_route embedded for contact and volume:
+                                          // World::embed; scenes without a floor)
   SceneTransform transform;
   std::string preset;                     // material.preset ("" if none): it set density and youngs_modulus
   double density = 1000.0;                // kg/m³ (material.density, else the preset's)

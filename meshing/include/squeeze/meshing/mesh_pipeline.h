@@ -64,6 +64,10 @@ struct MeshOptions {
                                         // winding_dilation (their hole rims are creases)
   bool shells_fallback = false;         // welded, non-manifold or self-intersecting segments: their
                                         // convex shells meshed with Mesh_3, as before version 11
+  bool shells_only = false;             // every input (closed parts too) meshed as its convex shells
+                                        // with Mesh_3: a coarse mesh around the input, the paper's
+                                        // (a simulation mesh in which a tight mesh is embedded,
+                                        // fem::World::embed); route "all_convex_shells"
   bool wrap = false;                    // the same inputs: mesh their alpha wrap (alpha_wrap.h) by
                                         // the boundary route (true; before `winding`); the convex
                                         // shells only where either fails
@@ -154,7 +158,8 @@ int hull_budget(const MeshOptions& options);
 /// segments; open scans), by name, as scenes ask for them (objects[].mesh_route) and as the
 /// flags of `squeeze mesh` set them: "auto" (the default: the boundary of the winding-number
 /// solid, simplified and tetrahedralized), "convex_shells" (shells_fallback), "winding_number"
-/// (winding), "alpha_wrap" (wrap). One table for every caller.
+/// (winding), "alpha_wrap" (wrap), "all_convex_shells" (shells_only: closed parts too). One table
+/// for every caller.
 const std::vector<std::string>& mesh_route_names();
 
 /// Sets the options of the route `name` (mesh_route_names) on `options`, the other routes' flags
