@@ -720,7 +720,10 @@ TEST_F(SceneEmbedTest, ConvexShellsSimulationMeshEmbedsTheTightMesh) {
   const SceneWorld w = build_scene(load_scene(p));
   ASSERT_TRUE(w.world.embedded(0));
   const squeeze::meshing::TetMesh tight = object_tet_mesh(data("sphere.off"), 300);
-  const squeeze::meshing::TetMesh shells = object_tet_mesh(data("sphere.off"), 300, nullptr, nullptr, nullptr, "all_convex_shells");
+  ASSERT_EQ(simulation_mesh_route(w.scene.objects[0]), "all_convex_shells");  // what render checks trajectories against
+  const squeeze::meshing::TetMesh shells =
+      object_tet_mesh(data("sphere.off"), 300, nullptr, nullptr, nullptr, simulation_mesh_route(w.scene.objects[0]));
+  EXPECT_EQ(w.meshes[0].T, shells.T);
   EXPECT_EQ(w.world.body(0).tets(), shells.T.rows());
   EXPECT_EQ(w.world.collision_body(0).tets(), tight.T.rows());
   EXPECT_EQ(w.meshes[0].T.rows(), shells.T.rows());  // what the FFD binds to and renders as "coarse"
@@ -733,6 +736,7 @@ TEST_F(SceneEmbedTest, ConvexShellsSimulationMeshEmbedsTheTightMesh) {
   // Without the key: one mesh, the tight one.
   const SceneWorld plain = build_scene(load_scene(sphere_scene("plain.json", "", "\"floor\": null, ")));
   EXPECT_FALSE(plain.world.embedded(0));
+  EXPECT_EQ(simulation_mesh_route(plain.scene.objects[0]), "auto");
   EXPECT_EQ(plain.world.body(0).tets(), tight.T.rows());
 }
 

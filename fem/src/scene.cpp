@@ -683,6 +683,10 @@ bool simulate_on_shells(const SceneObject& o) { return o.simulation_mesh == "con
 
 }  // namespace
 
+std::string simulation_mesh_route(const SceneObject& o) {
+  return !o.rigid && !meshing::is_tet_format(o.mesh) && simulate_on_shells(o) ? "all_convex_shells" : o.mesh_route;
+}
+
 SceneWorld build_scene(const Scene& scene, Progress* progress) {
   const std::string file = scene.file.string();
   WorldOptions wo;

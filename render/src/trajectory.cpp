@@ -126,7 +126,8 @@ void check_trajectory_matches_scene(const Trajectory& traj, const fem::Scene& sc
     if (so.rigid != to.rigid)
       throw InputError(head + "object '" + so.name + "' is " + (to.rigid ? "rigid" : "deformable") +
                        " in the trajectory, " + (so.rigid ? "rigid" : "deformable") + " in the scene");
-    const meshing::TetMesh coarse = fem::object_tet_mesh(so.mesh, so.tets, nullptr, nullptr, nullptr, so.mesh_route);
+    const meshing::TetMesh coarse =
+        fem::object_tet_mesh(so.mesh, so.tets, nullptr, nullptr, nullptr, fem::simulation_mesh_route(so));
     if (coarse.V.rows() != to.vertices || coarse.T.rows() != to.tets)
       throw InputError(head + "object '" + so.name + "' has " + std::to_string(to.vertices) + " vertices and " +
                        std::to_string(to.tets) + " tets, the scene's coarse mesh " +

@@ -176,6 +176,11 @@ meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bo
                                  Progress* progress = nullptr, std::string* off_target = nullptr,
                                  const std::string& route = "auto");
 
+/// The route of the mesh object `o` moves on (its simulation mesh, SceneWorld::meshes): "all_convex_shells"
+/// for a deformable object meshed from a surface with simulation_mesh "convex_shells", else
+/// o.mesh_route. object_tet_mesh(o.mesh, o.tets, ..., simulation_mesh_route(o)) is that mesh.
+std::string simulation_mesh_route(const SceneObject& o);
+
 /// The automatic time step of a world and what sets it (scene key `time_step`: "auto").
 struct TimeStepChoice {
   double h = 0;          // s
