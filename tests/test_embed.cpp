@@ -153,3 +153,40 @@ TEST(FemEmbed, BadEmbeddingsAreRefused) {
   EXPECT_TRUE(w.embedded(0));
   EXPECT_EQ(w.collision_body(0).vertices(), ball.V.rows());
 }
+
+// The floor holds an embedded mesh, not its cage: the box cage around the ball sinks into the
+// floor until the ball rests on it, with the implicit step and with Verlet.
+TEST(FemEmbed, TheFloorHoldsTheEmbeddedSurface) {
+  for (const std::string integrator : {"implicit", "verlet"}) {
+    SCOPED_TRACE(integrator);
+    WorldOptions o;
+    o.integrator = integrator;
+    o.h = integrator == "implicit" ? 1.0 / 60 : 5e-4;
+    o.floor = true;
+    o.contact_stiffness = 1e4;
+    o.contact_damping = 10;
+    World w(o);
+    const Vector3d c(0, 0.25, 0);
+    Material firm = soft();
+    firm.k_distance = firm.k_volume = 2000;  // holds its 27 kg
+    w.add_body(Body(translated(box_tet_mesh(Vector3d::Constant(-0.15), Vector3d::Constant(0.15), Eigen::Vector3i::Constant(3)), c),
+                    firm));
+    w.embed(0, translated(ball_tet_mesh(0.1, 6), c));
+    State s = w.initial_state();
+    const int steps = static_cast<int>(std::lround(3.0 / o.h));
+    double ball = 1, cage = 1;  // lowest points over the last second (Verlet bounces longer)
+    for (int k = 0; k < steps; ++k) {
+      w.step(s);
+      if (k >= steps - static_cast<int>(std::lround(1.0 / o.h))) {
+        const double b = w.collision_positions(s, 0).col(1).minCoeff();
+        if (b < ball) ball = b, cage = s.x.col(1).minCoeff();
+      }
+    }
+    ASSERT_TRUE(s.x.allFinite());
+    std::printf("%s: on the floor, the ball's bottom at %.4f m at the lowest in the last second, its cage's then %.4f m\n",
+                integrator.c_str(), ball, cage);
+    EXPECT_LT(ball, 0.005);        // it lands on the ball (a penalty floor: Verlet bounces 3-4 cm deep,
+    EXPECT_GT(ball, -0.05);        // the implicit step's damping settles it 4-5 mm deep)
+    EXPECT_LT(cage, ball - 0.03);  // the box's bottom, 5 cm below the ball's, is then under the floor
+  }
+}

@@ -751,7 +751,10 @@ TEST_F(SceneEmbedTest, ConvexShellsSimulationMeshRefusesWhatItCannotDo) {
   };
   const std::string bad = error(sphere_scene("bad.json", ", \"simulation_mesh\": \"cage\"", ""));
   EXPECT_NE(bad.find("objects[0].simulation_mesh: must be \"tight\" or \"convex_shells\", got \"cage\""), std::string::npos) << bad;
-  const std::string floor = error(sphere_scene("floor.json", ", \"simulation_mesh\": \"convex_shells\"", ""));
-  EXPECT_NE(floor.find("objects[0].simulation_mesh: \"convex_shells\" needs a scene without a floor"), std::string::npos) << floor;
-  EXPECT_EQ(floor.find('\n'), std::string::npos);
+  EXPECT_EQ(bad.find('\n'), std::string::npos);
+  write("cube_tets.mesh", "");
+  squeeze::meshing::save_tet_mesh(dir_->path() / "cube_tets.mesh", box_tet_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), Eigen::Vector3i::Ones()));
+  const std::string tet = error(write("tet.json", R"({"objects": [{"name": "c", "mesh": "cube_tets.mesh", "simulation_mesh": "convex_shells"}]})"));
+  EXPECT_NE(tet.find("objects[0].simulation_mesh: \"convex_shells\" needs a surface to mesh; cube_tets.mesh is a tetrahedral mesh"),
+            std::string::npos) << tet;
 }

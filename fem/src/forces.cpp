@@ -300,7 +300,8 @@ void assemble_forces(const World& w, const State& s, const RowMatrixX3d* externa
       if (ext) e += ext->row(i).transpose();
       f += e;
     }
-    if (floor && s.x(i, 1) < fy) f.y() += d.contact_k(i) * (fy - s.x(i, 1)) - d.contact_c(i) * std::min(0.0, s.v(i, 1));
+    if (floor && s.x(i, 1) < fy && d.floor_row[i])
+      f.y() += d.contact_k(i) * (fy - s.x(i, 1)) - d.contact_c(i) * std::min(0.0, s.v(i, 1));
     if (attached && (d.attach_k(i) > 0 || d.attach_c(i) > 0))  // zero-length spring to the rest position
       f -= d.attach_k(i) * (Vec3(s.x.row(i).transpose()) - Vec3(d.attach_anchor.row(i).transpose())) +
            d.attach_c(i) * Vec3(s.v.row(i).transpose());
@@ -308,6 +309,23 @@ void assemble_forces(const World& w, const State& s, const RowMatrixX3d* externa
       for (int id = ws.contact_head[i]; id >= 0; id = ws.contact_next[id]) f += ws.contact_f[id];
     F.row(i) = f.transpose();
   });
+  // The floor under embedded meshes: it holds their vertices (the same penalty, with their share
+  // of their rows' coefficients), and their rows by the weights they follow them with.
+  if (floor && d.any_embedded)
+    for (int g : d.embedded_vertices) {
+      const int a = d.coll_start[g], b = d.coll_start[g + 1];
+      double y = 0, vy = 0, k = 0, c = 0;
+      for (int q = a; q < b; ++q) {
+        const int r = d.coll_row[q];
+        y += d.coll_w[q] * s.x(r, 1);
+        vy += d.coll_w[q] * s.v(r, 1);
+        k += d.coll_w[q] * d.contact_k(r);
+        c += d.coll_w[q] * d.contact_c(r);
+      }
+      if (!(y < fy)) continue;
+      const double f = d.coll_share[g] * (k * (fy - y) - c * std::min(0.0, vy));
+      for (int q = a; q < b; ++q) F(d.coll_row[q], 1) += d.coll_w[q] * f;
+    }
 }
 
 std::vector<Penetration> find_penetrations(const World& w, const State& s, ForceWorkspace& workspace) {

@@ -206,6 +206,9 @@ class ImplicitIntegrator : public TimeIntegrator {
                double parent_worst = std::numeric_limits<double>::infinity());
   void carry_contacts();
   void add_contacts(const World& w, const std::vector<Penetration>& pens, const RowMatrixX3d& x);
+  // The floor under embedded meshes (World::embed): a contact of each of their vertices below it at
+  // x (vertex id −2 − its collision index), over the rows the vertex follows.
+  void add_floor_contacts(const World& w, const RowMatrixX3d& x);
   // G_x: G(x) if known (the initial guess's, computed to choose it), else NaN.
   void solve(const World& w, double h, RowMatrixX3d& x, double G_x = std::numeric_limits<double>::quiet_NaN());
   double potential(const World& w, const RowMatrixX3d& x, double h) const;
@@ -489,6 +492,7 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
     probe.overlap = s.overlap;
     carry_contacts();
   }
+  add_floor_contacts(w, xn_);
   // The initial guess: the inertial target y (exact in free flight) or x_n + h v_n (exact at rest
   // and in equilibrium), whichever has the lower potential. Both come from the state alone.
   RowMatrixX3d x = y_;
@@ -500,10 +504,11 @@ void ImplicitIntegrator::substep(const World& w, State& s, const RowMatrixX3d* e
     if (G_coast < G_x) x = std::move(coast), G_x = G_coast;
   }
   solve(w, h, x, G_x);  // its first line search starts from G_x (one potential less per substep)
-  for (int round = 0; round < o_.contact_rounds && o.collisions; ++round) {
+  for (int round = 0; round < o_.contact_rounds && (o.collisions || (o.floor && d.any_embedded)); ++round) {
     probe.x = x;
     const size_t count = contacts_.size();
-    add_contacts(w, find_penetrations(w, probe, ws), x);
+    if (o.collisions) add_contacts(w, find_penetrations(w, probe, ws), x);
+    add_floor_contacts(w, x);
     if (contacts_.size() == count) break;
     ++stats_.contact_rounds;
     solve(w, h, x);
@@ -603,7 +608,8 @@ void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetrat
   const WorldOptions& o = w.options();
   const int rows = d.rows;
   std::vector<char> have(static_cast<size_t>(d.X_rest_all.rows()), 0);
-  for (const LinearContact& c : contacts_) have[c.vertex] = 1;
+  for (const LinearContact& c : contacts_)
+    if (c.vertex >= 0) have[c.vertex] = 1;
   for (const Penetration& p : pens) {
     if (!(p.depth > 0) || have[p.vertex]) continue;
     have[p.vertex] = 1;
@@ -690,6 +696,44 @@ void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetrat
 }
 
 
+void ImplicitIntegrator::add_floor_contacts(const World& w, const RowMatrixX3d& x) {
+  const WorldData& d = w.data();
+  const WorldOptions& o = w.options();
+  if (!o.floor || !d.any_embedded) return;
+  std::vector<int> have;
+  for (const LinearContact& c : contacts_)
+    if (c.vertex <= -2) have.push_back(-2 - c.vertex);
+  std::sort(have.begin(), have.end());
+  for (int g : d.embedded_vertices) {
+    double y = 0;
+    for (int q = d.coll_start[g]; q < d.coll_start[g + 1]; ++q) y += d.coll_w[q] * x(d.coll_row[q], 1);
+    if (!(y < o.floor_height) || std::binary_search(have.begin(), have.end(), g)) continue;
+    LinearContact c;
+    c.r = Vec3(0, 1, 0);
+    c.n = 0;
+    double q = 0;
+    for (int k = d.coll_start[g]; k < d.coll_start[g + 1]; ++k) {
+      const int row = d.coll_row[k];
+      c.k += d.coll_w[k] * d.contact_k(row);
+      c.c += d.coll_w[k] * d.contact_c(row);
+      if (free_[row] < 0) continue;
+      c.row[c.n] = row;
+      c.w[c.n] = d.coll_w[k];
+      c.at[c.n] = x.row(row).transpose();
+      q += c.w[c.n] * c.at[c.n].y();
+      ++c.n;
+    }
+    if (c.n == 0) continue;
+    c.k *= d.coll_share[g];
+    c.c *= d.coll_share[g];
+    c.scale = edge_scale_(c.row[0]);
+    c.c0 = (o.floor_height - y) + q;  // depth(x) = c0 − Σ w y over the free rows
+    c.vertex = -2 - g;
+    c.body = -1;
+    contacts_.push_back(c);
+  }
+}
+
 double ImplicitIntegrator::potential(const World& w, const RowMatrixX3d& x, double h) const {
   const WorldData& d = w.data();
   const WorldOptions& o = w.options();
@@ -747,6 +791,7 @@ double ImplicitIntegrator::potential(const World& w, const RowMatrixX3d& x, doub
   }
   if (o.floor)
     for (int i : free_rows_) {
+      if (!d.floor_row[i]) continue;  // held through its embedded mesh (add_floor_contacts)
       const double pen = o.floor_height - x(i, 1);
       if (pen > 0) G += 0.5 * d.contact_k(i) * pen * pen;
       if (floor_damped_[i]) {
@@ -832,7 +877,7 @@ void ImplicitIntegrator::energy_gradient(const World& w, const RowMatrixX3d& x, 
         if (c.row[s] >= 0) add(c.row[s], (a * c.w[s]) * c.r);
   }
   for (int i : free_rows_) {
-    if (o.floor) {
+    if (o.floor && d.floor_row[i]) {
       const double pen = o.floor_height - x(i, 1);
       if (pen > 0) Gr(i, 1) -= d.contact_k(i) * pen;
       if (damping && floor_damped_[i]) Gr(i, 1) += d.contact_c(i) / h * std::min(0.0, x(i, 1) - xn_(i, 1));
@@ -1005,7 +1050,7 @@ void ImplicitIntegrator::assemble(const World& w, const RowMatrixX3d& x, double 
       if (!mine(part, static_cast<int>(f))) continue;
       const int i = free_rows_[f];
       Mat3 M = (d.mass(i) / (h * h)) * Mat3::Identity();
-      if (o.floor) {
+      if (o.floor && d.floor_row[i]) {
         if (x(i, 1) < o.floor_height) M(1, 1) += d.contact_k(i);
         if (floor_damped_[i] && x(i, 1) < xn_(i, 1)) M(1, 1) += d.contact_c(i) / h;
       }

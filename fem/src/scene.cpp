@@ -722,11 +722,6 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     // mesh above (tight to its surface) embedded for contact and volume.
     std::optional<Body> embedded;
     if (!o.rigid && !meshing::is_tet_format(o.mesh) && simulate_on_shells(o)) {
-      // The floor acts on the simulation mesh's vertices (a cage would rest on the floor by its
-      // shells, not by the object's surface).
-      if (scene.floor)
-        throw InputError(file + ": " + p + ".simulation_mesh: \"convex_shells\" needs a scene without a floor (\"floor\": "
-                         "null): the floor holds the simulation mesh's vertices, not the embedded mesh's; use \"tight\"");
       meshing::TetMesh shells;
       try {
         Material any;

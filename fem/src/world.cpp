@@ -436,6 +436,15 @@ void World::prepare() {
       d.coll_start[static_cast<size_t>(fv + k) + 1] = static_cast<int>(d.coll_row.size());
     }
   }
+  d.floor_row.assign(static_cast<size_t>(rows), 1);
+  d.embedded_vertices.clear();
+  for (size_t g = 0; g < order.size(); ++g) {
+    const int b = order[g];
+    if (d.state_row[static_cast<size_t>(b)] < 0 || d.embedding[static_cast<size_t>(b)] < 0) continue;
+    std::fill(d.floor_row.begin() + d.state_row[static_cast<size_t>(b)],
+              d.floor_row.begin() + d.state_row[static_cast<size_t>(b)] + d.bodies[static_cast<size_t>(b)].vertices(), 0);
+    for (int k = 0; k < d.scene.bodies[g]->vertices(); ++k) d.embedded_vertices.push_back(d.scene.first_vertex[g] + k);
+  }
   // Attachment anchors: the rest positions, raised by m g / k where the attachment carries the weight.
   d.attach_anchor.resize(rows, 3);
   for (size_t b = 0; b < d.bodies.size(); ++b)

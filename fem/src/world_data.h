@@ -76,6 +76,10 @@ struct WorldData {
   // vertices press on one cage vertex: together they are as stiff as the cage's own surface).
   std::vector<double> coll_share;
   bool any_embedded = false;
+  // Per state row: the floor holds it (1), or it is a row of an object with an embedded mesh,
+  // whose embedded vertices the floor holds instead (0).
+  std::vector<char> floor_row;
+  std::vector<int> embedded_vertices;  // collision vertices of embedded meshes, ascending
   CollisionFilter filter;
   Eigen::MatrixX4i T_all;
   RowMatrixX3d X_rest_all;  // rest positions in the collision numbering (rigid rows stay so)

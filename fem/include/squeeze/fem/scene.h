@@ -98,7 +98,7 @@ struct SceneObject {
                                           // on the mesh of mesh_route) or "convex_shells" (simulate on
                                           // the convex shells at `tets`, few degrees of freedom, with the
                                           // mesh of mesh_route embedded for contact and volume:
-                                          // World::embed; scenes without a floor)
+                                          // World::embed)
   SceneTransform transform;
   std::string preset;                     // material.preset ("" if none): it set density and youngs_modulus
   double density = 1000.0;                // kg/m³ (material.density, else the preset's)
