@@ -5,7 +5,8 @@
 // initial state, repeated until 2 s of wall clock (meshes from the cache; the first run meshes). Counters: sim_per_wall (simulated
 // s per wall s), h (s), steps, substeps and Newton iterations per step, and the largest volume change.
 // Scenes: bench/scenes/ball_drop.json, bunny_drop.json, headon.json, organs.json (box pins: the
-// organs sag and touch) and the bundled scenes/body_parts.json (supported: at rest) and barriers2.json; SQUEEZE_BENCH_SCENES=a.json,b.json replaces the list.
+// organs sag and touch), organs_embedded.json (the same organs moving on their convex shells, their
+// tight meshes embedded: World::embed) and the bundled scenes/body_parts.json (supported: at rest) and barriers2.json; SQUEEZE_BENCH_SCENES=a.json,b.json replaces the list.
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -42,6 +43,7 @@ std::vector<Case> cases() {
           {src + "/bench/scenes/bunny_drop.json", 1.5},
           {src + "/bench/scenes/headon.json", 0.5},
           {src + "/bench/scenes/organs.json", 0.5},
+          {src + "/bench/scenes/organs_embedded.json", 0.5},
           {src + "/scenes/body_parts.json", 0.5},
           {src + "/scenes/barriers2.json", 0.5}};
 }
