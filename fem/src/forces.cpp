@@ -191,22 +191,15 @@ void collect_contact_forces(const WorldData& d, const World& w, const State& s, 
   ws.stats.colliding_vertices = static_cast<int>(pens.size());
   // A collision vertex follows the state rows coll_row[a, b) with the weights coll_w (one row of
   // weight 1 for a vertex of the simulation mesh itself, none for a rigid one; embed).
-  auto single = [&](int g) {
-    return d.coll_start[g + 1] - d.coll_start[g] == 1 && d.coll_w[d.coll_start[g]] == 1.0;
-  };
+  auto single = [&](int g) { return d.single_row(g); };
   auto velocity = [&](int g) -> Vec3 {
     if (single(g)) return Vec3(s.v.row(d.coll_row[d.coll_start[g]]).transpose());
     Vec3 u = Vec3::Zero();
     for (int c = d.coll_start[g]; c < d.coll_start[g + 1]; ++c) u += d.coll_w[c] * Vec3(s.v.row(d.coll_row[c]).transpose());
     return u;
   };
-  auto followed = [&](int g) { return d.coll_start[g + 1] > d.coll_start[g]; };  // not rigid
-  auto weighted = [&](int g, const Eigen::VectorXd& per_row) {  // Σ w per_row over g's rows
-    if (single(g)) return per_row(d.coll_row[d.coll_start[g]]);
-    double q = 0;
-    for (int c = d.coll_start[g]; c < d.coll_start[g + 1]; ++c) q += d.coll_w[c] * per_row(d.coll_row[c]);
-    return q * d.coll_share[g];
-  };
+  auto followed = [&](int g) { return d.followed(g); };  // not rigid
+  auto weighted = [&](int g, const Eigen::VectorXd& per_row) { return d.contact_coefficient(g, per_row); };
   auto add = [&](int row, const Vec3& f) {  // appended: applied in the order found
     const int id = static_cast<int>(ws.contact_f.size());
     ws.contact_f.push_back(f);
@@ -314,16 +307,13 @@ void assemble_forces(const World& w, const State& s, const RowMatrixX3d* externa
   if (floor && d.any_embedded)
     for (int g : d.embedded_vertices) {
       const int a = d.coll_start[g], b = d.coll_start[g + 1];
-      double y = 0, vy = 0, k = 0, c = 0;
+      double y = 0, vy = 0;
       for (int q = a; q < b; ++q) {
-        const int r = d.coll_row[q];
-        y += d.coll_w[q] * s.x(r, 1);
-        vy += d.coll_w[q] * s.v(r, 1);
-        k += d.coll_w[q] * d.contact_k(r);
-        c += d.coll_w[q] * d.contact_c(r);
+        y += d.coll_w[q] * s.x(d.coll_row[q], 1);
+        vy += d.coll_w[q] * s.v(d.coll_row[q], 1);
       }
       if (!(y < fy)) continue;
-      const double f = d.coll_share[g] * (k * (fy - y) - c * std::min(0.0, vy));
+      const double f = d.contact_coefficient(g, d.contact_k) * (fy - y) - d.contact_coefficient(g, d.contact_c) * std::min(0.0, vy);
       for (int q = a; q < b; ++q) F(d.coll_row[q], 1) += d.coll_w[q] * f;
     }
 }

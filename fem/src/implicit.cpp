@@ -619,14 +619,9 @@ void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetrat
     c.r = p.direction;
     // Collision vertex g follows the state rows coll_row[a, b) by coll_w (one of weight 1 for a
     // vertex of the simulation mesh, none for a rigid one).
-    auto single = [&](int v) { return d.coll_start[v + 1] - d.coll_start[v] == 1 && d.coll_w[d.coll_start[v]] == 1.0; };
-    auto followed = [&](int v) { return d.coll_start[v + 1] > d.coll_start[v]; };
-    auto weighted = [&](int v, const Eigen::VectorXd& per_row) {
-      if (single(v)) return per_row(d.coll_row[d.coll_start[v]]);
-      double q = 0;
-      for (int k = d.coll_start[v]; k < d.coll_start[v + 1]; ++k) q += d.coll_w[k] * per_row(d.coll_row[k]);
-      return q * d.coll_share[v];
-    };
+    auto single = [&](int v) { return d.single_row(v); };
+    auto followed = [&](int v) { return d.followed(v); };
+    auto weighted = [&](int v, const Eigen::VectorXd& per_row) { return d.contact_coefficient(v, per_row); };
     // Coefficients as the explicit contact force takes them (World::contact_scale).
     if (!o.cap_contact_stiffness) {
       c.k = o.contact_stiffness;
@@ -714,8 +709,6 @@ void ImplicitIntegrator::add_floor_contacts(const World& w, const RowMatrixX3d& 
     double q = 0;
     for (int k = d.coll_start[g]; k < d.coll_start[g + 1]; ++k) {
       const int row = d.coll_row[k];
-      c.k += d.coll_w[k] * d.contact_k(row);
-      c.c += d.coll_w[k] * d.contact_c(row);
       if (free_[row] < 0) continue;
       c.row[c.n] = row;
       c.w[c.n] = d.coll_w[k];
@@ -724,8 +717,8 @@ void ImplicitIntegrator::add_floor_contacts(const World& w, const RowMatrixX3d& 
       ++c.n;
     }
     if (c.n == 0) continue;
-    c.k *= d.coll_share[g];
-    c.c *= d.coll_share[g];
+    c.k = d.contact_coefficient(g, d.contact_k);
+    c.c = d.contact_coefficient(g, d.contact_c);
     c.scale = edge_scale_(c.row[0]);
     c.c0 = (o.floor_height - y) + q;  // depth(x) = c0 − Σ w y over the free rows
     c.vertex = -2 - g;

@@ -108,6 +108,23 @@ struct WorldData {
     }
   }
 
+  /// Collision vertex g follows state rows (it is not rigid).
+  bool followed(int g) const { return coll_start[static_cast<size_t>(g) + 1] > coll_start[static_cast<size_t>(g)]; }
+  /// Collision vertex g is a state row itself (one row, weight 1): the simulation mesh's own vertex.
+  bool single_row(int g) const {
+    const int a = coll_start[static_cast<size_t>(g)];
+    return coll_start[static_cast<size_t>(g) + 1] - a == 1 && coll_w[static_cast<size_t>(a)] == 1.0;
+  }
+  /// A contact coefficient of collision vertex g from its rows' (per_row: per state row): the row's
+  /// own for a single row, else Σ w per_row times coll_share[g].
+  double contact_coefficient(int g, const Eigen::VectorXd& per_row) const {
+    if (single_row(g)) return per_row(coll_row[static_cast<size_t>(coll_start[static_cast<size_t>(g)])]);
+    double q = 0;
+    for (int c = coll_start[static_cast<size_t>(g)]; c < coll_start[static_cast<size_t>(g) + 1]; ++c)
+      q += coll_w[static_cast<size_t>(c)] * per_row(coll_row[static_cast<size_t>(c)]);
+    return q * coll_share[static_cast<size_t>(g)];
+  }
+
   WorldData() = default;
   WorldData(const WorldData& o);  // copies the build data; the copy must be prepared again
   WorldData& operator=(const WorldData&) = delete;
