@@ -733,10 +733,25 @@ TEST_F(SceneEmbedTest, ConvexShellsSimulationMeshEmbedsTheTightMesh) {
   EXPECT_LT(V, w.world.body(0).total_volume());  // the shells hold more than the sphere
   const Body& b = w.world.body(0);
   EXPECT_NEAR(b.mass.sum() - b.added_mass, 1000.0 * V, 1e-9 * 1000.0 * V);  // density × the object's volume
-  // Without the key: one mesh, the tight one.
-  const SceneWorld plain = build_scene(load_scene(sphere_scene("plain.json", "", "\"floor\": null, ")));
+  // "tight": one mesh, the tight one.
+  const SceneWorld plain = build_scene(load_scene(sphere_scene("plain.json", ", \"simulation_mesh\": \"tight\"", "\"floor\": null, ")));
   EXPECT_FALSE(plain.world.embedded(0));
+  EXPECT_EQ(plain.world.body(0).tets(), tight.T.rows());
   EXPECT_EQ(simulation_mesh_route(plain.scene.objects[0]), "auto");
+  // "auto" (the default): the shells where the tight mesh is over 1.35 × tets, else the tight mesh.
+  int overs = 0;  // the sphere: 320 tetrahedra at 120 (over), 878 at 1000 (not)
+  for (const int tets : {120, 1000}) {
+    SCOPED_TRACE(tets);
+    const squeeze::meshing::TetMesh t = object_tet_mesh(data("sphere.off"), tets);
+    const bool over = static_cast<double>(t.T.rows()) > 1.35 * tets;
+    overs += over;
+    const SceneWorld a = build_scene(load_scene(write("auto" + std::to_string(tets) + ".json",
+        "{\"objects\": [{\"name\": \"ball\", \"mesh\": \"" + data("sphere.off").string() + "\", \"tets\": " + std::to_string(tets) + "}]}")));
+    EXPECT_EQ(a.world.embedded(0), over) << t.T.rows() << " tetrahedra";
+    EXPECT_EQ(simulation_mesh_route(a.scene.objects[0]), over ? "all_convex_shells" : "auto");
+    EXPECT_EQ(a.world.collision_body(0).tets(), t.T.rows());
+  }
+  EXPECT_EQ(overs, 1) << "both branches of auto";
   EXPECT_EQ(plain.world.body(0).tets(), tight.T.rows());
 }
 
@@ -750,7 +765,7 @@ TEST_F(SceneEmbedTest, ConvexShellsSimulationMeshRefusesWhatItCannotDo) {
     return "";
   };
   const std::string bad = error(sphere_scene("bad.json", ", \"simulation_mesh\": \"cage\"", ""));
-  EXPECT_NE(bad.find("objects[0].simulation_mesh: must be \"tight\" or \"convex_shells\", got \"cage\""), std::string::npos) << bad;
+  EXPECT_NE(bad.find("objects[0].simulation_mesh: must be \"auto\", \"tight\" or \"convex_shells\", got \"cage\""), std::string::npos) << bad;
   EXPECT_EQ(bad.find('\n'), std::string::npos);
   write("cube_tets.mesh", "");
   squeeze::meshing::save_tet_mesh(dir_->path() / "cube_tets.mesh", box_tet_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), Eigen::Vector3i::Ones()));

@@ -271,8 +271,8 @@ Scene parse_scene(const std::string& text, const fs::path& file) {
     }
     if (o.contains("simulation_mesh")) {
       ob.simulation_mesh = c.string(o["simulation_mesh"], p + ".simulation_mesh");
-      if (ob.simulation_mesh != "tight" && ob.simulation_mesh != "convex_shells")
-        c.fail(p + ".simulation_mesh", "must be \"tight\" or \"convex_shells\", got \"" + ob.simulation_mesh + "\"");
+      if (ob.simulation_mesh != "auto" && ob.simulation_mesh != "tight" && ob.simulation_mesh != "convex_shells")
+        c.fail(p + ".simulation_mesh", "must be \"auto\", \"tight\" or \"convex_shells\", got \"" + ob.simulation_mesh + "\"");
     }
     if (o.contains("transform")) {
       const json& t = o["transform"];
@@ -677,14 +677,23 @@ std::string TimeStepChoice::describe(const Scene& scene) const {
 
 namespace {
 
-// Whether deformable object o is simulated on its convex shells with the mesh of its mesh_route
-// embedded (SceneObject::simulation_mesh).
-bool simulate_on_shells(const SceneObject& o) { return o.simulation_mesh == "convex_shells"; }
+// Whether deformable object o, meshed from a surface, is simulated on its convex shells with
+// `tight` (the mesh of its mesh_route) embedded (SceneObject::simulation_mesh): asked for, or
+// "auto" and `tight` has more than 35 % more tetrahedra than `tets` (the bound of its deviation
+// needs them: `tets` is then the number of degrees of freedom the object moves with).
+bool simulate_on_shells(const SceneObject& o, const meshing::TetMesh& tight) {
+  if (o.rigid || meshing::is_tet_format(o.mesh)) return false;
+  if (o.simulation_mesh == "convex_shells") return true;
+  return o.simulation_mesh == "auto" && static_cast<double>(tight.T.rows()) > 1.35 * o.tets;
+}
 
 }  // namespace
 
 std::string simulation_mesh_route(const SceneObject& o) {
-  return !o.rigid && !meshing::is_tet_format(o.mesh) && simulate_on_shells(o) ? "all_convex_shells" : o.mesh_route;
+  if (o.rigid || meshing::is_tet_format(o.mesh) || o.simulation_mesh == "tight") return o.mesh_route;
+  if (o.simulation_mesh == "convex_shells") return "all_convex_shells";
+  const meshing::TetMesh tight = object_tet_mesh(o.mesh, o.tets, nullptr, nullptr, nullptr, o.mesh_route);  // (cached)
+  return simulate_on_shells(o, tight) ? "all_convex_shells" : o.mesh_route;
 }
 
 SceneWorld build_scene(const Scene& scene, Progress* progress) {
@@ -721,7 +730,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     // A deformable object simulated on a cage (simulation_mesh): its convex shells at `tets`, the
     // mesh above (tight to its surface) embedded for contact and volume.
     std::optional<Body> embedded;
-    if (!o.rigid && !meshing::is_tet_format(o.mesh) && simulate_on_shells(o)) {
+    if (simulate_on_shells(o, m)) {
       meshing::TetMesh shells;
       try {
         Material any;

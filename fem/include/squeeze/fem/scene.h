@@ -94,11 +94,12 @@ struct SceneObject {
                                           // winding-number solid's boundary), "convex_shells",
                                           // "winding_number" (Mesh_3 as it is) or "alpha_wrap"
                                           // (meshing::mesh_route_names, set_mesh_route)
-  std::string simulation_mesh = "tight";  // deformable objects meshed from a surface: "tight" (simulate
-                                          // on the mesh of mesh_route) or "convex_shells" (simulate on
+  std::string simulation_mesh = "auto";   // deformable objects meshed from a surface: "tight" (simulate
+                                          // on the mesh of mesh_route), "convex_shells" (simulate on
                                           // the convex shells at `tets`, few degrees of freedom, with the
                                           // mesh of mesh_route embedded for contact and volume:
-                                          // World::embed)
+                                          // World::embed) or "auto" (convex_shells where the mesh of
+                                          // mesh_route has over 1.35 × tets tetrahedra, else tight)
   SceneTransform transform;
   std::string preset;                     // material.preset ("" if none): it set density and youngs_modulus
   double density = 1000.0;                // kg/m³ (material.density, else the preset's)
@@ -177,8 +178,9 @@ meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bo
                                  const std::string& route = "auto");
 
 /// The route of the mesh object `o` moves on (its simulation mesh, SceneWorld::meshes): "all_convex_shells"
-/// for a deformable object meshed from a surface with simulation_mesh "convex_shells", else
-/// o.mesh_route. object_tet_mesh(o.mesh, o.tets, ..., simulation_mesh_route(o)) is that mesh.
+/// for a deformable object meshed from a surface that simulates on its convex shells
+/// (simulation_mesh "convex_shells", or "auto" over its target: meshes it through the cache to
+/// tell), else o.mesh_route. object_tet_mesh(o.mesh, o.tets, ..., simulation_mesh_route(o)) is that mesh.
 std::string simulation_mesh_route(const SceneObject& o);
 
 /// The automatic time step of a world and what sets it (scene key `time_step`: "auto").
