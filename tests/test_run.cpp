@@ -350,3 +350,30 @@ TEST(CheckCli, WarnsAboutARobotInsideAnObstacleAndObjectsBelowTheFloor) {
   EXPECT_NE(r.err.find("bad.json: objects[0].pinned[0].near: holds no vertex of 'cube' at rest"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(d / "bad.check.json"));
 }
+
+// check measures the meshes objects collide with: two overlapping spheres moving on their convex
+// shells with their tight meshes embedded have the coarse overlaps, rest overlaps and gaps of the
+// same spheres moving on the tight meshes themselves (the shells are larger and would overlap more).
+TEST(SceneCheck, EmbeddedMeshesAreWhatIsChecked) {
+  auto check = [](const std::string& simulation_mesh) {
+    nlohmann::json j = {{"floor", nullptr}, {"gravity", {0, 0, 0}}};
+    const std::string sphere = kScenes + "assets/sphere.off";  // radius 0.5
+    j["objects"] = {
+        {{"name", "a"}, {"mesh", sphere}, {"tets", 150}, {"simulation_mesh", simulation_mesh}, {"transform", {{"scale", 0.5}}}},
+        {{"name", "b"}, {"mesh", sphere}, {"tets", 150}, {"simulation_mesh", simulation_mesh},
+         {"transform", {{"scale", 0.5}, {"translate", {0.48, 0, 0}}}}}};
+    const fem::SceneWorld w = fem::build_scene(fem::parse_scene(j.dump(), "pair.json"));
+    EXPECT_EQ(w.world.embedded(0), simulation_mesh == "convex_shells");
+    plan::SceneCheckOptions o;
+    o.settle = 0;
+    const plan::SceneCheck c = plan::check_scene(w, o);
+    EXPECT_EQ(c.overlaps.size(), 1u);
+    return c.overlaps.empty() ? plan::OverlapCheck{} : c.overlaps.front();
+  };
+  const plan::OverlapCheck tight = check("tight"), embedded = check("convex_shells");
+  ASSERT_TRUE(tight.surfaces_measured());
+  EXPECT_GT(tight.coarse_a_in_b, 0.0);  // they do overlap
+  EXPECT_EQ(embedded.coarse_a_in_b, tight.coarse_a_in_b);
+  EXPECT_EQ(embedded.coarse_b_in_a, tight.coarse_b_in_a);
+  EXPECT_EQ(embedded.surface_a_in_b, tight.surface_a_in_b);
+}

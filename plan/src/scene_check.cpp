@@ -178,16 +178,22 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
       c.a = a;
       c.b = b;
       if (!c.overlapping())
-        c.gap = std::min(boundary_distance(world.body(a), world.body(b)), boundary_distance(world.body(b), world.body(a)));
+        c.gap = std::min(boundary_distance(world.collision_body(a), world.collision_body(b)),
+                         boundary_distance(world.collision_body(b), world.collision_body(a)));
     }
   // --- coarse against surface overlaps: every pair whose surfaces' or coarse meshes' boxes meet ---
+  // The coarse mesh of an object is the one it collides with: its simulation mesh, or the tight
+  // mesh embedded in it (simulation_mesh, World::embed).
   if (options.details && options.surfaces && nb > 1) {
     std::vector<RestSurface> surf;
+    std::vector<meshing::TetMesh> coarse(static_cast<size_t>(nb));
     std::vector<Eigen::AlignedBox3d> coarse_box(static_cast<size_t>(nb));
     for (int b = 0; b < nb; ++b) {
       surf.push_back(rest_surface(w, b));
+      coarse[b].V = world.collision_body(b).rest;
+      coarse[b].T = world.collision_body(b).T;
       coarse_box[b].setEmpty();
-      for (Eigen::Index i = 0; i < w.meshes[b].V.rows(); ++i) coarse_box[b].extend(Eigen::Vector3d(w.meshes[b].V.row(i).transpose()));
+      for (Eigen::Index i = 0; i < coarse[b].V.rows(); ++i) coarse_box[b].extend(Eigen::Vector3d(coarse[b].V.row(i).transpose()));
     }
     std::vector<std::unique_ptr<meshing::FastWindingNumber>> winding(static_cast<size_t>(nb));
     std::vector<std::unique_ptr<meshing::TetLocator>> locator(static_cast<size_t>(nb));
@@ -196,7 +202,7 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
       return *winding[b];
     };
     auto loc = [&](int b) -> const meshing::TetLocator& {
-      if (!locator[b]) locator[b] = std::make_unique<meshing::TetLocator>(w.meshes[b]);
+      if (!locator[b]) locator[b] = std::make_unique<meshing::TetLocator>(coarse[b]);
       return *locator[b];
     };
     for (int a = 0; a < nb; ++a)
@@ -206,8 +212,8 @@ SceneCheck check_scene(const fem::SceneWorld& w, const SceneCheckOptions& option
         OverlapCheck c = listed ? pairs[{a, b}] : OverlapCheck{};
         c.a = a;
         c.b = b;
-        c.coarse_a_in_b = fraction_inside(w.meshes[a].V, loc(b));
-        c.coarse_b_in_a = fraction_inside(w.meshes[b].V, loc(a));
+        c.coarse_a_in_b = fraction_inside(coarse[a].V, loc(b));
+        c.coarse_b_in_a = fraction_inside(coarse[b].V, loc(a));
         c.surface_a_in_b = fraction_inside(surf[a].V, surf[b].box, wn(b));
         c.surface_b_in_a = fraction_inside(surf[b].V, surf[a].box, wn(a));
         if (listed || c.coarse_a_in_b + c.coarse_b_in_a + c.surface_a_in_b + c.surface_b_in_a > 0) pairs[{a, b}] = c;
