@@ -387,6 +387,26 @@ TEST(MeshCliOutputs, TargetTetsRaisesTheCount) {
   EXPECT_GT(nb, 3 * na) << na << " vs " << nb;
 }
 
+// --shells-only: a closed input (the sphere, which takes its own boundary by default) is meshed as
+// its convex shells, and the report says so; without the flag, not.
+TEST(MeshCliOutputs, ShellsOnlyMeshesAClosedPartAsItsConvexShells) {
+  TempDir dir("shells-only");
+  const RunResult a = run_squeeze({"-q", "mesh", data("sphere.off").string(), "-o", "a.mesh", "--target-tets", "300",
+                                   "--shells-only", "--report", "a.json"},
+                                  dir.path());
+  const RunResult b = run_squeeze({"-q", "mesh", data("sphere.off").string(), "-o", "b.mesh", "--target-tets", "300",
+                                   "--report", "b.json"},
+                                  dir.path());
+  ASSERT_EQ(a.code, 0) << a.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  const nlohmann::json ra = nlohmann::json::parse(read_text(dir / "a.json")), rb = nlohmann::json::parse(read_text(dir / "b.json"));
+  EXPECT_EQ(ra["method"], "convex_shells");
+  EXPECT_NE(ra["fallback_because"].get<std::string>().find("shells_only"), std::string::npos) << ra["fallback_because"];
+  EXPECT_EQ(rb["method"], "boundary");
+  EXPECT_GT(ra["volume_ratio"].get<double>(), 1.0);  // the hulls hold the whole sphere
+  EXPECT_LE(ra["deviation_in"].get<double>(), rb["deviation_in"].get<double>() + 0.005);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad inputs.
 
