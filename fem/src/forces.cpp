@@ -191,15 +191,7 @@ void collect_contact_forces(const WorldData& d, const World& w, const State& s, 
   ws.stats.colliding_vertices = static_cast<int>(pens.size());
   // A collision vertex follows the state rows coll_row[a, b) with the weights coll_w (one row of
   // weight 1 for a vertex of the simulation mesh itself, none for a rigid one; embed).
-  auto single = [&](int g) { return d.single_row(g); };
-  auto velocity = [&](int g) -> Vec3 {
-    if (single(g)) return Vec3(s.v.row(d.coll_row[d.coll_start[g]]).transpose());
-    Vec3 u = Vec3::Zero();
-    for (int c = d.coll_start[g]; c < d.coll_start[g + 1]; ++c) u += d.coll_w[c] * Vec3(s.v.row(d.coll_row[c]).transpose());
-    return u;
-  };
-  auto followed = [&](int g) { return d.followed(g); };  // not rigid
-  auto weighted = [&](int g, const Eigen::VectorXd& per_row) { return d.contact_coefficient(g, per_row); };
+  auto velocity = [&](int g) -> Vec3 { return d.followed(g) ? d.follow(g, s.v) : Vec3::Zero(); };
   auto add = [&](int row, const Vec3& f) {  // appended: applied in the order found
     const int id = static_cast<int>(ws.contact_f.size());
     ws.contact_f.push_back(f);
@@ -212,12 +204,9 @@ void collect_contact_forces(const WorldData& d, const World& w, const State& s, 
     }
     ws.contact_tail[row] = id;
   };
-  // f at collision vertex g, times `scale`, onto its rows by their weights.
+  // f at collision vertex g, times `scale`, onto its rows by their weights (a single row of
+  // weight 1 gets scale · f exactly).
   auto spread = [&](int g, double scale, const Vec3& f) {
-    if (single(g)) {
-      add(d.coll_row[d.coll_start[g]], scale == 1.0 ? f : Vec3(scale * f));
-      return;
-    }
     for (int c = d.coll_start[g]; c < d.coll_start[g + 1]; ++c) add(d.coll_row[c], (scale * d.coll_w[c]) * f);
   };
   for (const Penetration& p : pens) {  // fixed order: sequential
@@ -232,28 +221,22 @@ void collect_contact_forces(const WorldData& d, const World& w, const State& s, 
     if (!o.cap_contact_stiffness) {
       kc = o.contact_stiffness;
       cc = o.contact_damping;
-    } else if (followed(p.vertex)) {
-      kc = weighted(p.vertex, d.contact_k);
-      cc = weighted(p.vertex, d.contact_c);
+    } else if (d.followed(p.vertex)) {
+      kc = d.contact_coefficient(p.vertex, d.contact_k);
+      cc = d.contact_coefficient(p.vertex, d.contact_c);
     } else {
       kc = cc = 0;
       for (int k = 0; k < 4; ++k) {
         const int g = d.T_all(p.tet, k);
-        if (followed(g)) kc += p.bary[k] * weighted(g, d.contact_k), cc += p.bary[k] * weighted(g, d.contact_c);
+        if (d.followed(g))
+          kc += p.bary[k] * d.contact_coefficient(g, d.contact_k), cc += p.bary[k] * d.contact_coefficient(g, d.contact_c);
       }
     }
     const Vec3 f = (kc * p.depth - cc * closing) * r;
-    if (followed(p.vertex)) {
+    if (d.followed(p.vertex)) {
       spread(p.vertex, 1.0, f);
     } else {  // rigid vertex inside a deformable tet: the reaction acts on the tet
-      for (int k = 0; k < 4; ++k) {
-        const int g = d.T_all(p.tet, k);
-        if (!followed(g)) continue;
-        if (single(g))
-          add(d.coll_row[d.coll_start[g]], -(p.bary[k] * f));
-        else
-          spread(g, -p.bary[k], f);
-      }
+      for (int k = 0; k < 4; ++k) spread(d.T_all(p.tet, k), -p.bary[k], f);  // (none for a rigid corner)
     }
   }
 }
@@ -306,15 +289,11 @@ void assemble_forces(const World& w, const State& s, const RowMatrixX3d* externa
   // of their rows' coefficients), and their rows by the weights they follow them with.
   if (floor && d.any_embedded)
     for (int g : d.embedded_vertices) {
-      const int a = d.coll_start[g], b = d.coll_start[g + 1];
-      double y = 0, vy = 0;
-      for (int q = a; q < b; ++q) {
-        y += d.coll_w[q] * s.x(d.coll_row[q], 1);
-        vy += d.coll_w[q] * s.v(d.coll_row[q], 1);
-      }
+      const double y = d.follow(g, s.x).y();
       if (!(y < fy)) continue;
+      const double vy = d.follow(g, s.v).y();
       const double f = d.contact_coefficient(g, d.contact_k) * (fy - y) - d.contact_coefficient(g, d.contact_c) * std::min(0.0, vy);
-      for (int q = a; q < b; ++q) F(d.coll_row[q], 1) += d.coll_w[q] * f;
+      for (int q = d.coll_start[g]; q < d.coll_start[g + 1]; ++q) F(d.coll_row[q], 1) += d.coll_w[q] * f;
     }
 }
 
@@ -378,11 +357,7 @@ Eigen::Vector4i collision_tet(const World& w, int tet) { return w.data().T_all.r
 
 Eigen::Vector3d collision_vertex_position(const World& w, const State& s, int g) {
   const WorldData& d = w.data();
-  if (d.coll_start[g + 1] == d.coll_start[g]) return d.X_rest_all.row(g).transpose();  // rigid
-  if (!d.any_embedded) return s.x.row(g).transpose();
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  for (int c = d.coll_start[g]; c < d.coll_start[g + 1]; ++c) p += d.coll_w[c] * s.x.row(d.coll_row[c]).transpose();
-  return p;
+  return d.followed(g) ? d.follow(g, s.x) : Eigen::Vector3d(d.X_rest_all.row(g).transpose());  // rigid: at rest
 }
 
 void detect_contacts(const World& w, const State& s, ForceWorkspace& workspace) {

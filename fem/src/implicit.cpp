@@ -617,24 +617,21 @@ void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetrat
     const int g[5] = {p.vertex, d.T_all(p.tet, 0), d.T_all(p.tet, 1), d.T_all(p.tet, 2), d.T_all(p.tet, 3)};
     const double wg[5] = {1.0, -p.bary[0], -p.bary[1], -p.bary[2], -p.bary[3]};
     c.r = p.direction;
-    // Collision vertex g follows the state rows coll_row[a, b) by coll_w (one of weight 1 for a
-    // vertex of the simulation mesh, none for a rigid one).
-    auto single = [&](int v) { return d.single_row(v); };
-    auto followed = [&](int v) { return d.followed(v); };
-    auto weighted = [&](int v, const Eigen::VectorXd& per_row) { return d.contact_coefficient(v, per_row); };
     // Coefficients as the explicit contact force takes them (World::contact_scale).
     if (!o.cap_contact_stiffness) {
       c.k = o.contact_stiffness;
       c.c = o.contact_damping;
-    } else if (followed(p.vertex)) {
-      c.k = weighted(p.vertex, d.contact_k);
-      c.c = weighted(p.vertex, d.contact_c);
+    } else if (d.followed(p.vertex)) {
+      c.k = d.contact_coefficient(p.vertex, d.contact_k);
+      c.c = d.contact_coefficient(p.vertex, d.contact_c);
     } else {
       for (int k = 0; k < 4; ++k)
-        if (followed(g[k + 1])) c.k += p.bary[k] * weighted(g[k + 1], d.contact_k), c.c += p.bary[k] * weighted(g[k + 1], d.contact_c);
+        if (d.followed(g[k + 1]))
+          c.k += p.bary[k] * d.contact_coefficient(g[k + 1], d.contact_k),
+              c.c += p.bary[k] * d.contact_coefficient(g[k + 1], d.contact_c);
     }
     // The stencil: as (p, the tet's corners), one slot each, without embedded meshes; else the
-    // free rows they follow, merged.
+    // free rows they follow (coll_row, by coll_w), merged.
     if (!d.any_embedded) {
       c.n = 5;
       for (int s = 0; s < 5; ++s) {
@@ -647,7 +644,7 @@ void ImplicitIntegrator::add_contacts(const World& w, const std::vector<Penetrat
         for (int k = d.coll_start[g[s]]; k < d.coll_start[g[s] + 1]; ++k) {
           const int row = d.coll_row[k];
           if (free_[row] < 0) continue;
-          const double wk = single(g[s]) ? wg[s] : wg[s] * d.coll_w[k];
+          const double wk = wg[s] * d.coll_w[k];
           int t = 0;
           while (t < c.n && c.row[t] != row) ++t;
           if (t < c.n) {
@@ -700,8 +697,7 @@ void ImplicitIntegrator::add_floor_contacts(const World& w, const RowMatrixX3d& 
     if (c.vertex <= -2) have.push_back(-2 - c.vertex);
   std::sort(have.begin(), have.end());
   for (int g : d.embedded_vertices) {
-    double y = 0;
-    for (int q = d.coll_start[g]; q < d.coll_start[g + 1]; ++q) y += d.coll_w[q] * x(d.coll_row[q], 1);
+    const double y = d.follow(g, x).y();
     if (!(y < o.floor_height) || std::binary_search(have.begin(), have.end(), g)) continue;
     LinearContact c;
     c.r = Vec3(0, 1, 0);

@@ -3,6 +3,7 @@
 #include "squeeze/common/format.h"
 #include "squeeze/fem/constraints.h"
 #include "squeeze/fem/integrator.h"
+#include "squeeze/meshing/tet_geometry.h"
 
 #include <algorithm>
 #include <atomic>
@@ -729,16 +730,21 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
       spdlog::warn("{}: {}.simulation_mesh: '{}' is rigid (it never deforms): it collides with its mesh as it is", file, p, o.name);
     // A deformable object simulated on a cage (simulation_mesh): its convex shells at `tets`, the
     // mesh above (tight to its surface) embedded for contact and volume.
-    std::optional<Body> embedded;
+    std::optional<meshing::TetMesh> embedded;  // the mesh above in world coordinates (World::embed)
+    double embedded_volume = 0;                // m³
     if (simulate_on_shells(o, m)) {
       meshing::TetMesh shells;
       try {
-        Material any;
-        embedded.emplace(m, any, false, o.transform.affine());
         shells = object_tet_mesh(o.mesh, o.tets, nullptr, progress, &off_target, "all_convex_shells");
       } catch (const InputError& e) {
         throw InputError(file + ": " + p + ".mesh: " + e.what());
       }
+      embedded.emplace();
+      embedded->V.resize(m.V.rows(), 3);
+      const Eigen::Affine3d A = o.transform.affine();
+      for (Eigen::Index i = 0; i < m.V.rows(); ++i) embedded->V.row(i) = (A * Eigen::Vector3d(m.V.row(i).transpose())).transpose();
+      embedded->T = m.T;
+      embedded_volume = meshing::tet_volumes(*embedded).sum();
       spdlog::debug("{}: {}: simulated on its convex shells ({} tetrahedra), its {} tetrahedra embedded", file, p,
                     shells.T.rows(), m.T.rows());
       m = std::move(shells);
@@ -764,7 +770,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     }
     const double V = body->total_volume();
     // On a cage, the object's mass is its own (the embedded mesh's volume), spread over the cage.
-    const double V_object = embedded ? embedded->total_volume() : V;
+    const double V_object = embedded ? embedded_volume : V;
     if (embedded) mat.density = o.density * V_object / V;
     mat.k_distance = o.k_distance.value_or(o.youngs_modulus * V / std::max<Eigen::Index>(1, body->E.rows()));
     mat.k_volume = o.k_volume.value_or(3.0 * o.youngs_modulus * V / std::max(1, body->tets()));
@@ -807,11 +813,8 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
     body->gravity = o.gravity;
     const int b = world.add_body(std::move(*body));
     if (embedded) {
-      meshing::TetMesh collision;
-      collision.V = embedded->rest;
-      collision.T = embedded->T;
       try {
-        world.embed(b, collision);
+        world.embed(b, *embedded);
       } catch (const InputError& e) {
         throw InputError(file + ": " + p + ".simulation_mesh: " + e.what());
       }

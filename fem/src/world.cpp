@@ -370,16 +370,12 @@ void World::prepare() {
     if (d.state_row[b] >= 0) order.push_back(b);
   for (int b = 0; b < bodies(); ++b)
     if (d.state_row[b] < 0) order.push_back(b);
-  auto collider = [&](int b) -> const Body& {
-    const int e = d.embedding[static_cast<size_t>(b)];
-    return e >= 0 ? d.embedded[static_cast<size_t>(e)].mesh : d.bodies[static_cast<size_t>(b)];
-  };
   int nv_all = 0, nt_all = 0;
   double edge_sum = 0;
   long long edge_count = 0;
   d.any_embedded = false;
   for (int b : order) {
-    const Body& C = collider(b);
+    const Body& C = collision_body(b);
     d.any_embedded = d.any_embedded || d.embedding[static_cast<size_t>(b)] >= 0;
     d.scene.bodies.push_back(&C);
     d.group_body.push_back(b);
@@ -401,9 +397,11 @@ void World::prepare() {
   d.coll_row.clear();
   d.coll_w.clear();
   d.coll_share.clear();
+  d.floor_row.assign(static_cast<size_t>(rows), 1);
+  d.embedded_vertices.clear();
   for (size_t g = 0; g < order.size(); ++g) {
     const int b = order[g];
-    const Body& B = collider(b);
+    const Body& B = collision_body(b);
     const int fv = d.scene.first_vertex[g], ft = d.scene.first_tet[g];
     d.T_all.middleRows(ft, B.tets()) = B.T.array() + fv;
     d.X_rest_all.middleRows(fv, B.vertices()) = B.rest;
@@ -415,10 +413,13 @@ void World::prepare() {
     const int r0 = d.state_row[static_cast<size_t>(b)], e = d.embedding[static_cast<size_t>(b)];
     double share = 1.0;
     if (r0 >= 0 && e >= 0) {
-      const auto& own = d.bodies[static_cast<size_t>(b)].on_boundary;
-      const double cage = static_cast<double>(std::count(own.begin(), own.end(), 1));
+      const Body& host = d.bodies[static_cast<size_t>(b)];
+      const double cage = static_cast<double>(std::count(host.on_boundary.begin(), host.on_boundary.end(), 1));
       const double embedded = static_cast<double>(std::count(B.on_boundary.begin(), B.on_boundary.end(), 1));
       share = std::min(1.0, cage / std::max(1.0, embedded));
+      // The floor holds the embedded vertices instead of the host's rows.
+      std::fill(d.floor_row.begin() + r0, d.floor_row.begin() + r0 + host.vertices(), 0);
+      for (int k = 0; k < B.vertices(); ++k) d.embedded_vertices.push_back(fv + k);
     }
     d.coll_share.resize(static_cast<size_t>(fv + B.vertices()), share);
     for (int k = 0; k < B.vertices(); ++k) {
@@ -435,15 +436,6 @@ void World::prepare() {
       }
       d.coll_start[static_cast<size_t>(fv + k) + 1] = static_cast<int>(d.coll_row.size());
     }
-  }
-  d.floor_row.assign(static_cast<size_t>(rows), 1);
-  d.embedded_vertices.clear();
-  for (size_t g = 0; g < order.size(); ++g) {
-    const int b = order[g];
-    if (d.state_row[static_cast<size_t>(b)] < 0 || d.embedding[static_cast<size_t>(b)] < 0) continue;
-    std::fill(d.floor_row.begin() + d.state_row[static_cast<size_t>(b)],
-              d.floor_row.begin() + d.state_row[static_cast<size_t>(b)] + d.bodies[static_cast<size_t>(b)].vertices(), 0);
-    for (int k = 0; k < d.scene.bodies[g]->vertices(); ++k) d.embedded_vertices.push_back(d.scene.first_vertex[g] + k);
   }
   // Attachment anchors: the rest positions, raised by m g / k where the attachment carries the weight.
   d.attach_anchor.resize(rows, 3);

@@ -99,13 +99,18 @@ struct WorldData {
       return;
     }
     const int n = static_cast<int>(coll_start.size()) - 1;
-    for (int g = 0; g < n; ++g) {
-      const int a = coll_start[static_cast<size_t>(g)], b = coll_start[static_cast<size_t>(g) + 1];
-      if (a == b) continue;
-      Eigen::RowVector3d p = Eigen::RowVector3d::Zero();
-      for (int c = a; c < b; ++c) p += coll_w[static_cast<size_t>(c)] * x.row(coll_row[static_cast<size_t>(c)]);
-      X_all.row(g) = p;
-    }
+    for (int g = 0; g < n; ++g)
+      if (followed(g)) X_all.row(g) = follow(g, x).transpose();
+  }
+
+  /// Σ w per_row over the rows collision vertex g follows (its position for per_row = x, its
+  /// velocity for v); a single row of weight 1 exactly. per_row: #rows by 3.
+  Eigen::Vector3d follow(int g, const Eigen::Ref<const RowMatrixX3d>& per_row) const {
+    const int a = coll_start[static_cast<size_t>(g)], b = coll_start[static_cast<size_t>(g) + 1];
+    if (single_row(g)) return per_row.row(coll_row[static_cast<size_t>(a)]).transpose();
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    for (int c = a; c < b; ++c) p += coll_w[static_cast<size_t>(c)] * per_row.row(coll_row[static_cast<size_t>(c)]).transpose();
+    return p;
   }
 
   /// Collision vertex g follows state rows (it is not rigid).
