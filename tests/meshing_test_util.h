@@ -33,6 +33,16 @@ using squeeze::meshing::TetMesh;
 
 inline fs::path data(const std::string& name) { return fs::path(SQUEEZE_TEST_DATA) / name; }
 
+/// V (#V points), F (#F index triples) as a SurfaceMesh.
+inline SurfaceMesh surface_of(const std::vector<Eigen::Vector3d>& V, const std::vector<std::array<int, 3>>& F) {
+  SurfaceMesh m;
+  m.V.resize(static_cast<Eigen::Index>(V.size()), 3);
+  for (size_t i = 0; i < V.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = V[i].transpose();
+  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t i = 0; i < F.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
+  return m;
+}
+
 /// A fresh, empty directory for one test, removed when it goes out of scope.
 class TempDir {
  public:

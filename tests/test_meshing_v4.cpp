@@ -35,15 +35,7 @@ using sqt::join;
 using Vec3 = Eigen::Vector3d;
 namespace fs = std::filesystem;
 
-/// V, F as a SurfaceMesh.
-SurfaceMesh surface_of(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F) {
-  SurfaceMesh m;
-  m.V.resize(static_cast<Eigen::Index>(V.size()), 3);
-  for (size_t i = 0; i < V.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = V[i].transpose();
-  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
-  for (size_t i = 0; i < F.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
-  return m;
-}
+using sqt::surface_of;
 
 /// The surface of the box [lo, hi] with each side divided into n pieces along each axis (n(k) >= 1):
 /// (n0+1)(n1+1)(n2+1) - (n0-1)(n1-1)(n2-1) vertices, outward triangles.

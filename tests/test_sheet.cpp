@@ -76,12 +76,7 @@ SurfaceMesh pixel_ellipse(int nx, int ny, double pixel) {
       F.push_back({a, b, c});
       F.push_back({a, c, d});
     }
-  SurfaceMesh m;
-  m.V.resize(static_cast<Eigen::Index>(V.size()), 3);
-  for (size_t i = 0; i < V.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = V[i].transpose();
-  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
-  for (size_t i = 0; i < F.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << F[i][0], F[i][1], F[i][2];
-  return m;
+  return sqt::surface_of(V, F);
 }
 
 struct SheetCase {
