@@ -181,6 +181,7 @@ meshing::TetMesh object_tet_mesh(const std::filesystem::path& mesh, int tets, bo
 /// for a deformable object meshed from a surface that simulates on its convex shells
 /// (simulation_mesh "convex_shells", or "auto" over its target: meshes it through the cache to
 /// tell), else o.mesh_route. object_tet_mesh(o.mesh, o.tets, ..., simulation_mesh_route(o)) is that mesh.
+/// Throws InputError as object_tet_mesh where "auto" meshes the object (an unreadable file, say).
 std::string simulation_mesh_route(const SceneObject& o);
 
 /// The automatic time step of a world and what sets it (scene key `time_step`: "auto").
