@@ -1,5 +1,7 @@
 #include "squeeze/meshing/split_long_edges.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -18,6 +20,25 @@ double median_edge_length(const SurfaceMesh& s) {
   if (len.empty()) return 0.0;
   std::nth_element(len.begin(), len.begin() + static_cast<long>(len.size() / 2), len.end());
   return len[len.size() / 2];
+}
+
+double skinny_split_length(const SurfaceMesh& s, const SkinnySplitOptions& opt) {
+  double total = 0, skinny = 0;
+  std::vector<double> shortest;
+  for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
+    const Eigen::RowVector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
+    const double area = 0.5 * (b - a).cross(c - a).norm();
+    const double l[3] = {(b - a).norm(), (c - b).norm(), (a - c).norm()};
+    const double lo = std::min({l[0], l[1], l[2]}), hi = std::max({l[0], l[1], l[2]});
+    total += area;
+    if (hi > opt.max_aspect * lo && lo > 0) {
+      skinny += area;
+      shortest.push_back(lo);
+    }
+  }
+  if (!(total > 0) || !(skinny > opt.area_fraction * total) || shortest.empty()) return 0.0;
+  std::nth_element(shortest.begin(), shortest.begin() + static_cast<long>(shortest.size() / 2), shortest.end());
+  return opt.shortest_edges * shortest[shortest.size() / 2];
 }
 
 SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length) {

@@ -145,12 +145,16 @@ struct RunResult {
   // starting points is the same run: its size bound finds a subset of the same cells too large,
   // and those found now inserted nothing (tetrahedralize skips it).
   bool length_bound = false;
+  double work = 0;             // conflict-zone cells refinement searched (Mesher::conflict_cells_)
+  bool work_exceeded = false;  // ... beyond the Mesher's budget: refinement stopped there
 };
 
 class Mesher {
  public:
-  Mesher(const SurfaceMesh& s, const FastWindingNumber& wn, const TetrahedralizeOptions& opt, double edge_length)
-      : opt_(opt), L_(edge_length), wn_(wn), tr_(c3t3_.triangulation()) {
+  // work_budget: conflict-zone cells refinement may search (0: no bound; TetrahedralizeOptions::max_refine_work).
+  Mesher(const SurfaceMesh& s, const FastWindingNumber& wn, const TetrahedralizeOptions& opt, double edge_length,
+         double work_budget = 0)
+      : opt_(opt), L_(edge_length), work_budget_(work_budget), wn_(wn), tr_(c3t3_.triangulation()) {
     build_surface(s);
     start_points_ = P_.size();
   }
@@ -187,18 +191,26 @@ class Mesher {
       if (progress) progress->update(round, "refinement round " + std::to_string(round + 1));
       if (static_cast<int>(P_.size()) > max_vertices) break;
       if (!refine_round()) break;
+      if (work_budget_ > 0 && static_cast<double>(conflict_cells_) > work_budget_) {
+        r.work_exceeded = true;
+        spdlog::debug("refinement stopped after round {}: {} conflict-zone cells searched (bound {:.4g})", round,
+                      conflict_cells_, work_budget_);
+      }
       const bool was_conforming = r.conforming;
       if (r.conforming) r.conforming = make_conforming();
       classify(r.conforming);
-      spdlog::debug("round {}: {} points, conforming {}, {} splits, {} steiner", round, P_.size(), r.conforming, splits_,
-                    steiner_);
+      spdlog::debug("round {}: {} points, conforming {}, {} splits, {} steiner, {} conflict cells", round, P_.size(),
+                    r.conforming, splits_, steiner_, conflict_cells_);
       if (was_conforming && !r.conforming) break;
+      if (r.work_exceeded) break;
     }
     if (!r.conforming)
       spdlog::debug("tetrahedralize: some boundary faces are not faces of the triangulation; tetrahedra classified by "
                     "the winding number at their centroids");
     setup_complex();
-    if (opt_.exude) r.exuder_stopped = !exude();
+    // (Not after the work bound: the mesh is left for another boundary, and the exuder can take its
+    // time limit over such a one.)
+    if (opt_.exude && !r.work_exceeded) r.exuder_stopped = !exude();
     r.mesh = extract();
     // Boundary tetrahedra still below the floor (flat caps over the surface that refinement could
     // not reach without splitting the surface below min_split_) are peeled off where that moves the
@@ -210,6 +222,7 @@ class Mesher {
     r.steiner = steiner_;
     r.size_driven = size_driven_;
     r.length_bound = split_bound || size_driven_ > 0;
+    r.work = static_cast<double>(conflict_cells_);
     return r;
   }
 
@@ -235,6 +248,7 @@ class Mesher {
  private:
   const TetrahedralizeOptions& opt_;
   const double L_;  // interior edge length (INFINITY: quality refinement only)
+  const double work_budget_;  // conflict-zone cells refinement may search (0: no bound)
   const FastWindingNumber& wn_;  // of the surface (the fallback classification)
   int conformity_cap_ = 0;       // make_conforming gives up beyond this many points
   C3t3 c3t3_;
@@ -250,6 +264,7 @@ class Mesher {
   std::unordered_map<uint64_t, std::array<int, 2>> edge_tris_;
   std::unordered_map<Key3, int, Key3Hash> face_;
   int splits_ = 0, steiner_ = 0, size_driven_ = 0;
+  long conflict_cells_ = 0;  // cells of the conflict zones refinement searched (its work)
   size_t start_points_ = 0;        // P_'s points before run() (same_start)
   double min_split_ = 0;           // quality does not split surface edges shorter than this
 
@@ -874,6 +889,7 @@ class Mesher {
       if (tr_.side_of_power_sphere(c, wp, true) != CGAL::ON_BOUNDED_SIDE) return Try::outside;
       boundary.clear(), internal.clear(), cells.clear();
       tr_.find_conflicts(wp, c, std::back_inserter(boundary), std::back_inserter(cells), std::back_inserter(internal));
+      conflict_cells_ += static_cast<long>(cells.size());
       *enc = -1;
       double enc_area = -1;
       for (const Facet& f : internal) {
@@ -1075,7 +1091,8 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
   for (int attempt = 0; attempt < opt.max_attempts; ++attempt) {
     const auto t0 = std::chrono::steady_clock::now();
     if (progress) progress->stage("tetrahedralizing the boundary (attempt " + std::to_string(attempt + 1) + ")");
-    if (!mesher) mesher = std::make_unique<Mesher>(boundary, wn, opt, L);
+    const double budget = opt.max_refine_work > 0 ? std::max(1.0, opt.max_refine_work - st.refine_work) : 0.0;
+    if (!mesher) mesher = std::make_unique<Mesher>(boundary, wn, opt, L, budget);
     RunResult r = mesher->run(progress);
     const double n = static_cast<double>(r.mesh.T.rows());
     const bool recovered = r.recovered, length_bound = r.length_bound;
@@ -1085,6 +1102,9 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     st.attempts = attempt + 1;
     st.exuder_nan_stops += r.exuder_stopped;
+    st.refine_work += r.work;
+    const bool exceeded = r.work_exceeded;
+    st.work_exceeded = st.work_exceeded || exceeded;
     const double score = (r.conforming ? 0 : 100) + (n > 0 ? std::abs(std::log(n / target)) : 1e9);
     if (score < best_score) {
       best_score = score;
@@ -1096,6 +1116,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
       best = std::move(r);
     }
     if (n > 0.87 * target && n < 1.15 * target) break;
+    if (exceeded) break;  // its work bound: no further attempt
     // Coarser made no difference: the boundary (its faces and the quality it needs) sets the count.
     // Nor can it where the boundary was not recovered before refinement began: that recovery
     // depends on L only through the points set along creases, fewer for a longer L.
@@ -1111,7 +1132,8 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
     // starts from the same points (RunResult::length_bound): it would give the same mesh (the
     // heart's second attempt did, 0.7 s).
     if (attempt + 1 >= opt.max_attempts) break;
-    std::unique_ptr<Mesher> next = std::make_unique<Mesher>(boundary, wn, opt, L);
+    std::unique_ptr<Mesher> next = std::make_unique<Mesher>(
+        boundary, wn, opt, L, opt.max_refine_work > 0 ? std::max(1.0, opt.max_refine_work - st.refine_work) : 0.0);
     if (opt.skip_repeated_attempts && n > target && !length_bound && next->same_start(*mesher)) break;
     mesher = std::move(next);
   }

@@ -48,6 +48,13 @@ struct TetrahedralizeOptions {
                                   // every step is deterministic); false runs it (tests pin that it
                                   // gives the same mesh kept)
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
+  double max_refine_work = 0;     // cells of the conflict zones refinement may search in all attempts
+                                  // (its work, a deterministic measure of its time: about 4 million
+                                  // per second here); beyond it refinement stops and no further
+                                  // attempt runs (TetrahedralizeStats::work_exceeded). 0: no bound.
+                                  // Real meshes search under 0.2 million per attempt; a rod of long,
+                                  // thin triangles 21 million in its first (squeeze mesh bounds the
+                                  // parts it has a rounder boundary for: mesh_pipeline.h)
 };
 
 /// What tetrahedralize() reports beside the mesh.
@@ -65,6 +72,8 @@ struct TetrahedralizeStats {
   bool conforming = true;        // every boundary triangle (after splits) is a face of the mesh
   int exuder_nan_stops = 0;      // attempts whose CGAL exuder met a NaN weight beside a numerically flat
                                  // cell and stopped there, instead of the process dying of SIGFPE
+  double refine_work = 0;        // cells of the conflict zones refinement searched, all attempts
+  bool work_exceeded = false;    // refinement stopped at TetrahedralizeOptions::max_refine_work
 };
 
 /// Tetrahedralizes the solid bounded by `boundary`, a closed, consistently outward-oriented,
