@@ -72,7 +72,8 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
   cmd->add_flag("--shells-only", args->options.shells_only,
                 "Mesh every input, closed parts too, as its convex shells with Mesh_3 (the paper's coarse meshes, "
                 "looser than the deviation bounds): a simulation cage for a tight mesh embedded in it (scene key "
-                "objects[].simulation_mesh)");
+                "objects[].simulation_mesh). Where Mesh_3 cannot mesh the shells around the input (a part thinner "
+                "than its cells), the default route instead (the report's fallback_because)");
   cmd->add_option("--winding-facet-distance", args->options.winding_facet_distance,
                   "Inputs that are not closed parts: Mesh_3's facet distance on their winding-number solid, as a "
                   "multiple of --max-deviation (smaller: closer to the input inside, more tetrahedra and seconds)")

@@ -664,6 +664,80 @@ TEST(MeshingV4, LongThinTrianglesOfACylinderComeOutExact) {
 }
 
 
+// A faceted rod along z: `sides` vertices per ring, `rings` + 1 rings over `length`, capped by a
+// fan around each end's centre (a CAD export's tube: side triangles length / rings long and
+// 2 pi r / sides wide).
+SurfaceMesh ringed_rod(double r, double length, int sides, int rings) {
+  SurfaceMesh s;
+  s.V.resize(sides * (rings + 1) + 2, 3);
+  for (int j = 0; j <= rings; ++j)
+    for (int i = 0; i < sides; ++i) {
+      const double t = 2 * M_PI * i / sides;
+      s.V.row(j * sides + i) << r * std::cos(t), r * std::sin(t), length * j / rings;
+    }
+  const int c0 = sides * (rings + 1), c1 = c0 + 1;
+  s.V.row(c0) << 0, 0, 0;
+  s.V.row(c1) << 0, 0, length;
+  std::vector<Eigen::Vector3i> F;
+  for (int j = 0; j < rings; ++j)
+    for (int i = 0; i < sides; ++i) {
+      const int a = j * sides + i, b = j * sides + (i + 1) % sides, c = a + sides, d = b + sides;
+      F.emplace_back(a, b, d);
+      F.emplace_back(a, d, c);
+    }
+  for (int i = 0; i < sides; ++i) {
+    F.emplace_back(c0, (i + 1) % sides, i);
+    F.emplace_back(c1, rings * sides + i, rings * sides + (i + 1) % sides);
+  }
+  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t f = 0; f < F.size(); ++f) s.F.row(static_cast<Eigen::Index>(f)) = F[f].transpose();
+  return s;
+}
+
+// A 1 m rod of 3 mm radius, 12 sides and 40 rings (side triangles 25 mm by 1.6 mm): its own
+// boundary left the simplification no collapse, and its Delaunay refinement searched conflict
+// zones the size of the rod (21 s and 2.2 degrees, not conforming, at 150; 169 s at 1000). Mostly
+// skinny triangles: it is split to rounder ones and simplified, and comes out within the bounds
+// with far less refinement work (a deterministic proxy for its time).
+TEST(MeshingV4, RodOfLongThinTrianglesIsSplitAndMeshedWithinTheBounds) {
+  const SurfaceMesh s = ringed_rod(0.003, 1.0, 12, 40);
+  EXPECT_GT(squeeze::meshing::skinny_split_length(s), 0.0);
+  EXPECT_EQ(squeeze::meshing::skinny_split_length(sphere(Vec3(0.1, 0.2, 0.3), 0.2, 3)), 0.0);
+  EXPECT_EQ(squeeze::meshing::skinny_split_length(box(Vec3(0, 0, 0), Vec3(1, 0.6, 0.02))), 0.0);
+  const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
+  for (int target : {150, 1000}) {
+    SCOPED_TRACE("target " + std::to_string(target));
+    const MeshResult r = mesh(s, target);
+    EXPECT_EQ(r.method, "boundary") << r.fallback_because;
+    EXPECT_TRUE(r.tet_stats.conforming);
+    expect_within(r, diag, 0.05, 0.015, 0.005, 1);
+    EXPECT_FALSE(r.tet_stats.work_exceeded);
+    EXPECT_LT(r.tet_stats.refine_work, 1e6);
+    EXPECT_LT(r.quality.tets, 4 * target);
+  }
+  // The same rod with rounder triangles is not split, and meshes alike.
+  const SurfaceMesh fine = ringed_rod(0.003, 1.0, 12, 160);
+  EXPECT_EQ(squeeze::meshing::skinny_split_length(fine), 0.0);
+}
+
+// Asked for its convex shells, the rod (one shell, thinner than Mesh_3's cells) got 24 tetrahedra
+// around its middle, 3.6 times its volume and a diagonal off it. Such a shells mesh is refused and
+// the input is meshed by the default route, the report saying why.
+TEST(MeshingV4, ShellsOnlyFallsBackWhereMesh3CannotMeshTheShells) {
+  const SurfaceMesh s = ringed_rod(0.003, 1.0, 12, 40);
+  const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
+  MeshOptions o;
+  o.tetrahedralize.target_tets = 150;
+  o.shells_only = true;
+  const MeshResult r = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_EQ(r.method, "boundary");
+  EXPECT_NE(r.fallback_because.find("convex shells were asked for, but"), std::string::npos) << r.fallback_because;
+  expect_within(r, diag, 0.05, 0.015, 0.005, 1);
+  // Where Mesh_3 can, the shells stay (the sphere: one shell around it).
+  const MeshResult b = squeeze::meshing::mesh_surface(sphere(Vec3(0, 0, 0), 0.2, 3), o);
+  EXPECT_EQ(b.method, "convex_shells");
+}
+
 // drop_debris_components: a tetrahedron hanging on a mesh by one vertex is its own face-connected
 // component and goes when its volume share is below the bound; two solids of similar size stay.
 TEST(MeshingV4, DebrisComponentsAreDroppedAndSolidsKept) {

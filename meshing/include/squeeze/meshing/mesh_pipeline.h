@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 13;  // 13: open sheets: outline edges under a quarter of the edge length collapsed, the slab's slivers moved and flipped; 12: version 11 with open scans at winding_dilation (a commit of 11 gave them 0.3; the key tells cached meshes apart); 11: inputs that are not closed parts by their winding-number solid's boundary, simplified against the input; 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
+constexpr int kMeshingAlgorithmVersion = 14;  // 14: closed parts of mostly skinny triangles split to rounder ones where their own boundary is too much refinement work or does not hold; shells meshes that do not hold the input refused (shells_only); 13: open sheets: outline edges under a quarter of the edge length collapsed, the slab's slivers moved and flipped; 12: version 11 with open scans at winding_dilation (a commit of 11 gave them 0.3; the key tells cached meshes apart); 11: inputs that are not closed parts by their winding-number solid's boundary, simplified against the input; 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
@@ -62,6 +62,12 @@ struct MeshOptions {
                                         // touching organs' coarse meshes overlapped 3.24 points
                                         // more than their surfaces. Open scans of solids keep
                                         // winding_dilation (their hole rims are creases)
+  double skinny_refine_work = 2e6;      // a closed part whose boundary is mostly long, thin triangles
+                                        // (skinny_split_length, split_long_edges.h) is tetrahedralized
+                                        // with this bound on its refinement's work
+                                        // (TetrahedralizeOptions::max_refine_work: about 0.5 s here);
+                                        // beyond it, or where its mesh does not hold, its boundary
+                                        // is split to rounder triangles and meshed again. 0: no bound
   bool shells_fallback = false;         // welded, non-manifold or self-intersecting segments: their
                                         // convex shells meshed with Mesh_3, as before version 11
   bool shells_only = false;             // every input (closed parts too) meshed as its convex shells
