@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 14;  // 14: closed parts of mostly skinny triangles split to rounder ones where their own boundary is too much refinement work or does not hold; shells meshes that do not hold the input refused (shells_only); 13: open sheets: outline edges under a quarter of the edge length collapsed, the slab's slivers moved and flipped; 12: version 11 with open scans at winding_dilation (a commit of 11 gave them 0.3; the key tells cached meshes apart); 11: inputs that are not closed parts by their winding-number solid's boundary, simplified against the input; 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
+constexpr int kMeshingAlgorithmVersion = 14;  // 14: closed parts of mostly skinny triangles split to rounder ones where their own boundary is too much refinement work or does not hold; shells meshes that do not hold the input refused (shells_only); open scans whose caps lie over three times the bound off meshed as sheets; 13: open sheets: outline edges under a quarter of the edge length collapsed, the slab's slivers moved and flipped; 12: version 11 with open scans at winding_dilation (a commit of 11 gave them 0.3; the key tells cached meshes apart); 11: inputs that are not closed parts by their winding-number solid's boundary, simplified against the input; 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
@@ -68,6 +68,10 @@ struct MeshOptions {
                                         // (TetrahedralizeOptions::max_refine_work: about 0.5 s here);
                                         // beyond it, or where its mesh does not hold, its boundary
                                         // is split to rounder triangles and meshed again. 0: no bound
+  bool open_scans_as_sheets = false;    // open 2-manifold components that enclose a solid (open scans)
+                                        // meshed as open sheets (slabs) too; mesh_surface tries it by
+                                        // itself where the solid's caps over wide holes break the
+                                        // outer bound (max_deviation) three times over (version 14)
   bool shells_fallback = false;         // welded, non-manifold or self-intersecting segments: their
                                         // convex shells meshed with Mesh_3, as before version 11
   bool shells_only = false;             // every input (closed parts too) meshed as its convex shells
