@@ -120,7 +120,9 @@ struct MeshResult {
   SurfaceMesh boundary;         // the simplified boundaries of all parts (one closed surface each)
   int boundary_target_faces = 0;  // the face count the target asked of them, summed
   int boundary_retries = 0;     // parts' boundaries tried again (half the bounds, then the part's own
-                                // surface) after a non-conforming or sliver tetrahedralization
+                                // surface, then toward four times the faces; and a mostly skinny
+                                // part's split boundary) after a non-conforming or sliver
+                                // tetrahedralization
   int parts_by_winding_number = 0;  // parts whose boundary still did not hold after the retries,
                                 // meshed as their winding-number solid by Mesh_3 instead
   int cavities = 0;             // closed components the file orients inward that lie inside another
