@@ -659,6 +659,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             return m;
           };
           p.tets = tetrahedralize_part(p.boundary, &p.tet_stats, t.max_tets, t.max_attempts);
+          t.max_refine_work = 0;  // the bound is the first boundary's only (the retries below have their own)
           // A boundary whose tetrahedralization is not conforming or keeps a dihedral angle below the
           // floor (the simplification brought two sheets of a thin part close) is tried again,
           // simplified within half the bounds, then as the part's own surface (the input's
@@ -682,27 +683,26 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // within the same bounds: the simplification can then collapse along the part (a 1 m rod
           // of 3 mm radius, 12 sides and 40 rings: 165 tetrahedra, 9.4°, 0.6 s at 150, where its
           // own boundary's refinement took 21 s for 2.2°, not conforming).
+          // A retry's mesh, its stats, its boundary and that boundary's simplification replace the part's.
+          auto adopt = [&](TetMesh& m, const TetrahedralizeStats& st, SurfaceMesh& b, const EnvelopeStats& es) {
+            p.tets = std::move(m);
+            p.tet_stats = st;
+            p.boundary = std::move(b);
+            p.envelope = es;
+          };
           if (skinny > 0 && (p.tet_stats.work_exceeded || !holds(p.tets, p.tet_stats)) && !abandoned) {
             const SurfaceMesh split = split_long_edges(p.surface, skinny);
-            Part q = p;
-            q.surface = split;
             EnvelopeStats es;
-            SurfaceMesh b = simplify(q, e, &es, nullptr);
+            SurfaceMesh b = simplify_envelope(split, e, &es, nullptr);  // (skinny > 0: no p.target)
             if (!(p.check && does_self_intersect(b))) {
               TetrahedralizeStats st;
-              t.max_refine_work = 0;
               TetMesh m = tetrahedralize_part(b, &st, t.max_tets, t.max_attempts);
               spdlog::debug("part {}: boundary of mostly skinny triangles ({} tetrahedra, refinement work {:.3g}{}): split "
                             "at {:.4g} to {} faces, simplified to {}: {} tetrahedra, conforming {}",
                             i, p.tets.T.rows(), p.tet_stats.refine_work, p.tet_stats.work_exceeded ? ", over its bound" : "",
                             skinny, split.F.rows(), b.F.rows(), m.T.rows(), st.conforming);
               ++p.retries;
-              if (p.tet_stats.work_exceeded || better(m, st, p.tets, p.tet_stats)) {
-                p.tets = std::move(m);
-                p.tet_stats = st;
-                p.boundary = std::move(b);
-                p.envelope = es;
-              }
+              if (p.tet_stats.work_exceeded || better(m, st, p.tets, p.tet_stats)) adopt(m, st, b, es);
             }
           }
           const Eigen::Index first_count = p.tets.T.rows();
@@ -746,12 +746,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             spdlog::debug("part {}: retry {} ({}): {} faces, {} tetrahedra, conforming {}", i, retry,
                           retry == 1 ? "half the bounds" : retry == 2 ? "its own surface" : "four times the faces", b.F.rows(), m.T.rows(), st.conforming);
             ++p.retries;
-            if (better(m, st, p.tets, p.tet_stats)) {
-              p.tets = std::move(m);
-              p.tet_stats = st;
-              p.boundary = std::move(b);
-              p.envelope = es;
-            }
+            if (better(m, st, p.tets, p.tet_stats)) adopt(m, st, b, es);
           }
           // A part whose boundary still does not hold (a cone's sharp tip between thin triangles,
           // whose recovery splits them ten times over: 52 of 90 generated cones failed, some not
@@ -1083,12 +1078,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // Nor where it is far larger than the shells themselves: dilated to hold points Mesh_3 had
     // missed (a disc 0.2 m across and 1 mm thick, one convex shell: 15,000 times its volume).
     double hulls = 0;
-    for (const ConvexShell& c : shells.decomposition.shells) {
-      SurfaceMesh h;
-      h.V = c.hull.V;
-      h.F = c.hull.F;
-      hulls += std::abs(signed_volume(h));
-    }
+    for (const ConvexShell& c : shells.decomposition.shells) hulls += c.hull.volume;
     spdlog::debug("convex shells: {} shells of {:.4g} in all, their mesh {:.4g}", shells.decomposition.shells.size(), hulls,
                   shells.quality.volume);
     const bool holds = shells.shell_stats.covered >= 0.999;

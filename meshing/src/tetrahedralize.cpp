@@ -1088,11 +1088,12 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
   double best_score = INFINITY;
   double previous_n = INFINITY, previous_L = 0;
   std::unique_ptr<Mesher> mesher;  // the next attempt's, made before it where it decides whether to run it
+  // The refinement work the attempts may still do (Mesher's budget: 0, no bound).
+  auto work_left = [&] { return opt.max_refine_work > 0 ? std::max(1.0, opt.max_refine_work - st.refine_work) : 0.0; };
   for (int attempt = 0; attempt < opt.max_attempts; ++attempt) {
     const auto t0 = std::chrono::steady_clock::now();
     if (progress) progress->stage("tetrahedralizing the boundary (attempt " + std::to_string(attempt + 1) + ")");
-    const double budget = opt.max_refine_work > 0 ? std::max(1.0, opt.max_refine_work - st.refine_work) : 0.0;
-    if (!mesher) mesher = std::make_unique<Mesher>(boundary, wn, opt, L, budget);
+    if (!mesher) mesher = std::make_unique<Mesher>(boundary, wn, opt, L, work_left());
     RunResult r = mesher->run(progress);
     const double n = static_cast<double>(r.mesh.T.rows());
     const bool recovered = r.recovered, length_bound = r.length_bound;
@@ -1132,8 +1133,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
     // starts from the same points (RunResult::length_bound): it would give the same mesh (the
     // heart's second attempt did, 0.7 s).
     if (attempt + 1 >= opt.max_attempts) break;
-    std::unique_ptr<Mesher> next = std::make_unique<Mesher>(
-        boundary, wn, opt, L, opt.max_refine_work > 0 ? std::max(1.0, opt.max_refine_work - st.refine_work) : 0.0);
+    std::unique_ptr<Mesher> next = std::make_unique<Mesher>(boundary, wn, opt, L, work_left());
     if (opt.skip_repeated_attempts && n > target && !length_bound && next->same_start(*mesher)) break;
     mesher = std::move(next);
   }
