@@ -8,6 +8,8 @@
 //  BM_TetrahedralizeVsTetgen  squeeze's tetrahedralization of the bunny's surface (the boundary
 //                             version 4 meshes) against the Debian `tetgen` binary meshing the same
 //                             surface (`tetgen -pq1.414 -Q bunny.off`), and their ratio
+//  BM_RodPipeline/<N>, BM_RodWithoutSplit/<N>  a faceted 1 m by 3 mm rod (tests/shapes.h): the
+//                             whole pipeline (version 14) against it with split_skinny off (13)
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -19,6 +21,7 @@
 #include <string>
 #include <unistd.h>
 
+#include "shapes.h"
 #include "squeeze/meshing/mesh_pipeline.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/tetrahedralize.h"
@@ -163,5 +166,36 @@ void BM_TetrahedralizeVsTetgen(benchmark::State& state) {
 BENCHMARK(BM_TetrahedralizeVsTetgen)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 }  // namespace
+
+// A faceted rod (1 m by 3 mm, 12 sides, 40 rings; tests/shapes.h), meshing version 14: the whole
+// pipeline (its boundary split to rounder triangles after a bounded first try) against the same
+// pipeline with MeshOptions::split_skinny off (version 13's way: its own boundary, refinement
+// unbounded, then the retries).
+void BM_RodPipeline(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh rod = sqs::ringed_rod(0.003, 1.0, 12, 40);
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = static_cast<int>(state.range(0));
+  long tets = 0;
+  for (auto _ : state) tets = squeeze::meshing::mesh_surface(rod, o).quality.tets;
+  state.counters["tets"] = static_cast<double>(tets);
+}
+BENCHMARK(BM_RodPipeline)->Arg(150)->Arg(1000)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+void BM_RodWithoutSplit(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh rod = sqs::ringed_rod(0.003, 1.0, 12, 40);
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = static_cast<int>(state.range(0));
+  o.split_skinny = false;  // version 13: its own boundary only, refinement unbounded, then the retries
+  long tets = 0;
+  double dihedral = 0;
+  for (auto _ : state) {
+    const squeeze::meshing::MeshResult r = squeeze::meshing::mesh_surface(rod, o);
+    tets = r.quality.tets;
+    dihedral = r.quality.min_dihedral;
+  }
+  state.counters["tets"] = static_cast<double>(tets);
+  state.counters["min_dihedral"] = dihedral;
+}
+BENCHMARK(BM_RodWithoutSplit)->Arg(150)->Arg(1000)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 BENCHMARK_MAIN();

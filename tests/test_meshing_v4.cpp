@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "meshing_test_util.h"
+#include "shapes.h"
 #include "squeeze/common/error.h"
 #include "squeeze/meshing/envelope.h"
 #include "squeeze/meshing/mesh_pipeline.h"
@@ -667,43 +668,13 @@ TEST(MeshingV4, LongThinTrianglesOfACylinderComeOutExact) {
 }
 
 
-// A faceted rod along z: `sides` vertices per ring, `rings` + 1 rings over `length`, capped by a
-// fan around each end's centre (a CAD export's tube: side triangles length / rings long and
-// 2 pi r / sides wide).
-SurfaceMesh ringed_rod(double r, double length, int sides, int rings) {
-  SurfaceMesh s;
-  s.V.resize(sides * (rings + 1) + 2, 3);
-  for (int j = 0; j <= rings; ++j)
-    for (int i = 0; i < sides; ++i) {
-      const double t = 2 * M_PI * i / sides;
-      s.V.row(j * sides + i) << r * std::cos(t), r * std::sin(t), length * j / rings;
-    }
-  const int c0 = sides * (rings + 1), c1 = c0 + 1;
-  s.V.row(c0) << 0, 0, 0;
-  s.V.row(c1) << 0, 0, length;
-  std::vector<Eigen::Vector3i> F;
-  for (int j = 0; j < rings; ++j)
-    for (int i = 0; i < sides; ++i) {
-      const int a = j * sides + i, b = j * sides + (i + 1) % sides, c = a + sides, d = b + sides;
-      F.emplace_back(a, b, d);
-      F.emplace_back(a, d, c);
-    }
-  for (int i = 0; i < sides; ++i) {
-    F.emplace_back(c0, (i + 1) % sides, i);
-    F.emplace_back(c1, rings * sides + i, rings * sides + (i + 1) % sides);
-  }
-  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
-  for (size_t f = 0; f < F.size(); ++f) s.F.row(static_cast<Eigen::Index>(f)) = F[f].transpose();
-  return s;
-}
-
 // A 1 m rod of 3 mm radius, 12 sides and 40 rings (side triangles 25 mm by 1.6 mm): its own
 // boundary left the simplification no collapse, and its Delaunay refinement searched conflict
 // zones the size of the rod (21 s and 2.2 degrees, not conforming, at 150; 169 s at 1000). Mostly
 // skinny triangles: it is split to rounder ones and simplified, and comes out within the bounds
 // with far less refinement work (a deterministic proxy for its time).
 TEST(MeshingV4, RodOfLongThinTrianglesIsSplitAndMeshedWithinTheBounds) {
-  const SurfaceMesh s = ringed_rod(0.003, 1.0, 12, 40);
+  const SurfaceMesh s = sqs::ringed_rod(0.003, 1.0, 12, 40);
   EXPECT_GT(squeeze::meshing::skinny_split_length(s), 0.0);
   EXPECT_EQ(squeeze::meshing::skinny_split_length(sphere(Vec3(0.1, 0.2, 0.3), 0.2, 3)), 0.0);
   EXPECT_EQ(squeeze::meshing::skinny_split_length(box(Vec3(0, 0, 0), Vec3(1, 0.6, 0.02))), 0.0);
@@ -719,7 +690,7 @@ TEST(MeshingV4, RodOfLongThinTrianglesIsSplitAndMeshedWithinTheBounds) {
     EXPECT_LT(r.quality.tets, 4 * target);
   }
   // The same rod with rounder triangles is not split, and meshes alike.
-  const SurfaceMesh fine = ringed_rod(0.003, 1.0, 12, 160);
+  const SurfaceMesh fine = sqs::ringed_rod(0.003, 1.0, 12, 160);
   EXPECT_EQ(squeeze::meshing::skinny_split_length(fine), 0.0);
 }
 
@@ -727,7 +698,7 @@ TEST(MeshingV4, RodOfLongThinTrianglesIsSplitAndMeshedWithinTheBounds) {
 // around its middle, 3.6 times its volume and a diagonal off it. Such a shells mesh is refused and
 // the input is meshed by the default route, the report saying why.
 TEST(MeshingV4, ShellsOnlyFallsBackWhereMesh3CannotMeshTheShells) {
-  const SurfaceMesh s = ringed_rod(0.003, 1.0, 12, 40);
+  const SurfaceMesh s = sqs::ringed_rod(0.003, 1.0, 12, 40);
   const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
   MeshOptions o;
   o.tetrahedralize.target_tets = 150;

@@ -616,7 +616,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           }
           // A surface made mostly of long, thin triangles (a faceted rod) has a rounder version
           // (skinny_split_length): used where its own is too much work to refine or does not hold.
-          const double skinny = !p.target && p.offset == 0 ? skinny_split_length(p.surface) : 0.0;
+          const double skinny = opt.split_skinny && !p.target && p.offset == 0 ? skinny_split_length(p.surface) : 0.0;
           e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
           p.target_faces = e.target_faces;
           p.boundary = simplify(p, e, &p.envelope, progress_here ? progress : nullptr);

@@ -68,6 +68,9 @@ struct MeshOptions {
                                         // (TetrahedralizeOptions::max_refine_work: about 0.5 s here);
                                         // beyond it, or where its mesh does not hold, its boundary
                                         // is split to rounder triangles and meshed again. 0: no bound
+  bool split_skinny = true;             // false: parts of mostly skinny triangles meshed on their own
+                                        // boundary only, as before version 14 (bench_mesh measures
+                                        // against it)
   bool open_scans_as_sheets = false;    // open 2-manifold components that enclose a solid (open scans)
                                         // meshed as open sheets (slabs) too; mesh_surface tries it by
                                         // itself where the solid's caps over wide holes break the
