@@ -39,8 +39,11 @@ struct SkinnySplitOptions {
 /// refinement of it searches conflict zones the size of the whole part (1 m × 3 mm rod at 1,000
 /// tetrahedra: 97 s); split to triangles about as long as `shortest_edges` times their width, the
 /// same rod simplifies to a few hundred faces and meshes in under a second. Scanned and remeshed
-/// surfaces (skinny triangles a few percent of their area) get 0. Throws nothing.
-///   surface  #V by 3, #F by 3
+/// surfaces (skinny triangles a few percent of their area) get 0. Throws nothing. Source:
+/// squeeze's own criterion (meshing version 14, docs/meshing.md); the split itself is
+/// split_long_edges' red-green refinement.
+///   surface  #V by 3, #F by 3 (model units)
+///   opt      SkinnySplitOptions (ratios, dimensionless)
 double skinny_split_length(const SurfaceMesh& surface, const SkinnySplitOptions& opt = {});
 
 }  // namespace squeeze::meshing
