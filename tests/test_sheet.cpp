@@ -18,6 +18,7 @@
 
 #include "meshing_test_util.h"
 #include "squeeze/common/error.h"
+#include "squeeze/meshing/envelope.h"
 #include "squeeze/meshing/mesh_pipeline.h"
 #include "squeeze/meshing/sheet.h"
 #include "squeeze/meshing/surface_analysis.h"
@@ -228,6 +229,93 @@ TEST(Sheet, SheetsAreMeshedAsThinSlabsWithinTheBounds) {
         EXPECT_TRUE(again.tets.V == r.tets.V && again.tets.T == r.tets.T) << what << ": not deterministic";
       }
     }
+}
+
+// simplify_sheet grades a fine sheet: large triangles where it is flat, small where it curves, no
+// edge longer than max_edge, and every point of the result and of the input within the bound of the
+// other (both measured here by brute force, at the vertices and face centroids). The sheet: 1 m
+// flat, then a quarter turn of radius 0.1 m, 0.5 m wide, 19,500 right isosceles triangles.
+TEST(Sheet, SimplifySheetGradesWithinTheBoundAndNoEdgeLonger) {
+  const double R = 0.1, flat = 1.0, arc = 0.5 * M_PI * R;
+  const SurfaceMesh fine = grid(151, 66, [&](double u, double v) {
+    const double t = u * (flat + arc);
+    if (t <= flat) return Vec3(t, 0.5 * v, 0);
+    const double a = (t - flat) / R;
+    return Vec3(flat + R * std::sin(a), 0.5 * v, R * (1 - std::cos(a)));
+  });
+  squeeze::meshing::EnvelopeOptions o;
+  o.max_outside = o.max_inside = 0.002;
+  o.max_edge = 0.15;
+  o.min_triangle_angle = 25;
+  o.short_edge = 0;
+  const SurfaceMesh c = squeeze::meshing::simplify_sheet(fine, fine, o);
+  ASSERT_GT(c.F.rows(), 0);
+  EXPECT_LT(c.F.rows(), fine.F.rows() / 10);
+  auto farthest = [](const SurfaceMesh& from, const SurfaceMesh& to) {
+    double worst = 0;
+    auto check = [&](const Vec3& x) {
+      double d = INFINITY;
+      for (Eigen::Index g = 0; g < to.F.rows(); ++g)
+        d = std::min(d, sqt::point_triangle_distance(x, to.V.row(to.F(g, 0)).transpose(), to.V.row(to.F(g, 1)).transpose(),
+                                                     to.V.row(to.F(g, 2)).transpose()));
+      worst = std::max(worst, d);
+    };
+    for (Eigen::Index v = 0; v < from.V.rows(); ++v) check(from.V.row(v).transpose());
+    for (Eigen::Index f = 0; f < from.F.rows(); ++f)
+      check((from.V.row(from.F(f, 0)) + from.V.row(from.F(f, 1)) + from.V.row(from.F(f, 2))).transpose() / 3.0);
+    return worst;
+  };
+  EXPECT_LE(farthest(c, fine), 0.002 * 1.01);
+  EXPECT_LE(farthest(fine, c), 0.002 * 1.01);
+  double flat_sum = 0, bent_sum = 0, longest = 0;
+  int flat_n = 0, bent_n = 0;
+  for (Eigen::Index f = 0; f < c.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 a = c.V.row(c.F(f, k)).transpose(), b = c.V.row(c.F(f, (k + 1) % 3)).transpose();
+      const double len = (a - b).norm();
+      longest = std::max(longest, len);
+      if (std::max(a.x(), b.x()) < 0.8) flat_sum += len, ++flat_n;
+      if (std::min(a.x(), b.x()) > flat + 0.02) bent_sum += len, ++bent_n;
+    }
+  EXPECT_LE(longest, 0.15 * 1.0001);
+  ASSERT_GT(flat_n, 0);
+  ASSERT_GT(bent_n, 0);
+  EXPECT_GT(flat_sum / flat_n, 1.5 * bent_sum / bent_n) << "not graded";
+  EXPECT_THROW(squeeze::meshing::simplify_sheet(fine, SurfaceMesh{}, o), squeeze::InputError);
+}
+
+// split_sheet_faces: the longest edge of each face asked, and every face on a split edge, split so
+// that the sheet stays a conforming, consistently oriented 2-manifold of the same area and outline
+// (a flat sheet, faces with one, two and three split edges).
+TEST(Sheet, SplitSheetFacesKeepsItConformingOrientedAndItsArea) {
+  SurfaceMesh s = grid(6, 5, [](double u, double v) { return Vec3(u, 0.8 * v, 0); });
+  const SurfaceMesh before = s;
+  auto area = [](const SurfaceMesh& m) {
+    double a = 0;
+    for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+      a += 0.5 * (m.V.row(m.F(f, 1)) - m.V.row(m.F(f, 0))).cross(m.V.row(m.F(f, 2)) - m.V.row(m.F(f, 0))).z();
+    return a;  // signed: every face keeps its orientation (+z)
+  };
+  const std::vector<int> faces{0, 1, 2, 9, 10, 11, 20, 20, 39};
+  const int split = squeeze::meshing::split_sheet_faces(s, faces);
+  EXPECT_GE(split, 5);
+  EXPECT_EQ(s.V.rows(), before.V.rows() + split);
+  EXPECT_NEAR(area(s), area(before), 1e-12);
+  for (Eigen::Index f = 0; f < s.F.rows(); ++f)
+    EXPECT_GT((s.V.row(s.F(f, 1)) - s.V.row(s.F(f, 0))).cross(s.V.row(s.F(f, 2)) - s.V.row(s.F(f, 0))).z(), 0) << f;
+  // Conforming: every directed edge once, and each interior edge in both directions.
+  std::map<std::pair<int, int>, int> directed;
+  for (Eigen::Index f = 0; f < s.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++directed[{s.F(f, k), s.F(f, (k + 1) % 3)}];
+  double outline = 0;  // the boundary edges' length: the 1 × 0.8 rectangle's perimeter
+  for (const auto& [e, n] : directed) {
+    EXPECT_EQ(n, 1);
+    if (directed.count({e.second, e.first}) == 0) outline += (s.V.row(e.first) - s.V.row(e.second)).norm();
+  }
+  EXPECT_NEAR(outline, 3.6, 1e-12);
+  const squeeze::meshing::SheetEvidence e = squeeze::meshing::sheet_evidence(s.V, s.F);
+  EXPECT_TRUE(e.open_manifold);
+  EXPECT_THROW(squeeze::meshing::split_sheet_faces(s, {static_cast<int>(s.F.rows())}), squeeze::InputError);
 }
 
 // The thickness is the user's: --sheet-thickness (a multiple of max_deviation × the diagonal).

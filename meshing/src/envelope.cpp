@@ -54,6 +54,7 @@ struct State {
   double out = 0, in = 0;          // bounds (units)
   double cos_fold = 0, cos_turn = 0;
   double min_angle = 0;            // radians
+  double max_edge = INFINITY;      // no new edge longer (units)
   std::vector<Vec3> samples;       // points of the reference surface
   std::vector<std::vector<int>> assigned;  // samples answerable to each face (by face index)
   std::vector<FD> sample_face;     // ... and the face each sample is answerable to
@@ -219,6 +220,8 @@ struct Filter {
     // Points along the new edges and in the new faces, as far apart as twice the inner bound (up
     // to three per edge); where the new faces are small next to the inner bound, the reference's
     // own points (above) already pin them.
+    for (VD w : profile.link())
+      if ((vec(m.point(w)) - p).norm() > s->max_edge) return boost::none;
     for (VD w : profile.link()) {
       const Vec3 q = vec(m.point(w));
       const double len = (q - p).norm();
@@ -256,8 +259,19 @@ struct SnappedPlacement {
   SMS::LindstromTurk_placement<Mesh> lt;
   template <typename Profile>
   boost::optional<typename Profile::Point> operator()(const Profile& profile) const {
+    // An open sheet's outline (simplify_sheet) keeps its vertices where they are: a collapse onto
+    // an outline vertex keeps its point, along the outline onto one end, across (two outline
+    // vertices joined through the sheet) none.
+    const Mesh& m = profile.surface_mesh();
+    const bool b0 = static_cast<bool>(CGAL::is_border(profile.v0(), m)), b1 = static_cast<bool>(CGAL::is_border(profile.v1(), m));
+    if (b0 && b1 && !(m.is_border(profile.v0_v1()) || m.is_border(profile.v1_v0()))) return boost::none;
+    if (b0 != b1) return b0 ? profile.p0() : profile.p1();
     const boost::optional<typename Profile::Point> op = lt(profile);
     if (!op) return op;
+    if (b0 && b1) {
+      const Vec3 p = vec(*op);
+      return (p - vec(profile.p0())).norm() <= (p - vec(profile.p1())).norm() ? profile.p0() : profile.p1();
+    }
     const Vec3 p = vec(*op), a = vec(profile.p0()), b = vec(profile.p1());
     const double tolerance = 1e-3 * (b - a).norm();
     const double da = (p - a).norm(), db = (p - b).norm();
@@ -346,11 +360,14 @@ SurfaceMesh from_cgal(Mesh& m) {
 namespace {
 
 // simplify_envelope with or without a target (nullptr: the surface is its own).
+// open: `surface` may have borders (an open sheet, with a target): both bounds hold on either side.
 SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surface, const EnvelopeOptions& opt,
-                     EnvelopeStats* stats, Progress* progress) {
-  Mesh m = to_cgal(surface, "simplify_envelope: the surface is not a 2-manifold");
-  for (HD h : m.halfedges())
-    if (m.is_border(h)) throw InputError("simplify_envelope: the surface is not closed");
+                     EnvelopeStats* stats, Progress* progress, bool open = false) {
+  const std::string name = open ? "simplify_sheet" : "simplify_envelope";
+  Mesh m = to_cgal(surface, name + ": the surface is not a 2-manifold");
+  if (!open)
+    for (HD h : m.halfedges())
+      if (m.is_border(h)) throw InputError("simplify_envelope: the surface is not closed");
 
   const TriangleBvh reference(surface.V, surface.F);
   std::unique_ptr<TriangleBvh> target;
@@ -364,6 +381,7 @@ SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surfa
   s.cos_fold = std::cos(opt.min_fold_angle * M_PI / 180.0);
   s.cos_turn = std::cos(opt.max_normal_turn * M_PI / 180.0);
   s.min_angle = opt.min_triangle_angle * M_PI / 180.0;
+  if (opt.max_edge > 0) s.max_edge = opt.max_edge;
   s.progress = progress;
   s.assigned.resize(m.number_of_faces());
   // Local gaps: from each vertex along its normal, inwards (the thickness) and outwards (to another
@@ -432,7 +450,8 @@ SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surfa
     for (size_t i = 0; i < points.size(); ++i)
       if (nearest_face[i] >= 0)
         add_sample(points[i], FD(static_cast<Mesh::size_type>(nearest_face[i])), opt.max_inside,
-                   {opt.max_inside, INFINITY, INFINITY});
+                   open ? std::array<double, 3>{opt.max_inside, opt.max_inside, opt.max_inside}
+                        : std::array<double, 3>{opt.max_inside, INFINITY, INFINITY});
   }
   s.initial_faces = m.number_of_faces();
   if (progress) progress->stage("simplifying the boundary", static_cast<double>(m.number_of_faces() / 2));
@@ -481,6 +500,14 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const SurfaceMesh& tar
                               EnvelopeStats* stats, Progress* progress) {
   if (target.F.rows() == 0) throw InputError("simplify_envelope: the target has no triangles");
   return simplify(surface, &target, options, stats, progress);
+}
+
+SurfaceMesh simplify_sheet(const SurfaceMesh& sheet, const SurfaceMesh& target, const EnvelopeOptions& options,
+                           EnvelopeStats* stats, Progress* progress) {
+  if (target.F.rows() == 0) throw InputError("simplify_sheet: the target has no triangles");
+  EnvelopeOptions o = options;
+  o.max_outside = o.max_inside = std::min(options.max_outside, options.max_inside);
+  return simplify(sheet, &target, o, stats, progress, true);
 }
 
 SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int iterations) {

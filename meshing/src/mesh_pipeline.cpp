@@ -27,6 +27,7 @@
 #include "squeeze/meshing/alpha_wrap.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/sheet.h"
+#include "squeeze/meshing/tet_geometry.h"
 #include "squeeze/meshing/shell_tetrahedralize.h"
 #include "squeeze/meshing/split_long_edges.h"
 #include "squeeze/meshing/tet_cleanup.h"
@@ -205,6 +206,7 @@ struct Part {
   bool sheet_capped = false;  // ... with more tetrahedra than its share of the target (thinness)
   const SurfaceMesh* target = nullptr;  // the input, when `surface` is not its own boundary but
                               // its winding-number solid's (the bounds are the input's; version 11)
+  bool scan = false;          // the sheet is an open scan of a solid (holes wider than the bound)
   double offset = 0;          // how far `surface` lies outside the input (units): a sheet's slab, half
                               // its thickness (sheet.h); taken off the outer bound, and the inner
                               // bound kept below half of it so that the sheet stays inside
@@ -327,7 +329,9 @@ void measure(MeshResult& r, const MeshOptions& opt) {
 }  // namespace
 
 namespace {
-MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
+// decomposition: the input's, when a first try already made it (mesh_surface), else null.
+MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress,
+                             const Decomposition* decomposition_made = nullptr) {
   if (!(opt.coverage_tolerance >= 0)) throw InputError("coverage tolerance must be >= 0");
   if (!(opt.tets_per_hull >= 0)) throw InputError("tets_per_hull must be >= 0");
   if (opt.tetrahedralize.target_tets < 1) throw InputError("--target-tets must be at least 1");
@@ -378,7 +382,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   decomposing_arena.execute([&] {
     decomposing.run([&] {
       const auto t0 = std::chrono::steady_clock::now();
-      r.decomposition = decompose(r.input, dopt, nullptr);
+      r.decomposition = decomposition_made ? *decomposition_made : decompose(r.input, dopt, nullptr);
       r.beside.emplace_back("decomposing", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     });
   });
@@ -541,48 +545,127 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       const double h = p.offset;
       const int share = std::max(1, static_cast<int>(std::lround(target * p.volume / total_volume)));
       const double wanted = std::sqrt(3.0 * area(p.sheet) / (0.433 * share));
-      double Ls = std::min(wanted, 10.0 * h);
+      const double longest = std::min(wanted, 10.0 * h);
+      double Ls = longest;
       const TriangleBvh input(p.sheet.V, p.sheet.F);
-      double apart = 0;
-      for (int attempt = 1; attempt <= 6; ++attempt) {
-        // After an attempt too far from the input: the chords' sag goes as the square of their
-        // length, so the length that should just meet the bound, and a tenth less.
-        if (attempt > 1) Ls *= std::clamp(0.9 * std::sqrt(0.8 * h / apart), 0.3, 0.9);
-        SurfaceMesh s = remesh_sheet(p.sheet, Ls);
-        if (s.F.rows() == 0) {
-          apart = 0.8 * h / 0.49;
-          continue;
-        }
-        const TriangleBvh remeshed(s.V, s.F);
-        const double spacing = std::max(0.25 * Ls, 1e-3 * bounding_box_diagonal(p.sheet.V));
-        apart = std::max(farthest_sample(s.V, s.F, input, spacing), farthest_sample(p.sheet.V, p.sheet.F, remeshed, spacing));
-        spdlog::debug("sheet (component {}): edge length {:.4g}, {} triangles, {:.3g} from the input (bound {:.3g})", p.component,
-                      Ls, s.F.rows(), apart, 0.8 * h);
-        TetMesh m;
-        SurfaceMesh slab;
-        if (!(apart <= 0.8 * h)) continue;
-        if (!sheet_tets(s, h, m, &slab)) {
-          apart = 0.8 * h / 0.49;  // folded: the next attempt 0.63 times as long
-          continue;
-        }
-        // Prisms over flat or needle triangles of the remeshed sheet (a jagged outline keeps every
-        // vertex as a corner) are slivers: their vertices moved, then flipped, as the boundary
-        // route's are (nothing changes where no tetrahedron is under the floor).
+      const double fine = 1e-3 * bounding_box_diagonal(p.sheet.V);
+      // How far a sheet s strays from the input, either way (sampled 0.25 len apart).
+      auto apart_from_input = [&](const SurfaceMesh& s, double len) {
+        const TriangleBvh other(s.V, s.F);
+        const double spacing = std::max(0.25 * len, fine);
+        return std::max(farthest_sample(s.V, s.F, input, spacing), farthest_sample(p.sheet.V, p.sheet.F, other, spacing));
+      };
+      // The sheet s coarsened where it is flat, within the bound, no edge longer than `longest`
+      // (simplify_sheet, meshing version 15): its prisms (m, slab) where it holds the bound and
+      // its slab does not fold.
+      auto graded = [&](const SurfaceMesh& s, TetMesh& m, SurfaceMesh& slab, SurfaceMesh& c) {
+        EnvelopeOptions g;
+        g.max_outside = g.max_inside = 0.55 * h;  // its samples are sparser than apart_from_input's
+        g.max_edge = longest;
+        g.min_triangle_angle = 25.0;  // prisms over rounder triangles, and normals that turn little
+        g.min_fold_angle = 140.0;     // from face to face (each vertex's normal within its prisms)
+        g.max_normal_turn = 30.0;
+        g.target_faces = std::max(4, share / 3);
+        g.short_edge = 0;
+        c = simplify_sheet(s, p.sheet, g);
+        const double apart = apart_from_input(c, longest);
+        const bool ok = apart <= 0.8 * h && sheet_tets(c, h, m, &slab);
+        spdlog::debug("sheet (component {}): graded from {} to {} triangles, {:.3g} from the input{}", p.component, s.F.rows(),
+                      c.F.rows(), apart, ok ? "" : ": its slab folds, or too far");
+        return ok;
+      };
+      // Prisms over flat or needle triangles of the remeshed sheet (a jagged outline keeps every
+      // vertex as a corner) are slivers: their vertices moved, then flipped, as the boundary
+      // route's are (nothing changes where no tetrahedron is under the floor). Then kept in p.
+      auto adopt = [&](TetMesh& m, SurfaceMesh& slab, double len, int attempt) {
         const int relocated = relocate_sliver_vertices(m, opt.tetrahedralize.min_dihedral);
         const int flips = flip_slivers(m, opt.tetrahedralize.min_dihedral);
         slab.V = m.V;
-        p.sheet_capped = Ls < wanted;
+        p.sheet_capped = len < wanted;
         p.boundary = std::move(slab);
         p.tets = std::move(m);
         p.tet_stats = TetrahedralizeStats{};
         p.tet_stats.relocated = relocated;
         p.tet_stats.flips = flips;
         p.tet_stats.attempts = attempt;
-        p.tet_stats.edge_length = Ls;
+        p.tet_stats.edge_length = len;
         p.tet_stats.conforming = true;
         p.target_faces = 2 * static_cast<int>(std::lround(area(p.sheet) / (0.433 * wanted * wanted)));
+      };
+      // The faces of sheet c whose prisms hold a tetrahedron of p.tets under the floor: those
+      // holding all its vertices' sheet vertices (c's vertex v is v and #V + v of the slab).
+      auto sliver_faces = [&](const SurfaceMesh& c) {
+        const int nv = static_cast<int>(c.V.rows());
+        std::vector<std::vector<int>> faces_at(static_cast<size_t>(nv));
+        for (Eigen::Index f = 0; f < c.F.rows(); ++f)
+          for (int k = 0; k < 3; ++k) faces_at[static_cast<size_t>(c.F(f, k))].push_back(static_cast<int>(f));
+        std::vector<int> bad;
+        for (Eigen::Index t = 0; t < p.tets.T.rows(); ++t) {
+          const auto a = dihedral_angles(p.tets.V.row(p.tets.T(t, 0)), p.tets.V.row(p.tets.T(t, 1)),
+                                         p.tets.V.row(p.tets.T(t, 2)), p.tets.V.row(p.tets.T(t, 3)));
+          if (*std::min_element(a.begin(), a.end()) >= opt.tetrahedralize.min_dihedral) continue;
+          std::array<int, 4> base;
+          for (int k = 0; k < 4; ++k) base[static_cast<size_t>(k)] = p.tets.T(t, k) % nv;
+          for (int f : faces_at[static_cast<size_t>(base[0])]) {
+            bool all = true;
+            for (int k = 1; k < 4; ++k)
+              all = all && (c.F(f, 0) == base[static_cast<size_t>(k)] || c.F(f, 1) == base[static_cast<size_t>(k)] ||
+                            c.F(f, 2) == base[static_cast<size_t>(k)]);
+            if (all) bad.push_back(f);
+          }
+        }
+        std::sort(bad.begin(), bad.end());
+        bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+        return bad;
+      };
+      double apart = 0;
+      for (int attempt = 1; attempt <= 6; ++attempt) {
+        // After an attempt too far from the input: the chords' sag goes as the square of their
+        // length, so the length that should just meet the bound, and a tenth less.
+        if (attempt > 1) Ls *= std::clamp(0.9 * std::sqrt(0.8 * h / apart), 0.3, 0.9);
+        // (An open scan's slab is not worth more than 200,000 remeshed triangles: its solid is kept.)
+        if (p.scan && area(p.sheet) / (0.433 * Ls * Ls) > 2e5) break;
+        SurfaceMesh s = remesh_sheet(p.sheet, Ls);
+        if (s.F.rows() == 0) {
+          apart = 0.8 * h / 0.49;
+          continue;
+        }
+        apart = apart_from_input(s, Ls);
+        spdlog::debug("sheet (component {}): edge length {:.4g}, {} triangles, {:.3g} from the input (bound {:.3g})", p.component,
+                      Ls, s.F.rows(), apart, 0.8 * h);
+        if (!(apart <= 0.8 * h)) continue;
+        TetMesh m;
+        SurfaceMesh slab;
+        // Shorter than wanted where the sheet curves: then coarsened where it does not (a scan's
+        // flat back next to its ears), kept where that holds.
+        // Where its prisms leave tetrahedra under the floor after the sliver moves and flips (a long
+        // edge over the slab thinned where the sheet curves), their faces are split
+        // (split_sheet_faces) and the prisms made again: three rounds at most, then not kept.
+        SurfaceMesh c;
+        if (Ls < 0.99 * longest && graded(s, m, slab, c)) {
+          for (int round = 0;; ++round) {
+            adopt(m, slab, Ls, attempt);
+            const std::vector<int> bad = sliver_faces(c);
+            if (bad.empty()) return true;
+            spdlog::debug("sheet (component {}): graded, its prisms over {} faces leave tetrahedra under {}°{}", p.component,
+                          bad.size(), opt.tetrahedralize.min_dihedral, round == 3 ? ": not kept" : ": split");
+            m = TetMesh{};
+            slab = SurfaceMesh{};
+            if (round == 3) break;
+            split_sheet_faces(c, bad, &input);
+            if (!sheet_tets(c, h, m, &slab)) break;
+          }
+          m = TetMesh{};
+          slab = SurfaceMesh{};
+        }
+        if (!sheet_tets(s, h, m, &slab)) {
+          apart = 0.8 * h / 0.49;  // folded: the next attempt 0.63 times as long
+          continue;
+        }
+        adopt(m, slab, Ls, attempt);
         return true;
       }
+      if (p.scan) throw InputError("the open scan's slab folds over itself at every edge length tried");
       spdlog::debug("sheet (component {}): its slab folds over itself; meshing it by the boundary route", p.component);
       return false;
     };
@@ -1230,6 +1313,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         }
         Part& p = sheets[i];
         p.component = candidates[i];
+        p.scan = !is_sheet(ev);
         p.surface = thicken_sheet(m, h);
         p.sheet = m;
         p.volume = signed_volume(p.surface);
@@ -1281,15 +1365,16 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   MeshResult r = mesh_surface_once(surface, opt, progress);
   // An open scan meshed as a solid closes its holes: a hole wider than the outer bound leaves its
   // cap that far from the input (a tube open at both ends, 10 cm across and 40 cm long: 11.7 % of
-  // the diagonal). Its slab (sheet.h: the surface thickened by the sheet thickness, as an open
-  // sheet) is tried instead and kept where it holds every bound the solid broke. Only where the
-  // caps lie more than three times the bound (max_deviation) off: a scan less far over it is a
-  // solid with a few wide holes (the elephant with holes of 2 and 3 % of the diagonal: 1.7 and
-  // 2.5 %), whose slab is no model of it (it folded over itself: not conforming, 15,000-27,000
-  // tetrahedra in 30-50 s).
+  // the diagonal), and no solid can do better (a surface spanning the hole's rim within the bound
+  // of the scan runs along the whole scan: a slab). Its slab (sheet.h: the surface thickened by the
+  // sheet thickness, as an open sheet) is tried instead and kept where it holds every bound. Where
+  // the caps lie more than 1.5 times the bound (max_deviation) off: the outer bound that the
+  // boundary route's own dilation and chords keep within (meshing version 15; version 14: three
+  // times, since a detailed scan's slab, remeshed to equal triangles, folded over itself or took
+  // 15,000-130,000 tetrahedra in 30-50 s; simplify_sheet now grades it).
   const double diag = bounding_box_diagonal(r.input.V);
   const bool capped = (r.method == "winding_number_boundary" || r.method == "winding_number") && !r.info.closed &&
-                      r.deviation_out > 3.0 * opt.max_deviation * diag;
+                      r.deviation_out > 1.5 * opt.max_deviation * diag;
   // (Not where a route was asked for: --winding, --wrap, --shells-fallback, --shells-only.)
   if (!capped || opt.open_scans_as_sheets || opt.shells_only || opt.winding || opt.wrap || opt.shells_fallback ||
       !(diag > 0))
@@ -1298,7 +1383,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   o.open_scans_as_sheets = true;
   MeshResult s;
   try {
-    s = mesh_surface_once(surface, o, nullptr);
+    s = mesh_surface_once(surface, o, nullptr, r.decomposition.shells.empty() ? nullptr : &r.decomposition);
   } catch (const InputError& e) {
     spdlog::debug("the open scan as a sheet: {}", e.what());
     return r;
@@ -1317,6 +1402,8 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   const std::string why = "its holes are wider than the deviation bound: as a solid, the caps over them lay " +
                           percent(r.deviation_out / diag) + " of the diagonal off the input; meshed as an open sheet";
   s.fallback_because = s.fallback_because.empty() ? why : why + "; " + s.fallback_because;
+  s.seconds.insert(s.seconds.begin(), r.seconds.begin(), r.seconds.end());  // both tries' (the report sums a stage's)
+  s.beside.insert(s.beside.begin(), r.beside.begin(), r.beside.end());
   return s;
 }
 

@@ -6,12 +6,16 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <map>
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include <spdlog/spdlog.h>
+
 #include "squeeze/common/error.h"
 #include "squeeze/meshing/surface_normals.h"
+#include "squeeze/meshing/triangle_bvh.h"
 #include "squeeze/meshing/winding_number.h"
 
 namespace squeeze::meshing {
@@ -83,7 +87,11 @@ SheetEvidence sheet_evidence(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   return e;
 }
 
-SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness) {
+namespace {
+
+// thicken_sheet with each vertex's offset scaled by scale[v] (1: as thicken_sheet; sheet_tets
+// shrinks it where a prism inverts).
+SurfaceMesh thicken(const SurfaceMesh& sheet, double half_thickness, const std::vector<double>& scale) {
   if (!(half_thickness > 0)) throw InputError("thicken_sheet: the half thickness must be positive");
   const Eigen::Index nv = sheet.V.rows(), nf = sheet.F.rows();
   Eigen::MatrixX3d FN, N;
@@ -97,6 +105,34 @@ SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness) {
     else if (used[static_cast<size_t>(v)])
       throw InputError("thicken_sheet: vertex " + std::to_string(v) + " has no normal (its faces have no area)");
   }
+  // Where the area-weighted normal leans more than 60° from one of the vertex's faces (a graded
+  // sheet: a large face beside small ones across a crease), it is turned toward that face, a few
+  // times, while that raises the smallest cosine: the prisms' sides then lean less.
+  {
+    std::vector<std::vector<int>> faces_at(static_cast<size_t>(nv));
+    for (Eigen::Index f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) faces_at[static_cast<size_t>(sheet.F(f, k))].push_back(static_cast<int>(f));
+    for (Eigen::Index v = 0; v < nv; ++v) {
+      const auto& around = faces_at[static_cast<size_t>(v)];
+      auto worst = [&](const Eigen::RowVector3d& n, int* arg) {
+        double m = 2;
+        for (int f : around) {
+          const Eigen::RowVector3d fn = FN.row(f).normalized();
+          if (n.dot(fn) < m) m = n.dot(fn), *arg = f;
+        }
+        return m;
+      };
+      int f = -1;
+      double m = worst(N.row(v), &f);
+      for (int it = 0; it < 8 && m < 0.5 && f >= 0; ++it) {
+        const Eigen::RowVector3d n = (N.row(v) + 0.5 * FN.row(f).normalized()).normalized();
+        int g = -1;
+        const double mn = worst(n, &g);
+        if (!(mn > m)) break;
+        N.row(v) = n, m = mn, f = g;
+      }
+    }
+  }
   // Where the sheet bends sharply (radius R, estimated per edge as its length over the angle
   // between its vertex normals), the slab's inner side is squeezed by h / R: at most a quarter.
   std::vector<double> hv(static_cast<size_t>(nv), half_thickness);
@@ -109,6 +145,8 @@ SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness) {
       hv[static_cast<size_t>(a)] = std::min(hv[static_cast<size_t>(a)], limit);
       hv[static_cast<size_t>(b)] = std::min(hv[static_cast<size_t>(b)], limit);
     }
+  for (Eigen::Index v = 0; v < nv && v < static_cast<Eigen::Index>(scale.size()); ++v)
+    hv[static_cast<size_t>(v)] *= scale[static_cast<size_t>(v)];
   SurfaceMesh s;
   s.V.resize(2 * nv, 3);
   for (Eigen::Index v = 0; v < nv; ++v) {
@@ -148,41 +186,130 @@ SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness) {
   return s;
 }
 
-bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab_out) {
-  SurfaceMesh slab = thicken_sheet(sheet, half_thickness);
-  const int nv = static_cast<int>(sheet.V.rows());
-  Eigen::MatrixX4i T(3 * sheet.F.rows(), 4);
-  auto volume = [&](const Eigen::Vector4i& t) {
-    const Eigen::RowVector3d a = slab.V.row(t(0));
-    return (slab.V.row(t(1)) - a).dot((slab.V.row(t(2)) - a).cross(slab.V.row(t(3)) - a));
-  };
-  for (Eigen::Index f = 0; f < sheet.F.rows(); ++f) {
-    std::array<int, 3> v{sheet.F(f, 0), sheet.F(f, 1), sheet.F(f, 2)};
-    // Sorted: the parity of the sort decides the orientation the prism's tetrahedra should have.
-    int parity = 1;
-    for (int pass = 0; pass < 2; ++pass)
-      for (int k = 0; k < 2; ++k)
-        if (v[static_cast<size_t>(k)] > v[static_cast<size_t>(k) + 1]) {
-          std::swap(v[static_cast<size_t>(k)], v[static_cast<size_t>(k) + 1]);
-          parity = -parity;
-        }
-    const int i = v[0], j = v[1], k = v[2];  // the +side: i, j, k; the −side: nv + i, ...
-    const std::array<std::pair<Eigen::Vector4i, int>, 3> prism{{{Eigen::Vector4i(nv + i, nv + j, nv + k, k), parity},
-                                                                 {Eigen::Vector4i(nv + i, nv + j, j, k), -parity},
-                                                                 {Eigen::Vector4i(nv + i, i, j, k), parity}}};
-    for (int q = 0; q < 3; ++q) {
-      Eigen::Vector4i t = prism[static_cast<size_t>(q)].first;
-      const int sign = prism[static_cast<size_t>(q)].second;
-      if (!(sign * volume(t) > 0)) return false;  // inverted or flat: the slab folds over itself
-      if (sign < 0) std::swap(t(2), t(3));
-      T.row(3 * f + q) = t.transpose();
+}  // namespace
+
+SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness) { return thicken(sheet, half_thickness, {}); }
+
+int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const TriangleBvh* onto) {
+  const Eigen::Index nf = sheet.F.rows();
+  auto key = [](int a, int b) { return std::make_pair(std::min(a, b), std::max(a, b)); };
+  std::map<std::pair<int, int>, int> mid;  // split edge -> its new vertex
+  std::vector<Eigen::RowVector3d> added;
+  for (int f : faces) {
+    if (f < 0 || f >= nf) throw InputError("split_sheet_faces: face " + std::to_string(f) + " out of range");
+    int best = 0;
+    double len = -1;
+    for (int k = 0; k < 3; ++k) {
+      const double l = (sheet.V.row(sheet.F(f, k)) - sheet.V.row(sheet.F(f, (k + 1) % 3))).norm();
+      if (l > len) len = l, best = k;
+    }
+    const auto e = key(sheet.F(f, best), sheet.F(f, (best + 1) % 3));
+    if (mid.count(e)) continue;
+    Eigen::Vector3d m = 0.5 * (sheet.V.row(e.first) + sheet.V.row(e.second)).transpose();
+    if (onto) {
+      Eigen::Vector3d q;
+      if (std::isfinite(onto->nearest(m, nullptr, &q))) m = q;
+    }
+    mid[e] = static_cast<int>(sheet.V.rows() + static_cast<Eigen::Index>(added.size()));
+    added.push_back(m.transpose());
+  }
+  if (mid.empty()) return 0;
+  std::vector<Eigen::Vector3i> out;
+  out.reserve(static_cast<size_t>(nf) + 3 * mid.size());
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    const int v[3] = {sheet.F(f, 0), sheet.F(f, 1), sheet.F(f, 2)};
+    int m[3], n = 0;  // m[k]: the new vertex on edge (v[k], v[k+1]), or -1
+    for (int k = 0; k < 3; ++k) {
+      const auto it = mid.find(key(v[k], v[(k + 1) % 3]));
+      m[k] = it == mid.end() ? -1 : it->second;
+      n += m[k] >= 0;
+    }
+    if (n == 0) {
+      out.emplace_back(v[0], v[1], v[2]);
+    } else if (n == 3) {
+      out.emplace_back(v[0], m[0], m[2]);
+      out.emplace_back(m[0], v[1], m[1]);
+      out.emplace_back(m[2], m[1], v[2]);
+      out.emplace_back(m[0], m[1], m[2]);
+    } else {
+      // Rotated so that edge (a, b) is split; with two, (b, c) too.
+      int r = 0;
+      if (n == 1) {
+        while (m[r] < 0) ++r;
+      } else {
+        while (!(m[r] >= 0 && m[(r + 1) % 3] >= 0)) ++r;
+      }
+      const int a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3], ab = m[r], bc = m[(r + 1) % 3];
+      if (n == 1) {
+        out.emplace_back(a, ab, c);
+        out.emplace_back(ab, b, c);
+      } else {
+        out.emplace_back(ab, b, bc);
+        out.emplace_back(a, ab, bc);
+        out.emplace_back(a, bc, c);
+      }
     }
   }
-  out.V = slab.V;
-  out.T = std::move(T);
-  out.label.resize(0);
-  if (slab_out) *slab_out = std::move(slab);
-  return true;
+  const Eigen::Index nv = sheet.V.rows();
+  sheet.V.conservativeResize(nv + static_cast<Eigen::Index>(added.size()), 3);
+  for (size_t i = 0; i < added.size(); ++i) sheet.V.row(nv + static_cast<Eigen::Index>(i)) = added[i];
+  sheet.F.resize(static_cast<Eigen::Index>(out.size()), 3);
+  for (size_t i = 0; i < out.size(); ++i) sheet.F.row(static_cast<Eigen::Index>(i)) = out[i].transpose();
+  return static_cast<int>(mid.size());
+}
+
+bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab_out) {
+  const int nv = static_cast<int>(sheet.V.rows());
+  // Where a prism inverts (its vertices' normals lean across a crease of a graded sheet), its
+  // vertices' offsets are halved and the slab made again: up to five times (a thirty-second of
+  // the thickness there); beyond, the sheet folds too sharply for a slab (false).
+  std::vector<double> scale(static_cast<size_t>(nv), 1.0);
+  for (int round = 0; round < 6; ++round) {
+    SurfaceMesh slab = thicken(sheet, half_thickness, scale);
+    Eigen::MatrixX4i T(3 * sheet.F.rows(), 4);
+    auto volume = [&](const Eigen::Vector4i& t) {
+      const Eigen::RowVector3d a = slab.V.row(t(0));
+      return (slab.V.row(t(1)) - a).dot((slab.V.row(t(2)) - a).cross(slab.V.row(t(3)) - a));
+    };
+    std::vector<int> shrink;  // vertices of inverted prisms
+    for (Eigen::Index f = 0; f < sheet.F.rows(); ++f) {
+      std::array<int, 3> v{sheet.F(f, 0), sheet.F(f, 1), sheet.F(f, 2)};
+      // Sorted: the parity of the sort decides the orientation the prism's tetrahedra should have.
+      int parity = 1;
+      for (int pass = 0; pass < 2; ++pass)
+        for (int k = 0; k < 2; ++k)
+          if (v[static_cast<size_t>(k)] > v[static_cast<size_t>(k) + 1]) {
+            std::swap(v[static_cast<size_t>(k)], v[static_cast<size_t>(k) + 1]);
+            parity = -parity;
+          }
+      const int i = v[0], j = v[1], k = v[2];  // the +side: i, j, k; the −side: nv + i, ...
+      const std::array<std::pair<Eigen::Vector4i, int>, 3> prism{{{Eigen::Vector4i(nv + i, nv + j, nv + k, k), parity},
+                                                                   {Eigen::Vector4i(nv + i, nv + j, j, k), -parity},
+                                                                   {Eigen::Vector4i(nv + i, i, j, k), parity}}};
+      for (int q = 0; q < 3; ++q) {
+        Eigen::Vector4i t = prism[static_cast<size_t>(q)].first;
+        const int sign = prism[static_cast<size_t>(q)].second;
+        if (!(sign * volume(t) > 0)) {  // inverted or flat
+          shrink.insert(shrink.end(), {i, j, k});
+          break;
+        }
+        if (sign < 0) std::swap(t(2), t(3));
+        T.row(3 * f + q) = t.transpose();
+      }
+    }
+    if (shrink.empty()) {
+      out.V = slab.V;
+      out.T = std::move(T);
+      out.label.resize(0);
+      if (slab_out) *slab_out = std::move(slab);
+      return true;
+    }
+    spdlog::debug("sheet_tets: {} vertices of inverted prisms (round {})", shrink.size(), round);
+    for (int x : shrink) scale[static_cast<size_t>(x)] = 0.5 * std::min(scale[static_cast<size_t>(x)], 1.0);
+    // (a vertex in several inverted prisms is halved once per round)
+    for (int x : shrink) scale[static_cast<size_t>(x)] = std::min(scale[static_cast<size_t>(x)], std::pow(0.5, round + 1));
+  }
+  return false;
 }
 
 }  // namespace squeeze::meshing

@@ -24,6 +24,7 @@ struct EnvelopeOptions {
                               // which the tetrahedralization needs far fewer extra points to follow
   double short_edge = 0.25;   // then edges shorter than this share of the median edge are collapsed,
                               // shortest first, within the same bounds (0: not)
+  double max_edge = 0.0;      // units: no collapse makes an edge longer than this (0: no bound)
 };
 
 /// What simplify_envelope() did.
@@ -68,5 +69,17 @@ SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions&
 ///   target  V #V by 3, F #F by 3 (units; orientation not used)
 SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const SurfaceMesh& target, const EnvelopeOptions& options,
                               EnvelopeStats* stats = nullptr, Progress* progress = nullptr);
+
+/// The same for an open sheet (an oriented 2-manifold with borders: a curtain, or a scan with holes
+/// remeshed by remesh_sheet), measured against `target`, the sheet it was made from: points of the
+/// new faces within the bound of the target, and every point of the target (its vertices and
+/// samples of its larger faces) within the bound of the new faces, on either side; the bound is the
+/// smaller of max_outside and max_inside. Borders move as collapses take them, within the same
+/// bound. The result is graded: large triangles where the sheet is flat, small where it curves
+/// (with max_edge, none longer), as one layer of prisms over it needs (meshing version 15).
+///   sheet, target  V #V by 3, F #F by 3 (units); `sheet` oriented, 2-manifold
+/// Throws InputError when `sheet` is not an oriented 2-manifold or `target` is empty.
+SurfaceMesh simplify_sheet(const SurfaceMesh& sheet, const SurfaceMesh& target, const EnvelopeOptions& options,
+                           EnvelopeStats* stats = nullptr, Progress* progress = nullptr);
 
 }  // namespace squeeze::meshing

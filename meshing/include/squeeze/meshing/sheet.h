@@ -8,11 +8,14 @@
 // tetrahedra, deviation 66 % of the diagonal); the slab is a plate (docs/meshing.md, "Open sheets").
 #pragma once
 #include <Eigen/Core>
+#include <vector>
 
 #include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/tet_mesh.h"
 
 namespace squeeze::meshing {
+
+class TriangleBvh;
 
 /// What sheet_evidence measures of one face-connected component.
 struct SheetEvidence {
@@ -61,6 +64,15 @@ SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness);
 /// Throws InputError if edge_length is not positive or the sheet is not an oriented 2-manifold.
 /// (Implemented in envelope.cpp, the CGAL surface-mesh translation unit.)
 SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int iterations = 3);
+
+/// Splits the longest edge of each listed face of `sheet` at its midpoint, moved onto `onto` (the
+/// input sheet) when given, and every face on a split edge with it (one split edge: two triangles;
+/// two: three; three: four, red refinement), so that the result stays conforming and oriented as
+/// `sheet` was. Where a graded sheet's prisms leave slivers (a long edge over a slab thinned where
+/// the sheet curves), their faces are split and the prisms made again (meshing version 15).
+///   sheet  V #V by 3, F #F by 3 (units), 2-manifold; faces  indices into F (repeats ignored)
+/// Returns the number of edges split. Throws InputError on a face index out of range.
+int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const TriangleBvh* onto = nullptr);
 
 /// One layer of tetrahedra between the two sides of the slab around `sheet`: thicken_sheet's
 /// vertices (the +side, then the −side), each triangle's prism split into three tetrahedra, every
