@@ -34,13 +34,16 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
   CLI::App* cmd = app.add_subcommand(
       "mesh",
       "Tetrahedralize a surface into a coarse mesh of its own shape: each closed part's boundary,\n"
-      "simplified within --max-deviation, is tetrahedralized; open sheets (one layer of triangles: a\n"
-      "curtain, a cloth) become thin slabs around them (--sheet-thickness), one layer of prisms; open\n"
-      "scans of solids (holes) and inputs with welded, non-manifold or self-intersecting segments become\n"
-      "the solid their winding number encloses: its boundary, found by CGAL Mesh_3, simplified within\n"
-      "--max-deviation of the input and tetrahedralized (--winding: Mesh_3's own tetrahedra; --shells-\n"
-      "fallback: their convex shells, the paper's method; --wrap: their alpha wrap, a closed surface just\n"
-      "outside them, meshed like a boundary); the report's method and fallback_because say which and why.\n"
+      "simplified within --max-deviation, is tetrahedralized (a part much thinner than its tetrahedra,\n"
+      "a plate or a bowl: one layer of prisms across its thickness, the report's thin_parts); open\n"
+      "sheets (one layer of triangles: a curtain, a cloth) become thin slabs around them\n"
+      "(--sheet-thickness), one layer of prisms; open scans of solids (holes) and inputs with welded,\n"
+      "non-manifold or self-intersecting segments become the solid their winding number encloses (a\n"
+      "scan whose holes are wider than the bound: its slab, as a sheet): its boundary, found by CGAL\n"
+      "Mesh_3, simplified within --max-deviation of the input and tetrahedralized (--winding: Mesh_3's\n"
+      "own tetrahedra; --shells-fallback: their convex shells, the paper's method; --wrap: their alpha\n"
+      "wrap, a closed surface just outside them, meshed like a boundary); the report's method and\n"
+      "fallback_because say which and why.\n"
       "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
       "non-manifold scans are fine. OUT: " + meshing::tet_format_list(true) + ".\n"
       "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");

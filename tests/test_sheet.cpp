@@ -318,6 +318,30 @@ TEST(Sheet, SplitSheetFacesKeepsItConformingOrientedAndItsArea) {
   EXPECT_THROW(squeeze::meshing::split_sheet_faces(s, {static_cast<int>(s.F.rows())}), squeeze::InputError);
 }
 
+// A sheet folded onto itself (a hairpin: two 0.5 m arms 1.2 cm apart, joined by a half turn): a
+// slab 2 cm thick would put each arm's slab through the other's. Each side is kept under 0.45 of
+// the way to the other arm along its normal: the slab does not intersect itself.
+TEST(Sheet, SlabsOfNearbyPartsOfASheetDoNotOverlap) {
+  const double gap = 0.012, arm = 0.5, r = 0.5 * gap, bend = M_PI * r;
+  const SurfaceMesh hairpin = grid(121, 11, [&](double u, double v) {
+    const double t = u * (2 * arm + bend);
+    if (t <= arm) return Vec3(arm - t, 0.3 * v, 0);
+    if (t >= arm + bend) return Vec3(t - arm - bend, 0.3 * v, gap);
+    const double a = (t - arm) / r;
+    return Vec3(-r * std::sin(a), 0.3 * v, r - r * std::cos(a));
+  });
+  const SurfaceMesh slab = squeeze::meshing::thicken_sheet(hairpin, 0.01);
+  EXPECT_FALSE(squeeze::meshing::does_self_intersect(slab));
+  // The arms' slabs are still about as thick as the gap allows (0.45 of it each side; 0.42 at
+  // their free ends, where the offset points are checked), not flattened.
+  double thinnest = INFINITY;
+  const Eigen::Index nv = hairpin.V.rows();
+  for (Eigen::Index v = 0; v < nv; ++v)
+    if (hairpin.V(v, 0) > 0.05) thinnest = std::min(thinnest, (slab.V.row(v) - slab.V.row(nv + v)).norm());
+  EXPECT_GT(thinnest, 0.8 * gap);
+  EXPECT_LT(thinnest, 0.95 * gap);
+}
+
 // The thickness is the user's: --sheet-thickness (a multiple of max_deviation × the diagonal).
 TEST(Sheet, ThicknessIsTheOption) {
   MeshOptions o;

@@ -89,13 +89,21 @@ SheetEvidence sheet_evidence(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
 
 namespace {
 
-// thicken_sheet with each vertex's offset scaled by scale[v] (1: as thicken_sheet; sheet_tets
-// shrinks it where a prism inverts).
-SurfaceMesh thicken(const SurfaceMesh& sheet, double half_thickness, const std::vector<double>& scale) {
+// Each vertex's offset direction and half thickness (thicken_sheet): base[v], or half_thickness
+// when base is empty, limited where the sheet bends and where another part of it is near.
+struct Offsets {
+  Eigen::MatrixX3d N;       // #V by 3 unit directions
+  std::vector<double> hv;   // #V half thicknesses (units)
+};
+
+Offsets offsets(const SurfaceMesh& sheet, double half_thickness, const std::vector<double>& base) {
   if (!(half_thickness > 0)) throw InputError("thicken_sheet: the half thickness must be positive");
+  for (double b : base)
+    if (!(b > 0)) throw InputError("sheet_tets: every half thickness must be positive");
   const Eigen::Index nv = sheet.V.rows(), nf = sheet.F.rows();
   Eigen::MatrixX3d FN, N;
   area_weighted_normals(sheet.V, sheet.F, FN, N);
+  angle_weighted_normals(sheet.V, sheet.F, N);  // (the bisector on a crease: a bent plate's mid-surface)
   std::vector<char> used(static_cast<size_t>(nv), 0);
   for (Eigen::Index f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) used[static_cast<size_t>(sheet.F(f, k))] = 1;
@@ -136,6 +144,7 @@ SurfaceMesh thicken(const SurfaceMesh& sheet, double half_thickness, const std::
   // Where the sheet bends sharply (radius R, estimated per edge as its length over the angle
   // between its vertex normals), the slab's inner side is squeezed by h / R: at most a quarter.
   std::vector<double> hv(static_cast<size_t>(nv), half_thickness);
+  if (static_cast<Eigen::Index>(base.size()) == nv) hv = base;
   for (Eigen::Index f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
       const int a = sheet.F(f, k), b = sheet.F(f, (k + 1) % 3);
@@ -145,14 +154,62 @@ SurfaceMesh thicken(const SurfaceMesh& sheet, double half_thickness, const std::
       hv[static_cast<size_t>(a)] = std::min(hv[static_cast<size_t>(a)], limit);
       hv[static_cast<size_t>(b)] = std::min(hv[static_cast<size_t>(b)], limit);
     }
-  for (Eigen::Index v = 0; v < nv && v < static_cast<Eigen::Index>(scale.size()); ++v)
-    hv[static_cast<size_t>(v)] *= scale[static_cast<size_t>(v)];
+  // Where another part of the sheet lies closer along the normal (the two sides of an elephant's
+  // ear, scanned as one sheet; a curtain folded onto itself), at most 0.45 of the way to it: the
+  // two slabs do not overlap.
+  // (Looked for along the vertex's normal and its faces': where the sheet bends sharply next to
+  // the vertex, its normal leans past the other part.)
+  {
+    const TriangleBvh bvh(sheet.V, sheet.F);
+    std::vector<std::vector<int>> faces_at(static_cast<size_t>(nv));
+    for (Eigen::Index f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) faces_at[static_cast<size_t>(sheet.F(f, k))].push_back(static_cast<int>(f));
+    tbb::parallel_for(Eigen::Index(0), nv, [&](Eigen::Index v) {
+      if (!used[static_cast<size_t>(v)]) return;
+      const Eigen::Vector3d x = sheet.V.row(v).transpose();
+      std::vector<Eigen::Vector3d> directions{N.row(v).transpose()};
+      for (int f : faces_at[static_cast<size_t>(v)])
+        if (FN.row(f).norm() > 0) directions.push_back(FN.row(f).normalized().transpose());
+      double& o = hv[static_cast<size_t>(v)];
+      const double reach = o / 0.45;
+      for (const Eigen::Vector3d& n : directions)
+        for (double dir : {-1.0, 1.0}) {
+          double t;
+          if (bvh.first_crossing(x, x + dir * reach * n, 1e-4, &t)) o = std::min(o, 0.45 * t * reach);
+        }
+      // A ray through another part's outline can miss it (two arms ending side by side): an offset
+      // point nearer than 0.9 of its offset to a face that is not around the vertex's neighbours
+      // (a graded sheet's chords lie that near on its concave side) is halved.
+      const Eigen::Vector3d n = N.row(v).transpose();
+      std::vector<int> ring;  // the vertex and its neighbours
+      for (int f : faces_at[static_cast<size_t>(v)])
+        for (int k = 0; k < 3; ++k) ring.push_back(sheet.F(f, k));
+      auto own = [&](int g) {
+        for (int k = 0; k < 3; ++k)
+          if (std::find(ring.begin(), ring.end(), sheet.F(g, k)) != ring.end()) return true;
+        return false;
+      };
+      for (double dir : {-1.0, 1.0})
+        for (int k = 0; k < 6; ++k) {
+          int g = -1;
+          if (!(bvh.nearest(x + dir * o * n, &g) < 0.9 * o) || g < 0 || own(g)) break;
+          o *= 0.5;
+        }
+    });
+  }
+  return Offsets{std::move(N), std::move(hv)};
+}
+
+// The slab of `sheet` with those offsets, each scaled by scale[v] (sheet_tets shrinks it where a
+// prism inverts; empty: 1).
+SurfaceMesh slab_of(const SurfaceMesh& sheet, const Offsets& off, const std::vector<double>& scale) {
+  const Eigen::Index nv = sheet.V.rows(), nf = sheet.F.rows();
   SurfaceMesh s;
   s.V.resize(2 * nv, 3);
   for (Eigen::Index v = 0; v < nv; ++v) {
-    const Eigen::RowVector3d n = N.row(v);
-    s.V.row(v) = sheet.V.row(v) + hv[static_cast<size_t>(v)] * n;
-    s.V.row(nv + v) = sheet.V.row(v) - hv[static_cast<size_t>(v)] * n;
+    const double h = off.hv[static_cast<size_t>(v)] * (static_cast<Eigen::Index>(scale.size()) == nv ? scale[static_cast<size_t>(v)] : 1.0);
+    s.V.row(v) = sheet.V.row(v) + h * off.N.row(v);
+    s.V.row(nv + v) = sheet.V.row(v) - h * off.N.row(v);
   }
   // The boundary edges, in their face's direction.
   std::vector<std::pair<int, int>> rim;
@@ -188,7 +245,9 @@ SurfaceMesh thicken(const SurfaceMesh& sheet, double half_thickness, const std::
 
 }  // namespace
 
-SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness) { return thicken(sheet, half_thickness, {}); }
+SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness) {
+  return slab_of(sheet, offsets(sheet, half_thickness, {}), {});
+}
 
 int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const TriangleBvh* onto) {
   const Eigen::Index nf = sheet.F.rows();
@@ -258,14 +317,33 @@ int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const T
   return static_cast<int>(mid.size());
 }
 
+namespace {
+bool prisms(const SurfaceMesh& sheet, double half_thickness, const std::vector<double>& base, TetMesh& out,
+            SurfaceMesh* slab_out);
+}
+
 bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab_out) {
+  return prisms(sheet, half_thickness, {}, out, slab_out);
+}
+
+bool sheet_tets(const SurfaceMesh& sheet, const std::vector<double>& half_thickness, TetMesh& out, SurfaceMesh* slab_out) {
+  if (static_cast<Eigen::Index>(half_thickness.size()) != sheet.V.rows())
+    throw InputError("sheet_tets: one half thickness per vertex of the sheet");
+  const double top = half_thickness.empty() ? 1.0 : *std::max_element(half_thickness.begin(), half_thickness.end());
+  return prisms(sheet, top, half_thickness, out, slab_out);
+}
+
+namespace {
+bool prisms(const SurfaceMesh& sheet, double half_thickness, const std::vector<double>& base, TetMesh& out,
+            SurfaceMesh* slab_out) {
   const int nv = static_cast<int>(sheet.V.rows());
   // Where a prism inverts (its vertices' normals lean across a crease of a graded sheet), its
   // vertices' offsets are halved and the slab made again: up to five times (a thirty-second of
   // the thickness there); beyond, the sheet folds too sharply for a slab (false).
   std::vector<double> scale(static_cast<size_t>(nv), 1.0);
+  const Offsets o = offsets(sheet, half_thickness, base);
   for (int round = 0; round < 6; ++round) {
-    SurfaceMesh slab = thicken(sheet, half_thickness, scale);
+    SurfaceMesh slab = slab_of(sheet, o, scale);
     Eigen::MatrixX4i T(3 * sheet.F.rows(), 4);
     auto volume = [&](const Eigen::Vector4i& t) {
       const Eigen::RowVector3d a = slab.V.row(t(0));
@@ -311,5 +389,6 @@ bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, S
   }
   return false;
 }
+}  // namespace
 
 }  // namespace squeeze::meshing

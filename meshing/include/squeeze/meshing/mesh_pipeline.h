@@ -26,7 +26,7 @@ namespace squeeze::meshing {
 
 /// Version of the meshing algorithms: part of every cache key made from meshing results (the
 /// scene loader's coarse-mesh cache). Bump it whenever a change alters the meshes produced.
-constexpr int kMeshingAlgorithmVersion = 15;  // 15: open sheets remeshed finer than wanted graded by simplify_sheet, prisms that invert thinned, open scans whose caps lie over 1.5 times the bound off meshed as sheets; 14: closed parts of mostly skinny triangles split to rounder ones where their own boundary is too much refinement work or does not hold; shells meshes that do not hold the input refused (shells_only); open scans whose caps lie over three times the bound off meshed as sheets; 13: open sheets: outline edges under a quarter of the edge length collapsed, the slab's slivers moved and flipped; 12: version 11 with open scans at winding_dilation (a commit of 11 gave them 0.3; the key tells cached meshes apart); 11: inputs that are not closed parts by their winding-number solid's boundary, simplified against the input; 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
+constexpr int kMeshingAlgorithmVersion = 15;  // 15: closed parts much thinner than their tetrahedra meshed as one layer of prisms across their thickness; inputs far from the origin meshed moved to it; open sheets remeshed finer than wanted graded by simplify_sheet, their creases kept, prisms that invert thinned, slabs of nearby parts kept apart; open scans whose caps lie over 1.5 times the bound off meshed as sheets; 14: closed parts of mostly skinny triangles split to rounder ones where their own boundary is too much refinement work or does not hold; shells meshes that do not hold the input refused (shells_only); open scans whose caps lie over three times the bound off meshed as sheets; 13: open sheets: outline edges under a quarter of the edge length collapsed, the slab's slivers moved and flipped; 12: version 11 with open scans at winding_dilation (a commit of 11 gave them 0.3; the key tells cached meshes apart); 11: inputs that are not closed parts by their winding-number solid's boundary, simplified against the input; 10: a part whose boundary does not hold as its winding-number solid, cavities, bounded retries; 9: unseen shapes (cylinders, debris, cones, flat caps in few digits); 8: open scans by winding number; 7: open sheets as slabs; 6: sliver moves and flips
 
 struct MeshOptions {
   DecompositionOptions decomposition;   // convex shells (--shells, tet labels, the report)
@@ -71,6 +71,10 @@ struct MeshOptions {
   bool split_skinny = true;             // false: parts of mostly skinny triangles meshed on their own
                                         // boundary only, as before version 14 (bench_mesh measures
                                         // against it)
+  bool thin_parts_as_prisms = true;     // closed parts much thinner than their tetrahedra would be
+                                        // long (a plate, a bowl) meshed as one layer of prisms
+                                        // across their thickness (version 15); false: as any part,
+                                        // as before (bench_mesh measures against it)
   bool open_scans_as_sheets = false;    // open 2-manifold components that enclose a solid (open scans)
                                         // meshed as open sheets (slabs) too; mesh_surface tries it by
                                         // itself where the solid's caps over wide holes break the
@@ -150,6 +154,9 @@ struct MeshResult {
   int target_tets = 0;
   int sheets = 0;                   // open sheets meshed as slabs (sheet.h; method "boundary")
   double sheet_thickness = 0;       // ... their thickness (units)
+  int thin_parts = 0;               // closed parts much thinner than their tetrahedra would be long (a
+                                    // plate, a bowl), meshed as one layer of prisms across their
+                                    // thickness (method "boundary"; meshing version 15)
   std::string target_exceeded_because;  // empty: the count is within ±35% of the target
   double input_volume = 0;      // the parts' enclosed volumes, summed (overlapping parts count twice,
                                 // as their tet meshes do)

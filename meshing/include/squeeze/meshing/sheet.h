@@ -86,4 +86,11 @@ int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const T
 /// sharply than half_thickness allows. Throws as thicken_sheet.
 bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab = nullptr);
 
+/// The same with a half thickness per vertex of `sheet` (a thin closed part's mid-surface, each
+/// vertex half as far from both sides as the part is thick there; meshing version 15).
+///   half_thickness  #V positive values (units)
+/// Throws InputError when there is not one per vertex or one is not positive.
+bool sheet_tets(const SurfaceMesh& sheet, const std::vector<double>& half_thickness, TetMesh& out,
+                SurfaceMesh* slab = nullptr);
+
 }  // namespace squeeze::meshing

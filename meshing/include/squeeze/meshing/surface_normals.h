@@ -1,4 +1,4 @@
-// squeeze::meshing — area-weighted face and vertex normals of a triangle mesh: the one
+// squeeze::meshing — area- and angle-weighted face and vertex normals of a triangle mesh: the one
 // accumulation of squeeze (envelope gaps, the winding route's seeds, the tet clean-ups' boundary
 // normals, the FFD's render normals).
 #pragma once
@@ -16,5 +16,13 @@ namespace squeeze::meshing {
 /// bit for bit with any thread count. Throws nothing; indices are not checked (asserted in debug).
 void area_weighted_normals(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, Eigen::MatrixX3d& FN,
                            Eigen::MatrixX3d& N);
+
+/// Angle-weighted vertex normals of (V, F) (G. Thürmer, C. A. Wüthrich, "Computing vertex normals
+/// from polygonal meshes", J. Graphics Tools 3(1), 1998): per vertex the sum of its faces' unit
+/// normals, each weighted by the face's angle at the vertex (radians), not normalized. On a
+/// straight crease it is the bisector whatever the triangles' sizes (a thin bent plate's mid-surface,
+/// meshing version 15). Serial, deterministic. Throws nothing.
+///   N  #V by 3 output (zero for a vertex without a face of non-zero area)
+void angle_weighted_normals(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, Eigen::MatrixX3d& N);
 
 }  // namespace squeeze::meshing
