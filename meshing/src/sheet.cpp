@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "squeeze/common/error.h"
+#include "squeeze/meshing/split_long_edges.h"
 #include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/triangle_bvh.h"
 #include "squeeze/meshing/winding_number.h"
@@ -273,47 +274,24 @@ int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const T
     added.push_back(m.transpose());
   }
   if (mid.empty()) return 0;
-  std::vector<Eigen::Vector3i> out;
-  out.reserve(static_cast<size_t>(nf) + 3 * mid.size());
-  for (Eigen::Index f = 0; f < nf; ++f) {
-    const int v[3] = {sheet.F(f, 0), sheet.F(f, 1), sheet.F(f, 2)};
-    int m[3], n = 0;  // m[k]: the new vertex on edge (v[k], v[k+1]), or -1
-    for (int k = 0; k < 3; ++k) {
-      const auto it = mid.find(key(v[k], v[(k + 1) % 3]));
-      m[k] = it == mid.end() ? -1 : it->second;
-      n += m[k] >= 0;
-    }
-    if (n == 0) {
-      out.emplace_back(v[0], v[1], v[2]);
-    } else if (n == 3) {
-      out.emplace_back(v[0], m[0], m[2]);
-      out.emplace_back(m[0], v[1], m[1]);
-      out.emplace_back(m[2], m[1], v[2]);
-      out.emplace_back(m[0], m[1], m[2]);
-    } else {
-      // Rotated so that edge (a, b) is split; with two, (b, c) too.
-      int r = 0;
-      if (n == 1) {
-        while (m[r] < 0) ++r;
-      } else {
-        while (!(m[r] >= 0 && m[(r + 1) % 3] >= 0)) ++r;
-      }
-      const int a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3], ab = m[r], bc = m[(r + 1) % 3];
-      if (n == 1) {
-        out.emplace_back(a, ab, c);
-        out.emplace_back(ab, b, c);
-      } else {
-        out.emplace_back(ab, b, bc);
-        out.emplace_back(a, ab, bc);
-        out.emplace_back(a, bc, c);
-      }
-    }
-  }
+  std::vector<std::array<int, 3>> F(static_cast<size_t>(nf));
+  for (Eigen::Index f = 0; f < nf; ++f) F[static_cast<size_t>(f)] = {sheet.F(f, 0), sheet.F(f, 1), sheet.F(f, 2)};
+  const Eigen::Index old = sheet.V.rows();
+  auto point = [&](int v) -> Eigen::RowVector3d {
+    return v < old ? Eigen::RowVector3d(sheet.V.row(v)) : added[static_cast<size_t>(v - old)];
+  };
+  const std::vector<std::array<int, 3>> out = red_green_split(
+      F,
+      [&](int a, int b) {
+        const auto it = mid.find(key(a, b));
+        return it == mid.end() ? -1 : it->second;
+      },
+      [&](int a, int b) { return (point(a) - point(b)).squaredNorm(); });
   const Eigen::Index nv = sheet.V.rows();
   sheet.V.conservativeResize(nv + static_cast<Eigen::Index>(added.size()), 3);
   for (size_t i = 0; i < added.size(); ++i) sheet.V.row(nv + static_cast<Eigen::Index>(i)) = added[i];
   sheet.F.resize(static_cast<Eigen::Index>(out.size()), 3);
-  for (size_t i = 0; i < out.size(); ++i) sheet.F.row(static_cast<Eigen::Index>(i)) = out[i].transpose();
+  for (size_t i = 0; i < out.size(); ++i) sheet.F.row(static_cast<Eigen::Index>(i)) << out[i][0], out[i][1], out[i][2];
   return static_cast<int>(mid.size());
 }
 

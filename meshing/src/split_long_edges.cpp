@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <cstdint>
 #include <unordered_map>
@@ -41,6 +42,55 @@ double skinny_split_length(const SurfaceMesh& s, const SkinnySplitOptions& opt) 
   return opt.shortest_edges * shortest[shortest.size() / 2];
 }
 
+std::vector<std::array<int, 3>> red_green_split(const std::vector<std::array<int, 3>>& F,
+                                                const std::function<int(int, int)>& midpoint,
+                                                const std::function<double(int, int)>& squared_length) {
+  std::vector<std::array<int, 3>> G;
+  G.reserve(F.size() * 2);
+  for (const auto& t : F) {
+    int m[3];
+    int n = 0;
+    for (int k = 0; k < 3; ++k) {
+      m[k] = midpoint(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]);  // on edge (t[k], t[k+1])
+      n += m[k] >= 0;
+    }
+    if (n == 0) {
+      G.push_back(t);
+    } else if (n == 3) {
+      G.push_back({t[0], m[0], m[2]});
+      G.push_back({m[0], t[1], m[1]});
+      G.push_back({m[2], m[1], t[2]});
+      G.push_back({m[0], m[1], m[2]});
+    } else {
+      // Rotate so that edge (a, b) = (t[r], t[r+1]) is split; with two, also (b, c).
+      int r = 0;
+      if (n == 1) {
+        while (m[r] < 0) ++r;
+      } else {
+        while (!(m[r] >= 0 && m[(r + 1) % 3] >= 0)) ++r;
+      }
+      const int a = t[static_cast<size_t>(r)], b = t[static_cast<size_t>((r + 1) % 3)], c = t[static_cast<size_t>((r + 2) % 3)];
+      const int mab = m[r];
+      if (n == 1) {
+        G.push_back({a, mab, c});
+        G.push_back({mab, b, c});
+      } else {
+        const int mbc = m[(r + 1) % 3];
+        G.push_back({mab, b, mbc});
+        // The quadrilateral a, mab, mbc, c along its shorter diagonal.
+        if (squared_length(a, mbc) <= squared_length(mab, c)) {
+          G.push_back({a, mab, mbc});
+          G.push_back({a, mbc, c});
+        } else {
+          G.push_back({a, mab, c});
+          G.push_back({mab, mbc, c});
+        }
+      }
+    }
+  }
+  return G;
+}
+
 SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length) {
   if (!(max_length > 0)) throw InputError("split_long_edges: max_length must be positive");
   std::vector<Eigen::RowVector3d> V;
@@ -74,51 +124,13 @@ SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length) {
       mid[k] = static_cast<int>(V.size());
       V.push_back(0.5 * (V[static_cast<size_t>(a)] + V[static_cast<size_t>(b)]));
     }
-    std::vector<std::array<int, 3>> G;
-    G.reserve(F.size() * 2);
-    for (const auto& t : F) {
-      int m[3];
-      int n = 0;
-      for (int k = 0; k < 3; ++k) {
-        const auto it = mid.find(key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]));
-        m[k] = it == mid.end() ? -1 : it->second;  // midpoint of edge (t[k], t[k+1])
-        n += m[k] >= 0;
-      }
-      if (n == 0) {
-        G.push_back(t);
-      } else if (n == 3) {
-        G.push_back({t[0], m[0], m[2]});
-        G.push_back({m[0], t[1], m[1]});
-        G.push_back({m[2], m[1], t[2]});
-        G.push_back({m[0], m[1], m[2]});
-      } else {
-        // Rotate so that edge (a, b) = (t[r], t[r+1]) is split; with two, also (b, c).
-        int r = 0;
-        if (n == 1) {
-          while (m[r] < 0) ++r;
-        } else {
-          while (!(m[r] >= 0 && m[(r + 1) % 3] >= 0)) ++r;
-        }
-        const int a = t[static_cast<size_t>(r)], b = t[static_cast<size_t>((r + 1) % 3)], c = t[static_cast<size_t>((r + 2) % 3)];
-        const int mab = m[r];
-        if (n == 1) {
-          G.push_back({a, mab, c});
-          G.push_back({mab, b, c});
-        } else {
-          const int mbc = m[(r + 1) % 3];
-          G.push_back({mab, b, mbc});
-          // The quadrilateral a, mab, mbc, c along its shorter diagonal.
-          if ((V[static_cast<size_t>(a)] - V[static_cast<size_t>(mbc)]).squaredNorm() <=
-              (V[static_cast<size_t>(mab)] - V[static_cast<size_t>(c)]).squaredNorm()) {
-            G.push_back({a, mab, mbc});
-            G.push_back({a, mbc, c});
-          } else {
-            G.push_back({a, mab, c});
-            G.push_back({mab, mbc, c});
-          }
-        }
-      }
-    }
+    std::vector<std::array<int, 3>> G = red_green_split(
+        F,
+        [&](int a, int b) {
+          const auto it = mid.find(key(a, b));
+          return it == mid.end() ? -1 : it->second;
+        },
+        [&](int a, int b) { return (V[static_cast<size_t>(a)] - V[static_cast<size_t>(b)]).squaredNorm(); });
     F.swap(G);
   }
   SurfaceMesh out;

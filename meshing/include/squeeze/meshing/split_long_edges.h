@@ -1,5 +1,9 @@
 // squeeze::meshing — splitting a surface's long edges at their midpoints (the surface unchanged).
 #pragma once
+#include <array>
+#include <functional>
+#include <vector>
+
 #include "squeeze/meshing/surface.h"
 
 namespace squeeze::meshing {
@@ -20,6 +24,14 @@ namespace squeeze::meshing {
 ///   max_length  model units, > 0 (else InputError)
 /// Returns the refined surface: the input's vertices first, in order, then the midpoints.
 SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length);
+
+/// One round of that red–green refinement on the faces F, given the new vertex on each split edge:
+/// midpoint(a, b) is its index (the same for (b, a)), or -1 where the edge is not split;
+/// squared_length(a, b) between two vertices chooses a quadrilateral's shorter diagonal. Each face
+/// keeps its orientation. Shared by split_long_edges and split_sheet_faces (sheet.h).
+std::vector<std::array<int, 3>> red_green_split(const std::vector<std::array<int, 3>>& F,
+                                                const std::function<int(int, int)>& midpoint,
+                                                const std::function<double(int, int)>& squared_length);
 
 /// The median length (model units) of the edges of `surface`'s triangles (each edge counted once
 /// per triangle); 0 for a surface without faces. Throws nothing.
