@@ -10,6 +10,9 @@
 //                             surface (`tetgen -pq1.414 -Q bunny.off`), and their ratio
 //  BM_RodPipeline/<N>, BM_RodWithoutSplit/<N>  a faceted 1 m by 3 mm rod (tests/shapes.h): the
 //                             whole pipeline (version 14) against it with split_skinny off (13)
+//  BM_ThinPlatePipeline/<N>, BM_ThinPlateWithoutPrisms/<N>  a closed 1 m plate 5 mm thick: the whole
+//                             pipeline (version 15: one layer of prisms) against it with
+//                             thin_parts_as_prisms off (version 14)
 #include <benchmark/benchmark.h>
 
 #include <chrono>
