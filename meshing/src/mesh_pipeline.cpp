@@ -243,6 +243,9 @@ std::vector<int> sliver_faces(const SurfaceMesh& sheet, const TetMesh& tets, dou
   return bad;
 }
 
+// The words fallback_because gives open scans of solids (mesh_surface looks for them).
+const std::string kOpenScans = "open scans of solids";
+
 std::string percent(double x) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.2g%%", 100.0 * x);
@@ -1532,7 +1535,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       // convex shells: the dragon 3.8-10.9 % of the diagonal out; version 11: its boundary
       // simplified against the scan, as for welded segments below, whatever --shells-fallback).
       const std::string why = std::to_string(unusable) + " of the input's " + std::to_string(components) +
-                              " components are open scans of solids (holes, not welded to other components)";
+                              " components are " + kOpenScans + " (holes, not welded to other components)";
       // Their hole rims are creases of the solid that Mesh_3's facets cut: the larger dilation
       // (at 0.3 an elephant with holes 1-3 % of the diagonal wide had 0.50-0.67 % in, at 0.45
       // 0.43-0.45 %).
@@ -1569,7 +1572,10 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   // times, since a detailed scan's slab, remeshed to equal triangles, folded over itself or took
   // 15,000-130,000 tetrahedra in 30-50 s; simplify_sheet now grades it).
   const double diag = bounding_box_diagonal(r.input.V);
+  // (Only open scans: components that are open 2-manifolds, each on its own. Welded, non-manifold
+  // or self-intersecting segments, a scanned dragon with holes, make no slab: no second try.)
   const bool capped = (r.method == "winding_number_boundary" || r.method == "winding_number") && !r.info.closed &&
+                      r.fallback_because.find(kOpenScans) != std::string::npos &&
                       r.deviation_out > 1.5 * opt.max_deviation * diag;
   // (Not where a route was asked for: --winding, --wrap, --shells-fallback, --shells-only.)
   if (!capped || opt.open_scans_as_sheets || opt.shells_only || opt.winding || opt.wrap || opt.shells_fallback ||
