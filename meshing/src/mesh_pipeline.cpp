@@ -220,9 +220,7 @@ struct Part {
 // tetrahedron's sheet vertices (after the sliver moves and flips, which keep the vertices).
 std::vector<int> sliver_faces(const SurfaceMesh& sheet, const TetMesh& tets, double floor) {
   const int nv = static_cast<int>(sheet.V.rows());
-  std::vector<std::vector<int>> faces_at(static_cast<size_t>(nv));
-  for (Eigen::Index f = 0; f < sheet.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) faces_at[static_cast<size_t>(sheet.F(f, k))].push_back(static_cast<int>(f));
+  const std::vector<std::vector<int>> faces_at = vertex_faces(sheet.F, nv);
   std::vector<int> bad;
   for (Eigen::Index t = 0; t < tets.T.rows(); ++t) {
     const auto a = dihedral_angles(tets.V.row(tets.T(t, 0)), tets.V.row(tets.T(t, 1)), tets.V.row(tets.T(t, 2)),
@@ -575,6 +573,21 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // of the thickness (so that the input stays inside the slab, and the slab within
     // max_deviation of the input). False where the slab folds over itself at every length tried: the
     // slab then takes the boundary route like any part.
+    // One layer of prisms (m, its slab; the sliver moves and flips done) kept as the part's mesh:
+    // edge length len, `triangles` the triangles its share of the target would have had.
+    auto keep_prisms = [](Part& p, TetMesh& m, SurfaceMesh& slab, int relocated, int flips, int attempts, double len,
+                          double triangles) {
+      slab.V = m.V;
+      p.boundary = std::move(slab);
+      p.tets = std::move(m);
+      p.tet_stats = TetrahedralizeStats{};
+      p.tet_stats.relocated = relocated;
+      p.tet_stats.flips = flips;
+      p.tet_stats.attempts = attempts;
+      p.tet_stats.edge_length = len;
+      p.tet_stats.conforming = true;
+      p.target_faces = 2 * static_cast<int>(std::lround(triangles));
+    };
     auto mesh_sheet = [&](Part& p) {
       const double h = p.offset;
       const int share = std::max(1, static_cast<int>(std::lround(target * p.volume / total_volume)));
@@ -614,17 +627,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       auto adopt = [&](TetMesh& m, SurfaceMesh& slab, double len, int attempt) {
         const int relocated = relocate_sliver_vertices(m, opt.tetrahedralize.min_dihedral);
         const int flips = flip_slivers(m, opt.tetrahedralize.min_dihedral);
-        slab.V = m.V;
         p.sheet_capped = len < wanted;
-        p.boundary = std::move(slab);
-        p.tets = std::move(m);
-        p.tet_stats = TetrahedralizeStats{};
-        p.tet_stats.relocated = relocated;
-        p.tet_stats.flips = flips;
-        p.tet_stats.attempts = attempt;
-        p.tet_stats.edge_length = len;
-        p.tet_stats.conforming = true;
-        p.target_faces = 2 * static_cast<int>(std::lround(area(p.sheet) / (0.433 * wanted * wanted)));
+        keep_prisms(p, m, slab, relocated, flips, attempt, len, area(p.sheet) / (0.433 * wanted * wanted));
       };
       double apart = 0;
       for (int attempt = 1; attempt <= 6; ++attempt) {
@@ -770,8 +774,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       SurfaceMesh mid = remesh_sheet(one, Ls);
       if (mid.F.rows() == 0) return false;
       // Each vertex: half way to the other side along its normal (the remeshed side's, outward).
-      Eigen::MatrixX3d MF, MN;
-      area_weighted_normals(mid.V, mid.F, MF, MN);
+      Eigen::MatrixX3d MN;
       angle_weighted_normals(mid.V, mid.F, MN);  // (on a crease, the bisector: toward the inner corner)
       // (A ray along the outline can graze the rim and meet nothing: such a vertex takes the mean
       // of its neighbours' that met the other side.)
@@ -800,8 +803,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       for (Eigen::Index v = 0; v < mid.V.rows(); ++v) mid.V.row(v) -= half[static_cast<size_t>(v)] * MN.row(v).normalized();
       // Vertices added by splits: half way between the sides along their normal (rays both ways).
       auto between_sides = [&](Eigen::Index from) {
-        Eigen::MatrixX3d F2, N2;
-        area_weighted_normals(mid.V, mid.F, F2, N2);
+        Eigen::MatrixX3d N2;
         angle_weighted_normals(mid.V, mid.F, N2);
         half.resize(static_cast<size_t>(mid.V.rows()), 0.0);
         for (Eigen::Index v = from; v < mid.V.rows(); ++v) {
@@ -844,17 +846,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         m = TetMesh{};
         slab = SurfaceMesh{};
       }
-      slab.V = m.V;
-      p.boundary = std::move(slab);
-      p.tets = std::move(m);
-      p.tet_stats = TetrahedralizeStats{};
-      p.tet_stats.relocated = relocated;
-      p.tet_stats.flips = flips;
-      p.tet_stats.attempts = 1;
-      p.tet_stats.edge_length = Ls;
-      p.tet_stats.conforming = true;
       p.thin = thickness;
-      p.target_faces = 2 * static_cast<int>(std::lround(area(one) / (0.433 * wanted * wanted)));
+      keep_prisms(p, m, slab, relocated, flips, 1, Ls, area(one) / (0.433 * wanted * wanted));
       return true;
     };
     // Once a part has failed, the whole input takes `fail`: the other parts' work is skipped.

@@ -15,6 +15,7 @@
 
 #include "squeeze/common/error.h"
 #include "squeeze/meshing/split_long_edges.h"
+#include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/triangle_bvh.h"
 #include "squeeze/meshing/winding_number.h"
@@ -102,25 +103,21 @@ Offsets offsets(const SurfaceMesh& sheet, double half_thickness, const std::vect
   for (double b : base)
     if (!(b > 0)) throw InputError("sheet_tets: every half thickness must be positive");
   const Eigen::Index nv = sheet.V.rows(), nf = sheet.F.rows();
-  Eigen::MatrixX3d FN, N;
-  area_weighted_normals(sheet.V, sheet.F, FN, N);
+  Eigen::MatrixX3d FN, unused;
+  area_weighted_normals(sheet.V, sheet.F, FN, unused);  // (the faces' normals)
+  Eigen::MatrixX3d N;
   angle_weighted_normals(sheet.V, sheet.F, N);  // (the bisector on a crease: a bent plate's mid-surface)
-  std::vector<char> used(static_cast<size_t>(nv), 0);
-  for (Eigen::Index f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) used[static_cast<size_t>(sheet.F(f, k))] = 1;
+  const std::vector<std::vector<int>> faces_at = vertex_faces(sheet.F, nv);
   for (Eigen::Index v = 0; v < nv; ++v) {
     const double len = N.row(v).norm();
     if (len > 0) N.row(v) /= len;
-    else if (used[static_cast<size_t>(v)])
+    else if (!faces_at[static_cast<size_t>(v)].empty())
       throw InputError("thicken_sheet: vertex " + std::to_string(v) + " has no normal (its faces have no area)");
   }
-  // Where the area-weighted normal leans more than 60° from one of the vertex's faces (a graded
-  // sheet: a large face beside small ones across a crease), it is turned toward that face, a few
-  // times, while that raises the smallest cosine: the prisms' sides then lean less.
+  // Where the normal leans more than 60° from one of the vertex's faces (a graded sheet: a large
+  // face beside small ones across a crease), it is turned toward that face, a few times, while
+  // that raises the smallest cosine: the prisms' sides then lean less.
   {
-    std::vector<std::vector<int>> faces_at(static_cast<size_t>(nv));
-    for (Eigen::Index f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) faces_at[static_cast<size_t>(sheet.F(f, k))].push_back(static_cast<int>(f));
     for (Eigen::Index v = 0; v < nv; ++v) {
       const auto& around = faces_at[static_cast<size_t>(v)];
       auto worst = [&](const Eigen::RowVector3d& n, int* arg) {
@@ -162,11 +159,8 @@ Offsets offsets(const SurfaceMesh& sheet, double half_thickness, const std::vect
   // the vertex, its normal leans past the other part.)
   {
     const TriangleBvh bvh(sheet.V, sheet.F);
-    std::vector<std::vector<int>> faces_at(static_cast<size_t>(nv));
-    for (Eigen::Index f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) faces_at[static_cast<size_t>(sheet.F(f, k))].push_back(static_cast<int>(f));
     tbb::parallel_for(Eigen::Index(0), nv, [&](Eigen::Index v) {
-      if (!used[static_cast<size_t>(v)]) return;
+      if (faces_at[static_cast<size_t>(v)].empty()) return;
       const Eigen::Vector3d x = sheet.V.row(v).transpose();
       std::vector<Eigen::Vector3d> directions{N.row(v).transpose()};
       for (int f : faces_at[static_cast<size_t>(v)])

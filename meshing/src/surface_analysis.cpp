@@ -1,5 +1,7 @@
 #include "squeeze/meshing/surface_analysis.h"
 
+#include <cassert>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <climits>
@@ -119,6 +121,14 @@ Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
       if (static_cast<bool>(flip[f]) != flip_all) std::swap(out(f, 1), out(f, 2));
   }
   return out;
+}
+
+std::vector<std::vector<int>> vertex_faces(const Eigen::MatrixX3i& F, Eigen::Index vertices) {
+  assert(F.rows() == 0 || (F.minCoeff() >= 0 && F.maxCoeff() < vertices));
+  std::vector<std::vector<int>> at(static_cast<size_t>(vertices));
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) at[static_cast<size_t>(F(f, k))].push_back(static_cast<int>(f));
+  return at;
 }
 
 bool is_closed(const Eigen::MatrixX3i& F) {

@@ -1,6 +1,7 @@
 // squeeze::meshing — topology of a triangle soup: components, closedness, consistent orientation,
 // enclosed volume, self-intersection.
 #pragma once
+#include <vector>
 #include <Eigen/Core>
 
 #include "squeeze/meshing/surface.h"
@@ -40,6 +41,12 @@ bool is_closed(const Eigen::MatrixX3i& F);
 ///   F         #F by 3 vertex indices
 ///   vertices  #V (vertices without faces are allowed)
 bool is_oriented_two_manifold(const Eigen::MatrixX3i& F, int vertices);
+
+/// The faces around each vertex: entry v lists, in increasing order, the faces of F that hold v.
+///   F         #F by 3 vertex indices, each in [0, vertices)
+///   vertices  #V (a vertex without faces gets an empty list)
+/// Throws nothing; indices are not checked (asserted in debug).
+std::vector<std::vector<int>> vertex_faces(const Eigen::MatrixX3i& F, Eigen::Index vertices);
 
 /// Edge counts, components, closedness and (for closed meshes) volume of `mesh`. The
 /// self_intersecting flag is left false here; see does_self_intersect().
