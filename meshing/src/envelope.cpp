@@ -15,7 +15,11 @@
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 
 #include <spdlog/spdlog.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -65,6 +69,7 @@ struct State {
   std::vector<double> face_gap;    // per reference face: a third of the smallest gap at its corners
   std::vector<int> pending;        // samples of the region of the collapse just accepted
   std::vector<FD> region;          // its faces
+  std::vector<Vec3> later;         // the filter's points checked last (scratch)
   int collapses = 0;
   Progress* progress = nullptr;
   size_t initial_faces = 0;
@@ -230,8 +235,10 @@ struct Filter {
       for (int j = 1; j <= k; ++j)
         if (!check_point(p + (static_cast<double>(j) / (k + 1)) * (q - p))) return boost::none;
     }
+    std::vector<Vec3>& later = s->later;
+    later.clear();
     for (const Tri& t : tris)
-      if (t.radius > s->in && !check_point(t.centre)) return boost::none;
+      if (t.radius > s->in) later.push_back(t.centre);
     // With a target, nothing else holds the new faces near it from outside (the surface's own
     // samples keep only the gap caps): points of each larger face, about twice the inner bound
     // apart (at most 8 along an edge).
@@ -241,9 +248,25 @@ struct Filter {
         const int n = std::min(8, static_cast<int>(std::ceil(2.0 * t.radius / (2.0 * s->in))));
         for (int i = 1; i < n; ++i)
           for (int j = 1; i + j < n; ++j)
-            if (!check_point(t.a + (static_cast<double>(i) / n) * (t.b - t.a) + (static_cast<double>(j) / n) * (t.c - t.a)))
-              return boost::none;
+            later.push_back(t.a + (static_cast<double>(i) / n) * (t.b - t.a) + (static_cast<double>(j) / n) * (t.c - t.a));
       }
+    // (Each point on its own, the collapse kept where all pass: many of them, two BVH queries each
+    // with a target, are checked in parallel, the answer the same.)
+    if (later.size() < 48) {
+      for (const Vec3& x : later)
+        if (!check_point(x)) return boost::none;
+      return op;
+    }
+    // (Isolated: a thread waiting here takes no other task, another part's meshing, and so no
+    // thread-local state, CGAL's random generator, changes under it.)
+    std::atomic<bool> fails{false};
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, later.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end() && !fails.load(std::memory_order_relaxed); ++i)
+          if (!check_point(later[i])) fails = true;
+      });
+    });
+    if (fails) return boost::none;
     return op;
   }
 };
@@ -425,7 +448,9 @@ SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surfa
     s.samples.push_back(x);
   };
   auto add_own_sample = [&](const Vec3& x, FD f, double cap) {
-    if (target) return add_sample(x, f, cap, {INFINITY, INFINITY, cap});
+    // (With a target, a sample whose cap is infinite, no other part of the surface within reach,
+    // passes whatever the new faces: it is not kept.)
+    if (target) return cap < INFINITY ? add_sample(x, f, cap, {INFINITY, INFINITY, cap}) : void();
     const double sure = std::min({opt.max_inside, opt.max_outside, cap});
     add_sample(x, f, sure, {opt.max_inside, opt.max_outside, sure});
   };
