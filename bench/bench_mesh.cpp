@@ -13,6 +13,10 @@
 //  BM_ThinPlatePipeline/<N>, BM_ThinPlateWithoutPrisms/<N>  a closed 1 m plate 5 mm thick: the whole
 //                             pipeline (version 15: one layer of prisms) against it with
 //                             thin_parts_as_prisms off (version 14)
+//  BM_ScanWithHolesSlabFirst/<N>, BM_ScanWithHolesSolidFirst/<N>  the bunny of tests/data with four
+//                             holes of 2 % of its diagonal: its slab tried first, its widest hole's
+//                             cap estimated from its outline (version 16), against the solid first
+//                             and then the slab (slab_first_for_wide_holes off, version 15)
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -23,6 +27,9 @@
 #include <memory>
 #include <string>
 #include <unistd.h>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "shapes.h"
 #include "squeeze/meshing/mesh_pipeline.h"
@@ -230,5 +237,46 @@ void BM_ThinPlatePipeline(benchmark::State& state) { plate(state, true); }
 void BM_ThinPlateWithoutPrisms(benchmark::State& state) { plate(state, false); }
 BENCHMARK(BM_ThinPlatePipeline)->Arg(150)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_ThinPlateWithoutPrisms)->Arg(150)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// An open scan whose holes are wider than the bound (the bunny of tests/data, four holes of 2 % of
+// its diagonal in radius cut around seeded vertices, as tests/test_meshing_v4.cpp cuts them):
+// both orders end at the same slab.
+squeeze::meshing::SurfaceMesh bunny_with_holes() {
+  const squeeze::meshing::SurfaceMesh bunny = squeeze::meshing::load_surface(data("bunny00.off"));
+  const double diag = (bunny.V.colwise().maxCoeff() - bunny.V.colwise().minCoeff()).norm();
+  std::vector<Eigen::RowVector3d> centres;
+  for (int k = 0; k < 4; ++k) centres.push_back(bunny.V.row((k * 7919 + 101) % bunny.V.rows()));
+  std::vector<Eigen::RowVector3i> kept;
+  for (Eigen::Index f = 0; f < bunny.F.rows(); ++f) {
+    const Eigen::RowVector3d c = (bunny.V.row(bunny.F(f, 0)) + bunny.V.row(bunny.F(f, 1)) + bunny.V.row(bunny.F(f, 2))) / 3.0;
+    bool cut = false;
+    for (const auto& x : centres) cut = cut || (c - x).norm() < 0.02 * diag;
+    if (!cut) kept.push_back(bunny.F.row(f));
+  }
+  squeeze::meshing::SurfaceMesh m;
+  m.V = bunny.V;
+  m.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
+  for (size_t i = 0; i < kept.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) = kept[i];
+  return m;
+}
+
+void scan_with_holes(benchmark::State& state, bool slab_first) {
+  const squeeze::meshing::SurfaceMesh m = bunny_with_holes();
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = static_cast<int>(state.range(0));
+  o.slab_first_for_wide_holes = slab_first;
+  squeeze::meshing::MeshResult r;
+  for (auto _ : state) r = squeeze::meshing::mesh_surface(m, o);
+  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  state.counters["sheets"] = r.sheets;
+  state.counters["deviation_out"] = r.deviation_out / diag;
+  state.counters["deviation_in"] = r.deviation_in / diag;
+  state.counters["min_dihedral"] = r.quality.min_dihedral;
+}
+void BM_ScanWithHolesSlabFirst(benchmark::State& state) { scan_with_holes(state, true); }
+void BM_ScanWithHolesSolidFirst(benchmark::State& state) { scan_with_holes(state, false); }
+BENCHMARK(BM_ScanWithHolesSlabFirst)->Arg(300)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_ScanWithHolesSolidFirst)->Arg(300)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 BENCHMARK_MAIN();

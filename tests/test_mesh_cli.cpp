@@ -305,8 +305,16 @@ TEST_P(FormatTest, MeshMeetsTheContract) {
   ASSERT_EQ(run.code, 0) << run.err;
   EXPECT_EQ(temporaries_in(dir.path()).size(), tmp_before.size()) << "squeeze left a temporary file";
   const TetMesh tets = squeeze::meshing::load_tet_mesh(dir / "out.mesh");
-  const TetFacts facts = expect_mesh_contract(tets, truth, v.name);
+  // The open elephant's hole (6 % of the diagonal in radius) is wider than the deviation bound: as
+  // a solid its cap lay 4.4 % off; since meshing version 16 it is a slab of prisms 1 % thick, about
+  // 16,000 tetrahedra, within every bound, and the report says why the count is over.
+  const bool slab = v.name == "open_elephant_ply";
+  const TetFacts facts = expect_mesh_contract(tets, truth, v.name, slab ? 60000 : 5000);
   const nlohmann::json report = nlohmann::json::parse(read_text(dir / "r.json"));
+  if (slab) {
+    EXPECT_TRUE(report["target_exceeded_because"].is_string()) << report.dump();
+    EXPECT_LE(report["deviation_out"].get<double>(), 0.01);
+  }
   expect_report(report, facts, truth, v.name);
   if (v.name != "dirty_ply") { EXPECT_EQ(report["input"]["closed"].get<bool>(), truth.closed) << v.name; }
 }

@@ -338,6 +338,44 @@ TEST(Sheet, SimplifySheetGradesWithinTheBoundAndNoEdgeLonger) {
   EXPECT_THROW(squeeze::meshing::simplify_sheet(fine, SurfaceMesh{}, o), squeeze::InputError);
 }
 
+// smooth_sheet_faces (meshing version 16): a fold flattens, half way to its neighbours' mean and no
+// farther than max_move; the outline and an evenly tessellated flat sheet stay where they are.
+TEST(Sheet, SmoothSheetFacesFlattensAFoldAndKeepsTheOutline) {
+  SurfaceMesh flat = grid(11, 11, [](double u, double v) { return Vec3(u, v, 0); });
+  std::vector<int> all(static_cast<size_t>(flat.F.rows()));
+  for (size_t f = 0; f < all.size(); ++f) all[f] = static_cast<int>(f);
+  const SurfaceMesh before = flat;
+  EXPECT_EQ(squeeze::meshing::smooth_sheet_faces(flat, all), 81);  // the 9 × 9 inner vertices
+  EXPECT_LT((flat.V - before.V).cwiseAbs().maxCoeff(), 1e-12);
+  // A spike at the centre (vertex 60), 0.1 high, over the faces around it.
+  SurfaceMesh spike = before;
+  spike.V(60, 2) = 0.1;
+  std::vector<int> around;
+  for (Eigen::Index f = 0; f < spike.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (spike.F(f, k) == 60) around.push_back(static_cast<int>(f));
+  ASSERT_EQ(around.size(), 6u);
+  SurfaceMesh once = spike;
+  squeeze::meshing::smooth_sheet_faces(once, around);
+  EXPECT_NEAR(once.V(60, 2), 0.05, 1e-12);           // half way to its neighbours' mean (0)
+  EXPECT_NEAR(once.V(61, 2), 0.5 * 0.1 / 6, 1e-12);  // a neighbour: half way to its own (0.1 / 6)
+  SurfaceMesh capped = spike;
+  squeeze::meshing::smooth_sheet_faces(capped, around, 0.01);
+  EXPECT_NEAR(capped.V(60, 2), 0.09, 1e-12);
+  // Faces on the outline: the outline stays (vertex 5, raised, on the row v = 0), the inside moves.
+  SurfaceMesh edge = before;
+  edge.V(5, 2) = 0.1;
+  std::vector<int> at5;
+  for (Eigen::Index f = 0; f < edge.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (edge.F(f, k) == 5) at5.push_back(static_cast<int>(f));
+  squeeze::meshing::smooth_sheet_faces(edge, at5);
+  EXPECT_EQ(edge.V(5, 2), 0.1);
+  for (int v : {4, 6}) EXPECT_EQ(edge.V.row(v), before.V.row(v));
+  EXPECT_GT(edge.V(16, 2), 0.0);  // the inner neighbour, lifted toward it
+  EXPECT_THROW(squeeze::meshing::smooth_sheet_faces(edge, {static_cast<int>(edge.F.rows())}), squeeze::InputError);
+}
+
 // split_sheet_faces: the longest edge of each face asked, and every face on a split edge, split so
 // that the sheet stays a conforming, consistently oriented 2-manifold of the same area and outline
 // (a flat sheet, faces with one, two and three split edges).

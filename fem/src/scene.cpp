@@ -464,7 +464,7 @@ meshing::TetMesh object_tet_mesh(const fs::path& mesh, int tets, bool* cache_hit
       << options.winding_mesh.sliver_bound << ',' << options.winding_mesh.optimize_seconds << ',' << options.wrap
       << ',' << options.wrap_alpha << ',' << options.wrap_offset << ',' << options.sheet_thickness << ','
       << options.shells_fallback << ',' << options.winding_mesh.facet_size << ',' << options.winding_surface_dilation << ','
-      << options.winding_mesh.cover_tolerance << (options.shells_only ? ",shells_only" : "") << (options.split_skinny ? "" : ",no_skinny_split") << (options.thin_parts_as_prisms ? "" : ",no_thin_prisms") << '|' << bytes.size() << '|';
+      << options.winding_mesh.cover_tolerance << (options.shells_only ? ",shells_only" : "") << (options.split_skinny ? "" : ",no_skinny_split") << (options.thin_parts_as_prisms ? "" : ",no_thin_prisms") << (options.slab_first_for_wide_holes ? "" : ",solid_first") << '|' << bytes.size() << '|';
   Hash128 h;
   h.add(opt.str());
   h.add(bytes);

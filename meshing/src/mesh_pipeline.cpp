@@ -591,43 +591,58 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     };
     // One layer of prisms over the sheet s (made by make(s, m, slab): sheet_tets) with no tetrahedron
     // under the floor: each round's prisms checked by `accept` (when given; false gives up), their
-    // sliver vertices moved and slivers flipped as the boundary route's are, then the faces whose
-    // prisms still hold one split (split_sheet_faces; `split` told the vertex count before, for
-    // per-vertex data) and the prisms made again. At most kSliverSplitRounds splits, none where
-    // over max_bad of the faces hold slivers (no few splits will do). Graded sheets, equal
-    // triangles and thin parts' mid-surfaces alike (meshing version 16; before, graded sheets and
-    // thin parts had a loop each, of three rounds, and equal triangles none).
+    // sliver vertices moved and slivers flipped as the boundary route's are, then, where some are
+    // left, the sheet mended there and the prisms made again. Mended by `relax` (when given: an open
+    // sheet smoothed around those faces; false where it then strays from the input) for
+    // kSmoothRounds rounds, then by that and splitting the faces (split_sheet_faces; `split` told
+    // the vertex count before, for per-vertex data), up to `rounds` rounds in all, none where over
+    // max_bad of the faces hold slivers (no few mends will do). Graded sheets, equal triangles and
+    // thin parts' mid-surfaces alike (meshing version 16; before, graded sheets and thin parts had a
+    // loop each, of three splits, and equal triangles none).
     enum class Layer { kClean, kSlivers, kFolded, kRefused };
     struct PrismLayer {
       TetMesh m;
       SurfaceMesh slab;
       int relocated = 0, flips = 0;
     };
-    // (Splitting converges where a long edge lies over a thinned slab, in one to three rounds. The
-    // elephant with holes of 2 % does not: its folds, where the scan's sides lie nearer each other
-    // than the slab is thick, thin some offsets to a three-hundredth, and six rounds left 21, 12,
-    // 1, 2, 10, 4, then 14 faces over slivers.)
-    constexpr int kSliverSplitRounds = 3;
-    auto prisms_without_slivers = [&](SurfaceMesh& s, const std::function<bool(const SurfaceMesh&, TetMesh&, SurfaceMesh&)>& make,
+    // (Splitting converges where a long edge lies over a thinned slab, in one to three rounds. On
+    // an elephant scanned with holes it does not: where its sheet folds sharply, prisms invert and
+    // their offsets are halved to a thirty-second (sheet_tets), and six rounds of splits left 21,
+    // 12, 1, 2, 10, 4, then 14 faces over slivers. Smoothing the fold first (21, 5, 1, 2, then
+    // none with splits from the fourth round) kept the slab of all four elephants with holes.)
+    constexpr int kSmoothRounds = 3;
+    using MakePrisms = std::function<bool(const SurfaceMesh&, TetMesh&, SurfaceMesh&, std::vector<int>*)>;
+    auto prisms_without_slivers = [&](SurfaceMesh& s, const MakePrisms& make,
                                       const std::function<bool(const SurfaceMesh&)>& accept,
-                                      const std::function<void(Eigen::Index)>& split, double max_bad, const std::string& what,
-                                      PrismLayer& layer) {
+                                      const std::function<bool(SurfaceMesh&, const std::vector<int>&)>& relax,
+                                      const std::function<void(Eigen::Index)>& split, int rounds, double max_bad,
+                                      const std::string& what, PrismLayer& layer) {
       const double floor = opt.tetrahedralize.min_dihedral;
       for (int round = 0;; ++round) {
         layer = PrismLayer{};
-        if (!make(s, layer.m, layer.slab)) return Layer::kFolded;
+        std::vector<int> inverted;
+        if (!make(s, layer.m, layer.slab, &inverted)) {
+          // (Folded: prisms that stay inverted however thin; the sheet smoothed there, when it may be.)
+          spdlog::debug("{}: prisms over {} faces invert{}", what, inverted.size(), relax && round < rounds ? ": smoothed" : "");
+          if (!relax || inverted.empty() || round == rounds || !relax(s, inverted)) return Layer::kFolded;
+          continue;
+        }
         if (accept && !accept(layer.slab)) return Layer::kRefused;
         layer.relocated = relocate_sliver_vertices(layer.m, floor);
         layer.flips = flip_slivers(layer.m, floor);
         const std::vector<int> bad = sliver_faces(s, layer.m, floor);
         if (bad.empty()) return Layer::kClean;
-        const bool last = round == kSliverSplitRounds || static_cast<double>(bad.size()) > max_bad * static_cast<double>(s.F.rows());
+        const bool last = round == rounds || static_cast<double>(bad.size()) > max_bad * static_cast<double>(s.F.rows());
+        const bool splits = !relax || round >= kSmoothRounds;
         spdlog::debug("{}: prisms over {} of {} faces leave tetrahedra under {}°{}", what, bad.size(), s.F.rows(), floor,
-                      last ? "" : ": split");
+                      last ? "" : relax ? (splits ? ": smoothed and split" : ": smoothed") : ": split");
         if (last) return Layer::kSlivers;
-        const Eigen::Index old = s.V.rows();
-        split_sheet_faces(s, bad);  // (midpoints on the faces: projecting them onto the input can cross a thin part)
-        if (split) split(old);
+        if (relax && !relax(s, bad)) return Layer::kSlivers;
+        if (splits) {
+          const Eigen::Index old = s.V.rows();
+          split_sheet_faces(s, bad);  // (midpoints on the faces: projecting them onto the input can cross a thin part)
+          if (split) split(old);
+        }
       }
     };
     auto mesh_sheet = [&](Part& p) {
@@ -661,7 +676,16 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                       c.F.rows(), apart, apart <= 0.8 * h ? "" : ": too far");
         return apart <= 0.8 * h;
       };
-      auto make = [&](const SurfaceMesh& s, TetMesh& m, SurfaceMesh& slab) { return sheet_tets(s, h, m, &slab); };
+      auto make = [&](const SurfaceMesh& s, TetMesh& m, SurfaceMesh& slab, std::vector<int>* inverted) {
+        return sheet_tets(s, h, m, &slab, inverted);
+      };
+      // Smoothed around faces over slivers, kept where it stays within the bound of the input.
+      auto relax = [&](SurfaceMesh& s, const std::vector<int>& bad) {
+        smooth_sheet_faces(s, bad, 0.2 * h);  // (0.1: 32,136 tetrahedra on the elephant, equal triangles; 0.2-0.35: 16,200, graded)
+        const double far = apart_from_input(s, longest);
+        if (!(far <= 0.9 * h)) spdlog::debug("sheet (component {}): smoothed, {:.3g} from the input: not kept", p.component, far);
+        return far <= 0.9 * h;
+      };
       const std::string what = "sheet (component " + std::to_string(p.component) + ")";
       // Kept in p: edge length len.
       auto adopt = [&](PrismLayer& layer, double len, int attempt) {
@@ -690,7 +714,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         PrismLayer layer;
         SurfaceMesh c;
         if (Ls < 0.99 * longest && graded(s, c) &&
-            prisms_without_slivers(c, make, nullptr, nullptr, 0.01, what + ", graded", layer) == Layer::kClean) {
+            prisms_without_slivers(c, make, nullptr, relax, nullptr, 8, 0.01, what + ", graded", layer) == Layer::kClean) {
           adopt(layer, Ls, attempt);
           return true;
         }
@@ -700,7 +724,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           throw InputError("the open scan's slab holds the bounds only with " + std::to_string(s.F.rows()) +
                            " equal triangles, and graded it leaves slivers");
         // Equal triangles: kept with what slivers are left (the report's dihedral says so).
-        if (prisms_without_slivers(s, make, nullptr, nullptr, 0.01, what, layer) == Layer::kFolded) {
+        if (prisms_without_slivers(s, make, nullptr, relax, nullptr, 8, 0.01, what, layer) == Layer::kFolded) {
           apart = 0.8 * h / 0.49;  // folded: the next attempt 0.63 times as long
           continue;
         }
@@ -856,8 +880,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       };
       PrismLayer layer;
       if (prisms_without_slivers(
-              mid, [&](const SurfaceMesh& s, TetMesh& m, SurfaceMesh& slab) { return sheet_tets(s, half, m, &slab); }, accept,
-              between_sides, 1.0, "part: thin", layer) != Layer::kClean)
+              mid, [&](const SurfaceMesh& s, TetMesh& m, SurfaceMesh& slab, std::vector<int>*) { return sheet_tets(s, half, m, &slab); },
+              accept,
+              nullptr, between_sides, 3, 1.0, "part: thin", layer) != Layer::kClean)
         return false;
       p.thin = thickness;
       keep_prisms(p, layer.m, layer.slab, layer.relocated, layer.flips, 1, Ls, area(one) / (0.433 * wanted * wanted));
@@ -1608,7 +1633,7 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   // would lie beyond that: the slab first, and the solid only where the slab does not hold (the
   // bunny with holes 2 % of its diagonal wide: 15.5 s, the solid and then the slab; the slab
   // alone, 10 s; meshing version 16).
-  if (routes_free) {
+  if (routes_free && opt.slab_first_for_wide_holes) {
     const Eigen::MatrixX3i F = without_duplicate_and_flat_faces(surface.V, surface.F);
     double cap = 0;
     if (is_open_two_manifold(F))
@@ -1634,7 +1659,9 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   }
   MeshResult r = mesh_surface_once(surface, opt, progress);
   // (Only open scans: components that are open 2-manifolds, each on its own. Welded, non-manifold
-  // or self-intersecting segments, a scanned dragon with holes, make no slab: no second try.)
+  // or self-intersecting segments, a scanned dragon with holes, make no slab: no second try. The
+  // sheet of their solid's boundary without its caps was tried in the eighteenth session: the
+  // simplified boundary, 1,350 faces for the dragon, spans the rims too coarsely, 5.5 % in.)
   const bool capped = (r.method == "winding_number_boundary" || r.method == "winding_number") && !r.info.closed &&
                       r.fallback_because.find(kOpenScans) != std::string::npos && r.deviation_out > trigger;
   if (!capped || !routes_free) return r;

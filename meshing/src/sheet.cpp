@@ -244,6 +244,46 @@ SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness) {
   return slab_of(sheet, offsets(sheet, half_thickness, {}), {});
 }
 
+int smooth_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, double max_move) {
+  const Eigen::Index nv = sheet.V.rows(), nf = sheet.F.rows();
+  const std::vector<std::vector<int>> around = vertex_faces(sheet.F, nv);
+  std::vector<char> moves(static_cast<size_t>(nv), 0);
+  for (int f : faces) {
+    if (f < 0 || f >= nf) throw InputError("smooth_sheet_faces: face " + std::to_string(f) + " out of range");
+    for (int k = 0; k < 3; ++k)
+      for (int g : around[static_cast<size_t>(sheet.F(f, k))])
+        for (int j = 0; j < 3; ++j) moves[static_cast<size_t>(sheet.F(g, j))] = 1;
+  }
+  // The outline stays (the remeshing kept it on the input's).
+  const std::vector<Half> h = halves(sheet.F);
+  for (size_t i = 0; i < h.size();) {
+    size_t j = i;
+    while (j < h.size() && h[j].lo == h[i].lo && h[j].hi == h[i].hi) ++j;
+    if (j - i == 1) moves[static_cast<size_t>(h[i].lo)] = moves[static_cast<size_t>(h[i].hi)] = 0;
+    i = j;
+  }
+  Eigen::MatrixX3d W = sheet.V;
+  int moved = 0;
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    if (!moves[static_cast<size_t>(v)]) continue;
+    std::vector<int> ring;  // the neighbours, each once
+    for (int g : around[static_cast<size_t>(v)])
+      for (int j = 0; j < 3; ++j)
+        if (sheet.F(g, j) != v) ring.push_back(sheet.F(g, j));
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    if (ring.empty()) continue;
+    Eigen::RowVector3d mean = Eigen::RowVector3d::Zero();
+    for (int u : ring) mean += sheet.V.row(u);
+    Eigen::RowVector3d step = 0.5 * (mean / static_cast<double>(ring.size()) - sheet.V.row(v));
+    if (step.norm() > max_move) step *= max_move / step.norm();
+    W.row(v) = sheet.V.row(v) + step;
+    ++moved;
+  }
+  sheet.V = std::move(W);
+  return moved;
+}
+
 int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const TriangleBvh* onto) {
   const Eigen::Index nf = sheet.F.rows();
   auto key = [](int a, int b) { return std::make_pair(std::min(a, b), std::max(a, b)); };
@@ -291,28 +331,31 @@ int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const T
 
 namespace {
 bool prisms(const SurfaceMesh& sheet, double half_thickness, const std::vector<double>& base, TetMesh& out,
-            SurfaceMesh* slab_out);
+            SurfaceMesh* slab_out, std::vector<int>* inverted);
 }
 
-bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab_out) {
-  return prisms(sheet, half_thickness, {}, out, slab_out);
+bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab_out,
+                std::vector<int>* inverted) {
+  return prisms(sheet, half_thickness, {}, out, slab_out, inverted);
 }
 
-bool sheet_tets(const SurfaceMesh& sheet, const std::vector<double>& half_thickness, TetMesh& out, SurfaceMesh* slab_out) {
+bool sheet_tets(const SurfaceMesh& sheet, const std::vector<double>& half_thickness, TetMesh& out, SurfaceMesh* slab_out,
+                std::vector<int>* inverted) {
   if (static_cast<Eigen::Index>(half_thickness.size()) != sheet.V.rows())
     throw InputError("sheet_tets: one half thickness per vertex of the sheet");
   const double top = half_thickness.empty() ? 1.0 : *std::max_element(half_thickness.begin(), half_thickness.end());
-  return prisms(sheet, top, half_thickness, out, slab_out);
+  return prisms(sheet, top, half_thickness, out, slab_out, inverted);
 }
 
 namespace {
 bool prisms(const SurfaceMesh& sheet, double half_thickness, const std::vector<double>& base, TetMesh& out,
-            SurfaceMesh* slab_out) {
+            SurfaceMesh* slab_out, std::vector<int>* inverted) {
   const int nv = static_cast<int>(sheet.V.rows());
   // Where a prism inverts (its vertices' normals lean across a crease of a graded sheet), its
   // vertices' offsets are halved and the slab made again: up to five times (a thirty-second of
   // the thickness there); beyond, the sheet folds too sharply for a slab (false).
   std::vector<double> scale(static_cast<size_t>(nv), 1.0);
+  if (inverted) inverted->clear();
   const Offsets o = offsets(sheet, half_thickness, base);
   for (int round = 0; round < 6; ++round) {
     SurfaceMesh slab = slab_of(sheet, o, scale);
@@ -341,6 +384,7 @@ bool prisms(const SurfaceMesh& sheet, double half_thickness, const std::vector<d
         const int sign = prism[static_cast<size_t>(q)].second;
         if (!(sign * volume(t) > 0)) {  // inverted or flat
           shrink.insert(shrink.end(), {i, j, k});
+          if (inverted && round == 5) inverted->push_back(static_cast<int>(f));
           break;
         }
         if (sign < 0) std::swap(t(2), t(3));

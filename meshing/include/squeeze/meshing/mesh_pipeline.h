@@ -77,8 +77,12 @@ struct MeshOptions {
                                         // as before (bench_mesh measures against it)
   bool open_scans_as_sheets = false;    // open 2-manifold components that enclose a solid (open scans)
                                         // meshed as open sheets (slabs) too; mesh_surface tries it by
-                                        // itself where the solid's caps over wide holes break the
-                                        // outer bound (max_deviation) three times over (version 14)
+                                        // itself where the solid's caps over wide holes lie over 1.5
+                                        // times the outer bound (max_deviation) off (version 15)
+  bool slab_first_for_wide_holes = true;  // where the widest hole's cap would lie that far off by its
+                                        // outline (hole_caps.h), the slab is tried before the solid
+                                        // (version 16); false: the solid first, as version 15
+                                        // (bench_mesh measures against it)
   bool shells_fallback = false;         // welded, non-manifold or self-intersecting segments: their
                                         // convex shells meshed with Mesh_3, as before version 11
   bool shells_only = false;             // every input (closed parts too) meshed as its convex shells

@@ -8,6 +8,7 @@
 // tetrahedra, deviation 66 % of the diagonal); the slab is a plate (docs/meshing.md, "Open sheets").
 #pragma once
 #include <Eigen/Core>
+#include <cmath>
 #include <vector>
 
 #include "squeeze/meshing/surface.h"
@@ -74,6 +75,17 @@ SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int itera
 /// Returns the number of edges split. Throws InputError on a face index out of range.
 int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const TriangleBvh* onto = nullptr);
 
+/// Moves the vertices of the listed faces and their neighbours, outline vertices excepted, half way
+/// to the mean of their neighbours (one Jacobi step of umbrella smoothing, Taubin 1995's λ = ½):
+/// a fold of the sheet there flattens, so its prisms need not have their offsets thinned to a
+/// sliver (an elephant scanned with holes: its graded sheet's prisms left slivers over 21 faces;
+/// splitting them alone did not converge, smoothing first did, meshing version 16). Where the
+/// sheet is a regular grid or flat and evenly tessellated, vertices stay in place (or in the plane).
+/// No vertex moves farther than max_move; the caller measures how far the sheet moved from the input.
+///   sheet  V #V by 3, F #F by 3 (units), 2-manifold; faces  indices into F; max_move (units)
+/// Returns the number of vertices moved. Throws InputError on a face index out of range.
+int smooth_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, double max_move = INFINITY);
+
 /// One layer of tetrahedra between the two sides of the slab around `sheet`: thicken_sheet's
 /// vertices (the +side, then the −side), each triangle's prism split into three tetrahedra, every
 /// quadrilateral side split along the diagonal from its lower-numbered sheet vertex on the −side to
@@ -82,15 +94,17 @@ int split_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, const T
 /// prisms and hexahedra into tetrahedra", IMR 1999).
 ///   sheet           an open, consistently oriented sheet (units); half_thickness > 0 (units)
 ///   slab            optional: also the slab (thicken_sheet), whose faces are the mesh's boundary
+///   inverted        optional: where false is returned, the faces whose prisms stay inverted
 /// Returns false (out and slab untouched) where a prism is inverted or flat: the sheet folds more
 /// sharply than half_thickness allows. Throws as thicken_sheet.
-bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab = nullptr);
+bool sheet_tets(const SurfaceMesh& sheet, double half_thickness, TetMesh& out, SurfaceMesh* slab = nullptr,
+                std::vector<int>* inverted = nullptr);
 
 /// The same with a half thickness per vertex of `sheet` (a thin closed part's mid-surface, each
 /// vertex half as far from both sides as the part is thick there; meshing version 15).
 ///   half_thickness  #V positive values (units)
 /// Throws InputError when there is not one per vertex or one is not positive.
 bool sheet_tets(const SurfaceMesh& sheet, const std::vector<double>& half_thickness, TetMesh& out,
-                SurfaceMesh* slab = nullptr);
+                SurfaceMesh* slab = nullptr, std::vector<int>* inverted = nullptr);
 
 }  // namespace squeeze::meshing
