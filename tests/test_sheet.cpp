@@ -263,6 +263,9 @@ TEST(Sheet, SheetsAreMeshedAsThinSlabsWithinTheBounds) {
       ASSERT_GT(r.tets.T.rows(), 0) << what;
       EXPECT_EQ(r.method, "boundary") << what << ": " << r.fallback_because;
       EXPECT_EQ(r.sheets, 1) << what;
+      EXPECT_EQ(r.scan_sheets, 0) << what;
+      // (A sheet's outline is no hole of a scan: the report gives no reason, as for any sheet.)
+      EXPECT_TRUE(r.fallback_because.empty()) << what << ": " << r.fallback_because;
       EXPECT_NEAR(r.sheet_thickness, o.sheet_thickness * o.max_deviation * diag, 1e-12) << what;
       EXPECT_LE(r.deviation_out, o.max_deviation * diag * 1.0001) << what;
       EXPECT_LE(r.deviation_in, 0.005 * diag) << what;

@@ -1556,6 +1556,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       spdlog::info("{} open sheet{} of the input {} meshed as slabs {:.3g} thick (--sheet-thickness)", sheets.size(),
                    sheets.size() == 1 ? "" : "s", sheets.size() == 1 ? "is" : "are", 2 * h);
       r.sheets = static_cast<int>(sheets.size());
+      for (const Part& p : sheets) r.scan_sheets += p.scan ? 1 : 0;
       r.sheet_thickness = 2 * h;
       for (Part& p : sheets) parts.push_back(std::move(p));
       std::sort(parts.begin(), parts.end(), [](const Part& a, const Part& b) { return a.component < b.component; });
@@ -1642,11 +1643,16 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
       spdlog::debug("the open scan's widest hole: a cap over it would lie {:.3g} from it ({} of the diagonal): its slab first",
                     cap, percent(cap / diag));
       MeshResult s;
+      bool made = false;
       try {
         s = mesh_surface_once(surface, o, progress);
+        made = true;
       } catch (const InputError& e) {
         spdlog::debug("the open scan as a sheet: {}", e.what());
       }
+      // (Open sheets, a curtain, whose outline is the "hole": no scan among them, so that try was
+      // the usual route, as it is.)
+      if (made && s.scan_sheets == 0) return s;
       if (holds(s, s.parts)) {
         as_sheet(s, cap, true);
         return s;

@@ -157,6 +157,7 @@ struct MeshResult {
   WrapStats wrap;                   // method "alpha_wrap" (or the shells after it failed)
   int target_tets = 0;
   int sheets = 0;                   // open sheets meshed as slabs (sheet.h; method "boundary")
+  int scan_sheets = 0;              // ... of them, open scans of solids (MeshOptions::open_scans_as_sheets)
   double sheet_thickness = 0;       // ... their thickness (units)
   int thin_parts = 0;               // closed parts much thinner than their tetrahedra would be long (a
                                     // plate, a bowl), meshed as one layer of prisms across their
