@@ -239,29 +239,10 @@ BENCHMARK(BM_ThinPlatePipeline)->Arg(150)->Unit(benchmark::kSecond)->UseRealTime
 BENCHMARK(BM_ThinPlateWithoutPrisms)->Arg(150)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 // An open scan whose holes are wider than the bound (the bunny of tests/data, four holes of 2 % of
-// its diagonal in radius cut around seeded vertices, as tests/test_meshing_v4.cpp cuts them):
-// both orders end at the same slab.
-squeeze::meshing::SurfaceMesh bunny_with_holes() {
-  const squeeze::meshing::SurfaceMesh bunny = squeeze::meshing::load_surface(data("bunny00.off"));
-  const double diag = (bunny.V.colwise().maxCoeff() - bunny.V.colwise().minCoeff()).norm();
-  std::vector<Eigen::RowVector3d> centres;
-  for (int k = 0; k < 4; ++k) centres.push_back(bunny.V.row((k * 7919 + 101) % bunny.V.rows()));
-  std::vector<Eigen::RowVector3i> kept;
-  for (Eigen::Index f = 0; f < bunny.F.rows(); ++f) {
-    const Eigen::RowVector3d c = (bunny.V.row(bunny.F(f, 0)) + bunny.V.row(bunny.F(f, 1)) + bunny.V.row(bunny.F(f, 2))) / 3.0;
-    bool cut = false;
-    for (const auto& x : centres) cut = cut || (c - x).norm() < 0.02 * diag;
-    if (!cut) kept.push_back(bunny.F.row(f));
-  }
-  squeeze::meshing::SurfaceMesh m;
-  m.V = bunny.V;
-  m.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
-  for (size_t i = 0; i < kept.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) = kept[i];
-  return m;
-}
-
+// its diagonal in radius cut around seeded vertices: sqs::with_holes, as tests/test_meshing_v4.cpp
+// cuts them): both orders end at the same slab.
 void scan_with_holes(benchmark::State& state, bool slab_first) {
-  const squeeze::meshing::SurfaceMesh m = bunny_with_holes();
+  const squeeze::meshing::SurfaceMesh m = sqs::with_holes(squeeze::meshing::load_surface(data("bunny00.off")), 0.02);
   squeeze::meshing::MeshOptions o;
   o.tetrahedralize.target_tets = static_cast<int>(state.range(0));
   o.slab_first_for_wide_holes = slab_first;

@@ -40,4 +40,26 @@ inline squeeze::meshing::SurfaceMesh ringed_rod(double r, double length, int sid
   return s;
 }
 
+// The scan with four holes of `radius` (a fraction of its bounding-box diagonal) cut around seeded
+// vertices (indices 101, 8020, 15939, 23858 modulo #V): the faces whose centroid lies nearer than
+// that to one of them removed, the vertices kept as they are. A scanner's gaps, for the open-scan
+// routes (meshing versions 15 and 16).
+inline squeeze::meshing::SurfaceMesh with_holes(const squeeze::meshing::SurfaceMesh& scan, double radius) {
+  const double diag = (scan.V.colwise().maxCoeff() - scan.V.colwise().minCoeff()).norm();
+  std::vector<Eigen::RowVector3d> centres;
+  for (int k = 0; k < 4; ++k) centres.push_back(scan.V.row((k * 7919 + 101) % scan.V.rows()));
+  std::vector<Eigen::RowVector3i> kept;
+  for (Eigen::Index f = 0; f < scan.F.rows(); ++f) {
+    const Eigen::RowVector3d c = (scan.V.row(scan.F(f, 0)) + scan.V.row(scan.F(f, 1)) + scan.V.row(scan.F(f, 2))) / 3.0;
+    bool cut = false;
+    for (const Eigen::RowVector3d& x : centres) cut = cut || (c - x).norm() < radius * diag;
+    if (!cut) kept.push_back(scan.F.row(f));
+  }
+  squeeze::meshing::SurfaceMesh m;
+  m.V = scan.V;
+  m.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
+  for (size_t i = 0; i < kept.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) = kept[i];
+  return m;
+}
+
 }  // namespace sqs

@@ -353,10 +353,7 @@ TEST(Sheet, SmoothSheetFacesFlattensAFoldAndKeepsTheOutline) {
   // A spike at the centre (vertex 60), 0.1 high, over the faces around it.
   SurfaceMesh spike = before;
   spike.V(60, 2) = 0.1;
-  std::vector<int> around;
-  for (Eigen::Index f = 0; f < spike.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k)
-      if (spike.F(f, k) == 60) around.push_back(static_cast<int>(f));
+  const std::vector<int> around = squeeze::meshing::vertex_faces(spike.F, spike.V.rows())[60];
   ASSERT_EQ(around.size(), 6u);
   SurfaceMesh once = spike;
   squeeze::meshing::smooth_sheet_faces(once, around);
@@ -368,11 +365,7 @@ TEST(Sheet, SmoothSheetFacesFlattensAFoldAndKeepsTheOutline) {
   // Faces on the outline: the outline stays (vertex 5, raised, on the row v = 0), the inside moves.
   SurfaceMesh edge = before;
   edge.V(5, 2) = 0.1;
-  std::vector<int> at5;
-  for (Eigen::Index f = 0; f < edge.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k)
-      if (edge.F(f, k) == 5) at5.push_back(static_cast<int>(f));
-  squeeze::meshing::smooth_sheet_faces(edge, at5);
+  squeeze::meshing::smooth_sheet_faces(edge, squeeze::meshing::vertex_faces(edge.F, edge.V.rows())[5]);
   EXPECT_EQ(edge.V(5, 2), 0.1);
   for (int v : {4, 6}) EXPECT_EQ(edge.V.row(v), before.V.row(v));
   EXPECT_GT(edge.V(16, 2), 0.0);  // the inner neighbour, lifted toward it

@@ -574,21 +574,6 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // of the thickness (so that the input stays inside the slab, and the slab within
     // max_deviation of the input). False where the slab folds over itself at every length tried: the
     // slab then takes the boundary route like any part.
-    // One layer of prisms (m, its slab; the sliver moves and flips done) kept as the part's mesh:
-    // edge length len, `triangles` the triangles its share of the target would have had.
-    auto keep_prisms = [](Part& p, TetMesh& m, SurfaceMesh& slab, int relocated, int flips, int attempts, double len,
-                          double triangles) {
-      slab.V = m.V;
-      p.boundary = std::move(slab);
-      p.tets = std::move(m);
-      p.tet_stats = TetrahedralizeStats{};
-      p.tet_stats.relocated = relocated;
-      p.tet_stats.flips = flips;
-      p.tet_stats.attempts = attempts;
-      p.tet_stats.edge_length = len;
-      p.tet_stats.conforming = true;
-      p.target_faces = 2 * static_cast<int>(std::lround(triangles));
-    };
     // One layer of prisms over the sheet s (made by make(s, m, slab): sheet_tets) with no tetrahedron
     // under the floor: each round's prisms checked by `accept` (when given; false gives up), their
     // sliver vertices moved and slivers flipped as the boundary route's are, then, where some are
@@ -603,7 +588,21 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     struct PrismLayer {
       TetMesh m;
       SurfaceMesh slab;
-      int relocated = 0, flips = 0;
+      int relocated = 0, flips = 0;  // sliver vertices moved, slivers flipped
+    };
+    // A layer kept as the part's mesh: edge length len, `triangles` the triangles its share of the
+    // target would have had.
+    auto keep_prisms = [](Part& p, PrismLayer& layer, int attempts, double len, double triangles) {
+      layer.slab.V = layer.m.V;
+      p.boundary = std::move(layer.slab);
+      p.tets = std::move(layer.m);
+      p.tet_stats = TetrahedralizeStats{};
+      p.tet_stats.relocated = layer.relocated;
+      p.tet_stats.flips = layer.flips;
+      p.tet_stats.attempts = attempts;
+      p.tet_stats.edge_length = len;
+      p.tet_stats.conforming = true;
+      p.target_faces = 2 * static_cast<int>(std::lround(triangles));
     };
     // (Splitting converges where a long edge lies over a thinned slab, in one to three rounds. On
     // an elephant scanned with holes it does not: where its sheet folds sharply, prisms invert and
@@ -690,7 +689,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       // Kept in p: edge length len.
       auto adopt = [&](PrismLayer& layer, double len, int attempt) {
         p.sheet_capped = len < wanted;
-        keep_prisms(p, layer.m, layer.slab, layer.relocated, layer.flips, attempt, len, area(p.sheet) / (0.433 * wanted * wanted));
+        keep_prisms(p, layer, attempt, len, area(p.sheet) / (0.433 * wanted * wanted));
       };
       double apart = 0;
       for (int attempt = 1; attempt <= 6; ++attempt) {
@@ -885,7 +884,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               nullptr, between_sides, 3, 1.0, "part: thin", layer) != Layer::kClean)
         return false;
       p.thin = thickness;
-      keep_prisms(p, layer.m, layer.slab, layer.relocated, layer.flips, 1, Ls, area(one) / (0.433 * wanted * wanted));
+      keep_prisms(p, layer, 1, Ls, area(one) / (0.433 * wanted * wanted));
       return true;
     };
     // Once a part has failed, the whole input takes `fail`: the other parts' work is skipped.
@@ -1659,7 +1658,8 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
       }
       // (No second try of the slab after the solid.)
       MeshResult r = mesh_surface_once(surface, opt, progress, s.decomposition.shells.empty() ? nullptr : &s.decomposition);
-      r.seconds.insert(r.seconds.begin(), s.seconds.begin(), s.seconds.end());
+      r.seconds.insert(r.seconds.begin(), s.seconds.begin(), s.seconds.end());  // both tries' (the report sums a stage's)
+      r.beside.insert(r.beside.begin(), s.beside.begin(), s.beside.end());     // (the decomposition: the slab's try made it)
       return r;
     }
   }
