@@ -231,18 +231,26 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
       }
     }
     C3t3 c3t3;
+    const auto t0 = std::chrono::steady_clock::now();
     refine_from_seeds(c3t3, domain, seeds, size, fd, opt.seed, opt.max_tets);
+    const auto t1 = std::chrono::steady_clock::now();
     // Perturbation and exudation run to completion in practice; their time limit is a bound for
     // pathological inputs (reaching it makes the result depend on the machine's load: warned).
-    if (CGAL::perturb_mesh_3(c3t3, domain, params::time_limit = opt.optimize_seconds,
+    if (opt.perturb &&
+        CGAL::perturb_mesh_3(c3t3, domain, params::time_limit = opt.optimize_seconds,
                              params::sliver_bound = opt.sliver_bound) == CGAL::TIME_LIMIT_REACHED)
       spdlog::warn("tetrahedralize: Mesh_3's sliver perturber stopped at its time limit ({} s): the mesh may differ "
                    "from run to run",
                    opt.optimize_seconds);
+    const auto t2 = std::chrono::steady_clock::now();
     if (exude_unless_nan(c3t3, opt.optimize_seconds, opt.sliver_bound) == CGAL::TIME_LIMIT_REACHED)
       spdlog::warn("tetrahedralize: Mesh_3's sliver exuder stopped at its time limit ({} s): the mesh may differ "
                    "from run to run",
                    opt.optimize_seconds);
+    const auto t3 = std::chrono::steady_clock::now();
+    auto sec = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
+    spdlog::debug("Mesh_3 (convex shells): refine {:.2f} s, perturb {:.2f} s, exude {:.2f} s", sec(t0, t1), sec(t1, t2),
+                  sec(t2, t3));
     return to_tet_mesh(c3t3);
   };
 
@@ -331,6 +339,9 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
     remove_unused_vertices(mesh);
     const int moves =
         mesh.T.rows() > 0 ? inflate_to_cover(mesh, corners, 0.5 * opt.coverage_tolerance * diag, opt.min_dihedral) : 0;
+    // Interior slivers the exuder left (the boundary's are peeled above).
+    const int relocated = opt.perturb ? 0 : relocate_sliver_vertices(mesh, opt.min_dihedral);
+    const int flips = opt.perturb ? 0 : flip_slivers(mesh, opt.min_dihedral);
     st.attempts = attempt + 1;
     const double n = static_cast<double>(mesh.T.rows());
     double needed = 0.0;
@@ -338,8 +349,9 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
     Eigen::VectorXi C;
     const int components = n > 0 ? tet_components(mesh, C) : 0;
     spdlog::info("Mesh_3 attempt {}: cell_size {:.4g}, facet_distance {:.4g}, offset {:.4g}: {} tetrahedra "
-                 "({} peeled, {} vertex moves), {} component(s), {:.2f}% of points held, {:.2f} s ({:.2f} s Mesh_3)",
-                 attempt + 1, size, fd, f.offset, mesh.T.rows(), peeled, moves, components, 100 * held,
+                 "({} peeled, {} vertex moves, {} sliver moves, {} flips), {} component(s), {:.2f}% of points held, "
+                 "{:.2f} s ({:.2f} s Mesh_3)",
+                 attempt + 1, size, fd, f.offset, mesh.T.rows(), peeled, moves, relocated, flips, components, 100 * held,
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), t_run);
     const bool covered = held >= required;
     const bool small_enough = n <= opt.max_tets;
@@ -355,6 +367,8 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
       st.facet_distance = fd;
       st.covered = held;
       st.peeled_slivers = peeled;
+      st.relocated = relocated;
+      st.flips = flips;
     }
     if (!covered && n > 0 && offset_raises < 4) {  // dilate by what the missing points need
       cover_factor = (f.offset + needed) / fd;
