@@ -71,7 +71,8 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
   cmd->add_flag("--shells-fallback", args->options.shells_fallback,
                 "Inputs with welded, non-manifold or self-intersecting segments: mesh their convex shells with "
                 "Mesh_3 (the paper's method, before meshing version 11): a few hundred tetrahedra, but 1.1-1.6 "
-                "times their volume and several % of the diagonal out");
+                "times their volume and several % of the diagonal out. Where Mesh_3 cannot mesh the shells around "
+                "the input (a part thinner than its cells), the default route instead (the report's fallback_because)");
   cmd->add_flag("--shells-only", args->options.shells_only,
                 "Mesh every input, closed parts too, as its convex shells with Mesh_3 (the paper's coarse meshes, "
                 "looser than the deviation bounds): a simulation cage for a tight mesh embedded in it (scene key "

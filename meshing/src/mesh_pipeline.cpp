@@ -1380,12 +1380,14 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     r = std::move(b);
     return mesh3(worse);
   };
-  if (opt.shells_only) {
-    // Where Mesh_3 cannot mesh the shells so that they hold the input (a part thinner than its cells:
-    // a 1 m rod of 3 mm radius at 150 gave 24 tetrahedra around its middle, 3.6 times its volume,
-    // a diagonal off it), the default route meshes the input instead: a mesh around it, as asked,
-    // only not its convex shells.
-    MeshResult shells = shells_route("the convex shells were asked for (MeshOptions::shells_only)");
+  // The convex shells, as asked (MeshOptions::shells_only, or shells_fallback for inputs that are
+  // not closed parts), where Mesh_3 can mesh them so that they hold the input. Where it cannot (a
+  // part thinner than its cells: a 1 m rod of 3 mm radius at 150 gave 24 tetrahedra around its
+  // middle, 3.6 times its volume, a diagonal off it), the default route meshes the input instead:
+  // a mesh around it, as asked, only not its convex shells. `asked`: the option, for the report;
+  // `own`: the options of the default route.
+  auto shells_where_they_hold = [&](const std::string& why, const std::string& asked, const MeshOptions& own) {
+    MeshResult shells = shells_route(why);
     // Nor where its volume is far below the input's: Mesh_3's facets are chords of the shells, and
     // across a thin part they cut it away (the same rod at 1000: 0.73 of its volume).
     // Nor where it is far larger than the shells themselves: dilated to hold points Mesh_3 had
@@ -1404,12 +1406,17 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                     : "was " + std::to_string(static_cast<long>(std::lround(shells.quality.volume / hulls))) +
                           " times the shells' volume";
     spdlog::warn("the convex shells' Mesh_3 mesh {}: meshing the input by the default route instead", short_of);
+    MeshResult d = mesh_surface_once(surface, own, progress, &shells.decomposition);
+    d.seconds.insert(d.seconds.begin(), shells.seconds.begin(), shells.seconds.end());  // both tries' (the report sums a stage's)
+    d.beside.insert(d.beside.begin(), shells.beside.begin(), shells.beside.end());
+    const std::string because = "the convex shells were asked for, but their Mesh_3 mesh " + short_of + " (" + asked + ")";
+    d.fallback_because = d.fallback_because.empty() ? because : because + "; " + d.fallback_because;
+    return d;
+  };
+  if (opt.shells_only) {
     MeshOptions own = opt;
     own.shells_only = false;
-    MeshResult d = mesh_surface_once(surface, own, progress);
-    const std::string why = "the convex shells were asked for, but their Mesh_3 mesh " + short_of;
-    d.fallback_because = d.fallback_because.empty() ? why : why + "; " + d.fallback_because;
-    return d;
+    return shells_where_they_hold("the convex shells were asked for (MeshOptions::shells_only)", "--shells-only", own);
   }
   // The parts: each face-connected component of the input that is a closed oriented 2-manifold
   // enclosing volume bounds its own solid and is its own boundary (when it intersects itself, only
@@ -1577,7 +1584,12 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   const std::function<MeshResult(const std::string&)> fallback =
       opt.wrap      ? std::function<MeshResult(const std::string&)>(wrap_route)
       : opt.winding ? std::function<MeshResult(const std::string&)>(winding_route)
-      : opt.shells_fallback ? std::function<MeshResult(const std::string&)>(shells_route)
+      : opt.shells_fallback ? std::function<MeshResult(const std::string&)>([&](const std::string& why) {
+                        // (since meshing version 17: before, the shells were kept whatever they held)
+                        MeshOptions own = opt;
+                        own.shells_fallback = false;
+                        return shells_where_they_hold(why, "--shells-fallback", own);
+                      })
                     : std::function<MeshResult(const std::string&)>([&](const std::string& why) {
                         return winding_boundary_route(why, opt.winding_surface_dilation);
                       });
