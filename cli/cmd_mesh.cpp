@@ -165,6 +165,7 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
     if (r.quality.min_dihedral < a.options.tetrahedralize.min_dihedral)
       spdlog::warn("{}: smallest dihedral angle {:.2f} deg is below {} deg", a.input, r.quality.min_dihedral,
                    a.options.tetrahedralize.min_dihedral);
+    if (!r.deviation_exceeded_because.empty()) spdlog::warn("{}: {}", a.input, r.deviation_exceeded_because);
     if (!r.target_exceeded_because.empty())
       spdlog::info("{}: {} tetrahedra for a target of {}: {}", a.input, r.quality.tets, r.target_tets,
                    r.target_exceeded_because);

@@ -467,6 +467,13 @@ inline void expect_report(const nlohmann::json& r, const TetFacts& f, const Inpu
     EXPECT_TRUE(v.is_number()) << what << ": " << group << "." << key << " is not a number";
     return v.is_number() ? v.get<double>() : std::nan("");
   };
+  // Why the boundary lies beyond 1.5 times the outer bound (default --max-deviation 0.01): a
+  // sentence exactly where it does (meshing version 17).
+  EXPECT_TRUE(r.contains("deviation_exceeded_because")) << what << ": report lacks deviation_exceeded_because";
+  if (r.contains("deviation_exceeded_because") && r.contains("deviation_out") && r["deviation_out"].is_number()) {
+    EXPECT_EQ(r["deviation_exceeded_because"].is_string(), r["deviation_out"].get<double>() > 0.015)
+        << what << ": deviation_out " << r["deviation_out"] << ", deviation_exceeded_because " << r["deviation_exceeded_because"];
+  }
   // Input.
   EXPECT_GE(number("input", "vertices"), 3);
   EXPECT_GE(number("input", "faces"), 1);

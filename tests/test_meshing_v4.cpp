@@ -124,6 +124,7 @@ double tet_volume(const squeeze::meshing::TetMesh& m) {
 /// out and in within the given fractions of the diagonal, the dihedral floor of 5°, `components`
 /// pieces.
 void expect_within(const MeshResult& r, double diag, double volume, double out, double in, int components) {
+  if (r.deviation_out <= 0.015 * diag) EXPECT_EQ(r.deviation_exceeded_because, "");  // (1.5 × the default bound)
   ASSERT_TRUE(r.volume_ratio.has_value());
   EXPECT_NEAR(*r.volume_ratio, 1.0, volume);
   EXPECT_LE(r.deviation_out, out * diag);
@@ -732,6 +733,9 @@ TEST(MeshingV4, HeartShellsHoldTheirBoundsWithoutThePerturber) {
     EXPECT_EQ(r.quality.components, 1);
     EXPECT_GE(r.quality.tets, 0.65 * target);
     EXPECT_LE(r.quality.tets, 1.35 * target);
+    // The shells are looser than the bound (7.6 % of the diagonal out), and the report says so.
+    EXPECT_NE(r.deviation_exceeded_because.find("the convex shells' mesh lies up to"), std::string::npos)
+        << r.deviation_exceeded_because;
   }
 }
 

@@ -1699,7 +1699,36 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
 
 }  // namespace
 
+namespace {
+// mesh_surface for an input anywhere (moved to the origin where far from it, below).
+MeshResult mesh_surface_placed(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress);
+
+// Why the mesh's boundary lies beyond 1.5 times the outer bound, where it does (the report's
+// deviation_exceeded_because); empty where it does not.
+std::string deviation_exceeded_because(const MeshResult& r, const MeshOptions& opt) {
+  const double diag = r.input.V.rows() > 0 ? bounding_box_diagonal(r.input.V) : 0.0;
+  if (!(diag > 0) || !(r.deviation_out > 1.5 * opt.max_deviation * diag)) return {};
+  const std::string off = "up to " + percent(r.deviation_out / diag) +
+                          " of the diagonal off the input, over 1.5 times --max-deviation (" + percent(opt.max_deviation) + ")";
+  if (r.method == "convex_shells")
+    return "the convex shells' mesh lies " + off + ": shells are as loose as the input is concave (the paper's method; " +
+           "the default route keeps within the bound)";
+  if ((r.method == "winding_number_boundary" || r.method == "winding_number") && !r.info.closed)
+    return "the input's winding-number solid closes its holes, and its caps over holes wider than the bound lie " + off +
+           " (a closed solid can do no better); no slab of the input within the bounds could be made (welded or "
+           "overlapping segments have none, and an open scan's may fold over itself or leave slivers)";
+  return "the mesh's boundary lies " + off;
+}
+}  // namespace
+
 MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
+  MeshResult r = mesh_surface_placed(surface, opt, progress);
+  r.deviation_exceeded_because = deviation_exceeded_because(r, opt);
+  return r;
+}
+
+namespace {
+MeshResult mesh_surface_placed(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
   // An input far from the origin next to its size (the corpus bunny, 1.6 m across its diagonal,
   // moved to (1e5, -2e5, 3e5) m, as a model in world or survey coordinates is) keeps its details
   // in the last few digits of its coordinates: the predicates fall back to exact arithmetic and
@@ -1730,6 +1759,7 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   }
   return mesh_surface_near_origin(surface, opt, progress);
 }
+}  // namespace
 
 MeshResult mesh_file(const std::filesystem::path& path, const MeshOptions& opt, Progress* progress) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -1795,6 +1825,7 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
                                         {"deviation", frac(r.wrap.deviation)}}
                                  : json(nullptr)},
       {"target_exceeded_because", r.target_exceeded_because.empty() ? json(nullptr) : json(r.target_exceeded_because)},
+      {"deviation_exceeded_because", r.deviation_exceeded_because.empty() ? json(nullptr) : json(r.deviation_exceeded_because)},
       {"input",
        {{"file", input_name},
         {"vertices", r.info.vertices},

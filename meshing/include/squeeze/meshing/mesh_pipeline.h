@@ -163,6 +163,9 @@ struct MeshResult {
                                     // plate, a bowl), meshed as one layer of prisms across their
                                     // thickness (method "boundary"; meshing version 15)
   std::string target_exceeded_because;  // empty: the count is within ±35% of the target
+  std::string deviation_exceeded_because;  // empty: deviation_out is within 1.5 × max_deviation of the
+                                // diagonal (the bound the routes keep within, their chords and dilation
+                                // included); else why not (meshing version 17)
   double input_volume = 0;      // the parts' enclosed volumes, summed (overlapping parts count twice,
                                 // as their tet meshes do)
   bool input_volume_from_winding_number = false;
