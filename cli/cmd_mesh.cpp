@@ -43,7 +43,9 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       "first): its boundary, found by CGAL Mesh_3, simplified within --max-deviation of the input and\n"
       "tetrahedralized (--winding: Mesh_3's own tetrahedra; --shells-fallback: their convex shells,\n"
       "the paper's method; --wrap: their alpha wrap, a closed surface just outside them, meshed like a\n"
-      "boundary); the report's method and fallback_because say which and why.\n"
+      "boundary); the report's method and fallback_because say which and why, target_exceeded_because\n"
+      "why the count is off the target, and deviation_exceeded_because (also warned) why the boundary\n"
+      "lies over 1.5 times --max-deviation off the input (the convex shells; caps over wide holes).\n"
       "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
       "non-manifold scans are fine. OUT: " + meshing::tet_format_list(true) + ".\n"
       "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");
