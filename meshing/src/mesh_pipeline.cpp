@@ -253,6 +253,18 @@ std::string percent(double x) {
 
 // The largest distance to `to` of points on the triangles (V, F) at most `spacing` apart
 // (surface_samples).
+// A result made after an earlier try (a refused shells mesh, a slab or solid not kept): the earlier
+// try's stage seconds and its decomposition's put first, so that the report sums both tries'.
+void after_earlier_try(MeshResult& later, const MeshResult& earlier) {
+  later.seconds.insert(later.seconds.begin(), earlier.seconds.begin(), earlier.seconds.end());
+  later.beside.insert(later.beside.begin(), earlier.beside.begin(), earlier.beside.end());
+}
+
+// Whether r is the winding-number solid of an input that is not closed (its holes capped).
+bool winding_solid_of_open_input(const MeshResult& r) {
+  return (r.method == "winding_number_boundary" || r.method == "winding_number") && !r.info.closed;
+}
+
 double farthest_sample(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const TriangleBvh& to, double spacing) {
   const auto pts = surface_samples(V, F, spacing);
   std::vector<double> d(pts.size(), 0.0);
@@ -1407,8 +1419,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                           " times the shells' volume";
     spdlog::warn("the convex shells' Mesh_3 mesh {}: meshing the input by the default route instead", short_of);
     MeshResult d = mesh_surface_once(surface, own, progress, &shells.decomposition);
-    d.seconds.insert(d.seconds.begin(), shells.seconds.begin(), shells.seconds.end());  // both tries' (the report sums a stage's)
-    d.beside.insert(d.beside.begin(), shells.beside.begin(), shells.beside.end());
+    after_earlier_try(d, shells);
     const std::string because = "the convex shells were asked for, but their Mesh_3 mesh " + short_of + " (" + asked + ")";
     d.fallback_because = d.fallback_because.empty() ? because : because + "; " + d.fallback_because;
     return d;
@@ -1670,8 +1681,7 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
       }
       // (No second try of the slab after the solid.)
       MeshResult r = mesh_surface_once(surface, opt, progress, s.decomposition.shells.empty() ? nullptr : &s.decomposition);
-      r.seconds.insert(r.seconds.begin(), s.seconds.begin(), s.seconds.end());  // both tries' (the report sums a stage's)
-      r.beside.insert(r.beside.begin(), s.beside.begin(), s.beside.end());     // (the decomposition: the slab's try made it)
+      after_earlier_try(r, s);  // (the decomposition: the slab's try made it)
       return r;
     }
   }
@@ -1680,7 +1690,7 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   // or self-intersecting segments, a scanned dragon with holes, make no slab: no second try. The
   // sheet of their solid's boundary without its caps was tried in the eighteenth session: the
   // simplified boundary, 1,350 faces for the dragon, spans the rims too coarsely, 5.5 % in.)
-  const bool capped = (r.method == "winding_number_boundary" || r.method == "winding_number") && !r.info.closed &&
+  const bool capped = winding_solid_of_open_input(r) &&
                       r.fallback_because.find(kOpenScans) != std::string::npos && r.deviation_out > trigger;
   if (!capped || !routes_free) return r;
   MeshResult s;
@@ -1692,16 +1702,9 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   }
   if (!holds(s, r.quality.components)) return r;
   as_sheet(s, r.deviation_out, false);
-  s.seconds.insert(s.seconds.begin(), r.seconds.begin(), r.seconds.end());  // both tries' (the report sums a stage's)
-  s.beside.insert(s.beside.begin(), r.beside.begin(), r.beside.end());
+  after_earlier_try(s, r);
   return s;
 }
-
-}  // namespace
-
-namespace {
-// mesh_surface for an input anywhere (moved to the origin where far from it, below).
-MeshResult mesh_surface_placed(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress);
 
 // Why the mesh's boundary lies beyond 1.5 times the outer bound, where it does (the report's
 // deviation_exceeded_because); empty where it does not.
@@ -1713,21 +1716,14 @@ std::string deviation_exceeded_because(const MeshResult& r, const MeshOptions& o
   if (r.method == "convex_shells")
     return "the convex shells' mesh lies " + off + ": shells are as loose as the input is concave (the paper's method; " +
            "the default route keeps within the bound)";
-  if ((r.method == "winding_number_boundary" || r.method == "winding_number") && !r.info.closed)
+  if (winding_solid_of_open_input(r))
     return "the input's winding-number solid closes its holes, and its caps over holes wider than the bound lie " + off +
            " (a closed solid can do no better); no slab of the input within the bounds could be made (welded or "
            "overlapping segments have none, and an open scan's may fold over itself or leave slivers)";
   return "the mesh's boundary lies " + off;
 }
-}  // namespace
 
-MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
-  MeshResult r = mesh_surface_placed(surface, opt, progress);
-  r.deviation_exceeded_because = deviation_exceeded_because(r, opt);
-  return r;
-}
-
-namespace {
+// mesh_surface for an input anywhere: moved to the origin where far from it.
 MeshResult mesh_surface_placed(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
   // An input far from the origin next to its size (the corpus bunny, 1.6 m across its diagonal,
   // moved to (1e5, -2e5, 3e5) m, as a model in world or survey coordinates is) keeps its details
@@ -1759,7 +1755,14 @@ MeshResult mesh_surface_placed(const SurfaceMesh& surface, const MeshOptions& op
   }
   return mesh_surface_near_origin(surface, opt, progress);
 }
+
 }  // namespace
+
+MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
+  MeshResult r = mesh_surface_placed(surface, opt, progress);
+  r.deviation_exceeded_because = deviation_exceeded_because(r, opt);
+  return r;
+}
 
 MeshResult mesh_file(const std::filesystem::path& path, const MeshOptions& opt, Progress* progress) {
   const auto t0 = std::chrono::steady_clock::now();

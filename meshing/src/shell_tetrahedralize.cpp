@@ -87,6 +87,11 @@ struct UnionFunction {
   }
 };
 
+// Seconds from a to b (steady-clock time points), for the debug log.
+double sec(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
 // The cells of the complex as a tet mesh (vertices in order of first use), positively oriented.
 TetMesh to_tet_mesh(const C3t3& c3t3) {
   const Tr& tr = c3t3.triangulation();
@@ -248,7 +253,6 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
                    "from run to run",
                    opt.optimize_seconds);
     const auto t3 = std::chrono::steady_clock::now();
-    auto sec = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
     spdlog::debug("Mesh_3 (convex shells): refine {:.2f} s, perturb {:.2f} s, exude {:.2f} s", sec(t0, t1), sec(t1, t2),
                   sec(t2, t3));
     return to_tet_mesh(c3t3);
@@ -582,7 +586,6 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
     if (exude_unless_nan(c3t3, opt.optimize_seconds, opt.sliver_bound) == CGAL::TIME_LIMIT_REACHED)
       st.time_limit_reached = true;
     const auto t2 = std::chrono::steady_clock::now();
-    auto sec = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
     spdlog::debug("Mesh_3 (winding number): refine {:.2f} s, exude {:.2f} s", sec(t0, t1), sec(t1, t2));
     return to_tet_mesh(c3t3);
   };
