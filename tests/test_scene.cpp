@@ -323,18 +323,31 @@ TEST_F(SceneTest, ACacheEntryReplacedByAnotherValidMeshIsNotUsed) {
 // request and is an error naming the file and key (an open surface, meshed by the convex shells'
 // fallback, used to give its at most 5000 tetrahedra silently for any larger `tets`).
 TEST_F(SceneTest, ATetCountThatCannotBeMetIsAnError) {
-  // Two half boxes welded at the wall between them (one copy of the wall: its edges in three faces,
-  // as the lung files' lobes are): not closed parts, so mesh_route "convex_shells" has the convex
+  // Two boxes 0.6 m long that overlap by 0.2 m, each cut into six sections along x, welded where
+  // their vertices coincide (the first's at x = -0.1 lie 3e-17 off the second's, in floating
+  // point: only some faces weld): not closed parts, so mesh_route "convex_shells" has the convex
   // shells' fallback mesh them, which makes at most 5,000 tetrahedra (by default, meshing version
   // 11, their winding-number solid's boundary is tetrahedralized, which honours the target). (An
   // open box with a fin was the input until meshing version 17 refused its shells' mesh, 11 times
-  // their volume, and meshed it by the default route.)
-  write("welded_boxes.off", "OFF\n16 22 0\n-0.5 -0.5 -0.5\n0 -0.5 -0.5\n0 0.5 -0.5\n-0.5 0.5 -0.5\n-0.5 -0.5 0.5\n"
-                        "0 -0.5 0.5\n0 0.5 0.5\n-0.5 0.5 0.5\n0 -0.5 -0.5\n0.5 -0.5 -0.5\n0.5 0.5 -0.5\n0 0.5 -0.5\n"
-                        "0 -0.5 0.5\n0.5 -0.5 0.5\n0.5 0.5 0.5\n0 0.5 0.5\n3 0 3 2\n3 0 2 1\n3 4 5 6\n3 4 6 7\n"
-                        "3 0 1 5\n3 0 5 4\n3 3 7 6\n3 3 6 2\n3 0 4 7\n3 0 7 3\n3 1 2 6\n3 1 6 5\n3 8 11 10\n"
-                        "3 8 10 9\n3 12 13 14\n3 12 14 15\n3 8 9 13\n3 8 13 12\n3 11 15 14\n3 11 14 10\n"
-                        "3 9 10 14\n3 9 14 13\n");
+  // their volume; two half boxes welded at one copy of the wall between them until version 18
+  // dropped the wall and meshed the closed box they make.)
+  auto sections = [](double x0, double x1, int n) {  // the box [x0, x1] × [-0.5, 0.5]², n sections
+    std::vector<Eigen::Vector3d> V;
+    std::vector<std::array<int, 3>> F;
+    for (int i = 0; i <= n; ++i) {
+      const double x = x0 + (x1 - x0) * i / n;
+      V.insert(V.end(), {{x, -0.5, -0.5}, {x, 0.5, -0.5}, {x, 0.5, 0.5}, {x, -0.5, 0.5}});
+    }
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < 4; ++k) {
+        const int p = 4 * i + k, q = 4 * i + (k + 1) % 4, r = 4 * (i + 1) + (k + 1) % 4, t = 4 * (i + 1) + k;
+        F.push_back({p, t, r}), F.push_back({p, r, q});
+      }
+    const int e = 4 * n;
+    F.insert(F.end(), {{0, 1, 2}, {0, 2, 3}, {e, e + 2, e + 1}, {e, e + 3, e + 2}});
+    return sqt::surface_of(V, F);
+  };
+  sqt::write_off(dir_->path() / "welded_boxes.off", sqt::join({sections(-0.5, 0.1, 6), sections(-0.1, 0.5, 6)}));
   const fs::path p = write("big.json", R"({"objects": [{"name": "box", "mesh": "welded_boxes.off", "tets": 20000, "mesh_route": "convex_shells"}]})");
   for (int pass = 0; pass < 2; ++pass) {  // meshed, then served by the cache: the same error
     SCOPED_TRACE(pass);

@@ -156,13 +156,141 @@ Mesh concatenate(const std::vector<Mesh>& ms, Elements Mesh::*elements) {
   return out;
 }
 
+// Disjoint sets over 0..n-1 (union by index, path halving).
+struct DisjointSets {
+  std::vector<int> parent;
+  explicit DisjointSets(Eigen::Index n) : parent(static_cast<size_t>(n)) {
+    for (size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+  }
+  int find(int i) {
+    while (parent[static_cast<size_t>(i)] != i)
+      i = parent[static_cast<size_t>(i)] = parent[static_cast<size_t>(parent[static_cast<size_t>(i)])];
+    return i;
+  }
+  void join(int i, int j) { parent[static_cast<size_t>(find(i))] = find(j); }
+};
+
+// Per face of G (#G by 3, no repeated face in one orientation): true where it lies in a wall
+// between segments welded to each other, which bounds nothing of their union (meshing version 18):
+// two boxes end to end, each with its own copy of the shared wall (a face and its twin, the same
+// vertices in the opposite order) or with one copy of it. A wall is a patch (faces joined across
+// edges of exactly two faces) with an edge of three or more faces (where it meets the segments'
+// outsides) that the rest of G encloses: at each of its faces, the mean of the winding numbers just
+// off either side is about 1 (0.75 to 1.25; the face's own share is opposite on its two sides, so
+// the mean is the rest's; the winding numbers of G's patches oriented, less twin pairs and the
+// walls found in earlier rounds). The segments' outsides have a mean of 1/2 (inside on one side, outside
+// on the other); a sheet modelled as two faces back to back, 0; a segment inside another, 3/2.
+// Walls are dropped from a component (faces joined across any edge) only where that leaves each
+// of its edges in no face or in two with opposite directions along it: the union's closed
+// surface. (Overlapping segments, as the liver's and the lungs', mix means of 1/2, 1 and 3/2 in
+// a patch, or leave edges of one face: kept.)
+std::vector<char> walls_between_welded_segments(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& G) {
+  const Eigen::Index n = G.rows();
+  std::vector<char> wall(static_cast<size_t>(n), 0);
+  // (edge's smaller vertex, larger vertex, face), sorted: each edge's faces together.
+  std::vector<std::array<int, 3>> edges;
+  edges.reserve(static_cast<size_t>(3 * n));
+  for (Eigen::Index f = 0; f < n; ++f)
+    for (int e = 0; e < 3; ++e) {
+      const int u = G(f, e), v = G(f, (e + 1) % 3);
+      edges.push_back({std::min(u, v), std::max(u, v), static_cast<int>(f)});
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<std::pair<size_t, size_t>> runs;  // [begin, end) of each edge's entries
+  bool branching = false;
+  for (size_t i = 0, j; i < edges.size(); i = j) {
+    for (j = i + 1; j < edges.size() && edges[j][0] == edges[i][0] && edges[j][1] == edges[i][1];) ++j;
+    runs.emplace_back(i, j);
+    branching |= j - i > 2;
+  }
+  if (!branching) return wall;
+  // Each patch oriented (a segment given inside out, say), so that winding numbers add up.
+  const Eigen::MatrixX3i O = orient_outward(V, G);
+  DisjointSets patch(n), component(n);
+  for (const auto& [i, j] : runs)
+    for (size_t k = i + 1; k < j; ++k) {
+      if (j - i == 2) patch.join(edges[k][2], edges[i][2]);
+      component.join(edges[k][2], edges[i][2]);
+    }
+  std::vector<char> candidate(static_cast<size_t>(n), 0);  // per patch root
+  for (const auto& [i, j] : runs)
+    if (j - i > 2)
+      for (size_t k = i; k < j; ++k) candidate[static_cast<size_t>(patch.find(edges[k][2]))] = 1;
+  // The winding numbers are those of the faces not yet found in walls, less both faces of each
+  // twin pair (which cancel: their orientations, as single faces, orient_outward cannot tell), so
+  // that one wall's share does not move another's mean where they meet (an L of three blocks).
+  // Found in rounds: a wall's faces all in the band; again without them, while more are found.
+  std::vector<char> twin(static_cast<size_t>(n), 0);
+  {
+    std::vector<std::pair<std::array<int, 3>, int>> keys(static_cast<size_t>(n));
+    for (Eigen::Index f = 0; f < n; ++f) {
+      std::array<int, 3> k{G(f, 0), G(f, 1), G(f, 2)};
+      std::sort(k.begin(), k.end());
+      keys[static_cast<size_t>(f)] = {k, static_cast<int>(f)};
+    }
+    std::sort(keys.begin(), keys.end());
+    for (size_t i = 1; i < keys.size(); ++i)
+      if (keys[i].first == keys[i - 1].first) twin[static_cast<size_t>(keys[i].second)] = twin[static_cast<size_t>(keys[i - 1].second)] = 1;
+  }
+  std::vector<char> found(static_cast<size_t>(n), 0);  // per patch root: a wall
+  for (int round = 0; round < 4; ++round) {
+    std::vector<Eigen::Index> field;
+    for (Eigen::Index f = 0; f < n; ++f)
+      if (!twin[static_cast<size_t>(f)] && !found[static_cast<size_t>(patch.find(static_cast<int>(f)))]) field.push_back(f);
+    Eigen::MatrixX3i W(static_cast<Eigen::Index>(field.size()), 3);
+    for (size_t i = 0; i < field.size(); ++i) W.row(static_cast<Eigen::Index>(i)) = O.row(field[i]);
+    if (W.rows() == 0) break;
+    const FastWindingNumber w(V, W);
+    std::vector<char> in_band(candidate);  // per patch root, among those not found yet
+    for (Eigen::Index p = 0; p < n; ++p) in_band[static_cast<size_t>(p)] &= !found[static_cast<size_t>(p)];
+    for (Eigen::Index f = 0; f < n; ++f) {
+      const int p = patch.find(static_cast<int>(f));
+      if (!in_band[static_cast<size_t>(p)]) continue;
+      const Eigen::RowVector3d a = V.row(O(f, 0)), b = V.row(O(f, 1)), c = V.row(O(f, 2));
+      const Eigen::RowVector3d normal = (b - a).cross(c - a);  // twice the area in length
+      const double perimeter = (b - a).norm() + (c - b).norm() + (a - c).norm();
+      // 1 % of the inradius off the centroid, either side: close to the face, far from the others.
+      const Eigen::RowVector3d centroid = (a + b + c) / 3.0, off = 0.01 * normal / perimeter;
+      const double mean = std::abs(0.5 * (w(centroid + off) + w(centroid - off)));
+      if (!(mean > 0.75 && mean < 1.25)) in_band[static_cast<size_t>(p)] = 0;
+    }
+    int more = 0;
+    for (Eigen::Index p = 0; p < n; ++p)
+      if (in_band[static_cast<size_t>(p)]) found[static_cast<size_t>(p)] = 1, ++more;
+    if (more == 0) break;
+  }
+  candidate = found;
+  std::vector<char> refused(static_cast<size_t>(n), 0);  // per component root
+  for (const auto& [i, j] : runs) {
+    int left = 0, direction = 0;
+    bool walled = false;
+    for (size_t k = i; k < j; ++k) {
+      const int f = edges[k][2];
+      if (candidate[static_cast<size_t>(patch.find(f))]) {
+        walled = true;
+        continue;
+      }
+      ++left;
+      for (int e = 0; e < 3; ++e) direction += (O(f, e) == edges[k][0] && O(f, (e + 1) % 3) == edges[k][1]) -
+                                               (O(f, e) == edges[k][1] && O(f, (e + 1) % 3) == edges[k][0]);
+    }
+    if (walled && !(left == 0 || (left == 2 && direction == 0))) refused[static_cast<size_t>(component.find(edges[i][2]))] = 1;
+  }
+  for (Eigen::Index f = 0; f < n; ++f)
+    wall[static_cast<size_t>(f)] = candidate[static_cast<size_t>(patch.find(static_cast<int>(f)))] &&
+                                   !refused[static_cast<size_t>(component.find(static_cast<int>(f)))];
+  return wall;
+}
+
 // F without faces of zero area (three collinear vertices, to 1e-5 of the longest edge; the loader
-// has already dropped those with a repeated vertex) and without repeats of a face (the same three vertices in any order:
-// a duplicated face, or a face and its twin, which enclose nothing); the first of each kept.
+// has already dropped those with a repeated vertex), without repeats of a face (the same three
+// vertices in any order: a duplicated face, or a face and its twin, which enclose nothing; the
+// first of each kept), and without the walls between segments welded to each other
+// (walls_between_welded_segments: both twins of such a wall dropped).
 Eigen::MatrixX3i without_duplicate_and_flat_faces(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
-  std::set<std::array<int, 3>> seen;
-  std::vector<Eigen::Index> keep;
-  keep.reserve(static_cast<size_t>(F.rows()));
+  // G: the first face of each vertex set in each orientation, in input order.
+  std::map<std::array<int, 3>, std::array<int, 2>> first;  // sorted vertices: G's face per orientation
+  std::vector<Eigen::Index> kept;                          // G's faces in F
   int flat = 0, repeated = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const Eigen::RowVector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
@@ -175,17 +303,45 @@ Eigen::MatrixX3i without_duplicate_and_flat_faces(const Eigen::MatrixX3d& V, con
     }
     std::array<int, 3> k{F(f, 0), F(f, 1), F(f, 2)};
     std::sort(k.begin(), k.end());
-    if (!seen.insert(k).second) {
+    // Its orientation: the cyclic order from the smallest vertex ascending or not.
+    const int x = F(f, 0), y = F(f, 1), z = F(f, 2);
+    const int next = k[0] == x ? y : k[0] == y ? z : x, last = k[0] == x ? z : k[0] == y ? x : y;
+    int& slot = first.try_emplace(k, std::array<int, 2>{-1, -1}).first->second[next < last ? 0 : 1];
+    if (slot >= 0) {
       ++repeated;
       continue;
     }
-    keep.push_back(f);
+    slot = static_cast<int>(kept.size());
+    kept.push_back(f);
   }
-  if (flat + repeated == 0) return F;
-  spdlog::debug("input: {} faces of zero area and {} repeated faces dropped", flat, repeated);
-  Eigen::MatrixX3i out(static_cast<Eigen::Index>(keep.size()), 3);
-  for (size_t i = 0; i < keep.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = F.row(keep[i]);
-  return out;
+  Eigen::MatrixX3i G(static_cast<Eigen::Index>(kept.size()), 3);
+  for (size_t i = 0; i < kept.size(); ++i) G.row(static_cast<Eigen::Index>(i)) = F.row(kept[i]);
+  const std::vector<char> wall = walls_between_welded_segments(V, G);
+  // Out: G without its walls, each vertex set's first face kept (a sheet's twins once).
+  std::vector<Eigen::Index> out;
+  int twins = 0, walls = 0;
+  for (size_t i = 0; i < kept.size(); ++i) {
+    if (wall[i]) {
+      ++walls;
+      continue;
+    }
+    std::array<int, 3> k{G(static_cast<Eigen::Index>(i), 0), G(static_cast<Eigen::Index>(i), 1),
+                         G(static_cast<Eigen::Index>(i), 2)};
+    std::sort(k.begin(), k.end());
+    const std::array<int, 2>& both = first.at(k);
+    const int other = both[0] == static_cast<int>(i) ? both[1] : both[0];
+    if (other >= 0 && other < static_cast<int>(i) && !wall[static_cast<size_t>(other)]) {
+      ++twins;
+      continue;
+    }
+    out.push_back(kept[i]);
+  }
+  if (flat + repeated + twins + walls == 0) return F;
+  spdlog::debug("input: {} faces of zero area, {} repeated faces and {} twins dropped, and {} faces of walls between "
+                "welded segments", flat, repeated, twins, walls);
+  Eigen::MatrixX3i result(static_cast<Eigen::Index>(out.size()), 3);
+  for (size_t i = 0; i < out.size(); ++i) result.row(static_cast<Eigen::Index>(i)) = F.row(out[i]);
+  return result;
 }
 
 // One part of the input and what becomes of it.
