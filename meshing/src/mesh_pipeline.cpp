@@ -1440,6 +1440,68 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     r.fallback_because = why;
     return boundary_route(parts, e, true, [&](const std::string& w) { return shells_route(why + "; on its alpha wrap, " + w); });
   };
+  // Open scans whose holes are all narrow (meshing version 18): the cap over each (hole_caps.h)
+  // within half the outer bound of the scan. Where the winding-number solid's boundary fails them
+  // (Mesh_3 does not find it about a solid thinner than its seeds' spacing: a rod 4 mm across and
+  // 1 m long with one end open came out 8.3 times its volume), the scan with each hole capped by a
+  // fan about its rim's centroid is a closed part, meshed by the boundary route (simplified against
+  // itself, the outer bound less the caps' distance). Empty where the input is not such a scan or the capped surface is not
+  // closed parts (a fan that crosses the scan).
+  auto capped_route = [&](const std::string& why,
+                          const std::function<MeshResult(const std::string&)>& fail) -> std::optional<MeshResult> {
+    if (!is_open_two_manifold(r.input.F)) return std::nullopt;
+    const std::vector<std::vector<int>> loops = boundary_loops(r.input.F);
+    double widest = 0;
+    for (const std::vector<int>& loop : loops) {
+      if (loop.size() < 3) return std::nullopt;
+      widest = std::max(widest, hole_cap_distance(r.input.V, loop));
+    }
+    if (!(widest <= 0.5 * eopt.max_outside)) return std::nullopt;
+    // Each boundary edge as its face runs along it; a cap face runs the other way.
+    std::set<std::pair<int, int>> along;
+    {
+      std::map<std::pair<int, int>, int> count;
+      for (Eigen::Index f = 0; f < r.input.F.rows(); ++f)
+        for (int e = 0; e < 3; ++e) {
+          const int u = r.input.F(f, e), v = r.input.F(f, (e + 1) % 3);
+          ++count[{std::min(u, v), std::max(u, v)}];
+        }
+      for (Eigen::Index f = 0; f < r.input.F.rows(); ++f)
+        for (int e = 0; e < 3; ++e) {
+          const int u = r.input.F(f, e), v = r.input.F(f, (e + 1) % 3);
+          if (count.at({std::min(u, v), std::max(u, v)}) == 1) along.insert({u, v});
+        }
+    }
+    SurfaceMesh capped;
+    size_t cap_faces = 0;
+    for (const std::vector<int>& loop : loops) cap_faces += loop.size();
+    capped.V.resize(r.input.V.rows() + static_cast<Eigen::Index>(loops.size()), 3);
+    capped.V.topRows(r.input.V.rows()) = r.input.V;
+    capped.F.resize(r.input.F.rows() + static_cast<Eigen::Index>(cap_faces), 3);
+    capped.F.topRows(r.input.F.rows()) = r.input.F;
+    Eigen::Index v = r.input.V.rows(), f = r.input.F.rows();
+    for (const std::vector<int>& loop : loops) {
+      Eigen::RowVector3d centroid = Eigen::RowVector3d::Zero();
+      for (int i : loop) centroid += r.input.V.row(i);
+      capped.V.row(v) = centroid / static_cast<double>(loop.size());
+      for (size_t i = 0; i < loop.size(); ++i) {
+        const int a = loop[i], b = loop[(i + 1) % loop.size()];
+        if (along.count({a, b})) capped.F.row(f++) << b, a, static_cast<int>(v);
+        else capped.F.row(f++) << a, b, static_cast<int>(v);
+      }
+      ++v;
+    }
+    capped.F = orient_outward(capped.V, capped.F);
+    int bad;
+    std::vector<Part> parts = closed_components(capped, [](double volume) { return volume > 0; }, &bad);
+    if (bad >= 0 || parts.empty() || does_self_intersect(capped)) return std::nullopt;
+    spdlog::info("meshing the input with its {} holes capped (each cap within {:.3g} of it): {}", loops.size(), widest, why);
+    leave_boundary_route("capped_boundary", why + "; its " + std::to_string(loops.size()) + " holes are narrower than "
+                         "the bound: meshed capped", static_cast<int>(parts.size()));
+    EnvelopeOptions e = eopt;  // (the caps lie up to `widest` off the input)
+    e.max_outside -= widest;
+    return boundary_route(parts, e, false, fail);
+  };
   // Inputs that are not closed parts (meshing version 11): the boundary of their winding-number
   // solid, as Mesh_3 finds it (winding_number_surface: a closed 2-manifold without
   // self-intersection, within the facet distance and the dilation of the input), is simplified
@@ -1488,8 +1550,14 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       }
     }
     auto mesh3 = [&](const std::string& because) {
-      spdlog::info("meshing the winding-number solid by Mesh_3 as it is: {}", because);
-      return winding_route(why + "; its boundary " + because);
+      auto tetrahedra = [&](const std::string& w) {
+        spdlog::info("meshing the winding-number solid by Mesh_3 as it is: {}", w);
+        return winding_route(why + "; its boundary " + w);
+      };
+      if (std::optional<MeshResult> c = capped_route(why + "; its winding-number solid's boundary " + because,
+                                                     [&](const std::string& w) { return tetrahedra(because + "; capped, " + w); }))
+        return std::move(*c);
+      return tetrahedra(because);
     };
     // No solid at all (triangles welded into a fan, say: no volume, and not open sheets either):
     // the convex shells of a flat input took minutes to grow a blob around it.
