@@ -746,14 +746,16 @@ TEST(MeshingV4, HeartShellsHoldTheirBoundsWithoutThePerturber) {
 // a third of the rod's vertices (its corners only), or, dilated until it held them, grew 5,342
 // times the shell's volume. Since meshing version 17 the default route meshes it instead, as
 // --shells-only already did, and the report says why. (Since version 18 that rod is one closed
-// part, its wall dropped. Two segments of the rod that overlap by 20 cm are not: the first one's
-// vertices at x = 0.4 lie 6e-17 short of the second's (0.6 × 4/6 in floating point), so only their
-// faces from 0.5 to 0.6 weld, and their shells fail in the same way.)
+// part, its wall dropped. Two segments of the rod that overlap by 20 cm, the second's end 0.1 µm
+// off the first's vertices there, are not: only their faces from 0.5 to 0.6 weld, and their shells
+// fail in the same way.)
 TEST(MeshingV4, ShellsFallbackIsRefusedWhereItsMeshDoesNotHoldTheInput) {
   const fs::path dir = fs::temp_directory_path() / ("squeeze_welded_rod_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  sqt::write_off(dir / "rod.off", join({box(Vec3(0, 0, 0), Vec3(0.6, 0.004, 0.004), {6, 1, 1}),
-                                        box(Vec3(0.4, 0, 0), Vec3(1.0, 0.004, 0.004), {6, 1, 1})}));
+  SurfaceMesh second = box(Vec3(0.4, 0, 0), Vec3(1.0, 0.004, 0.004), {6, 1, 1});
+  for (Eigen::Index v = 0; v < second.V.rows(); ++v)
+    if (second.V(v, 0) == 0.4) second.V(v, 0) += 1e-7;  // 0.1 µm: not welded
+  sqt::write_off(dir / "rod.off", join({box(Vec3(0, 0, 0), Vec3(0.6, 0.004, 0.004), {6, 1, 1}), second}));
   const SurfaceMesh s = squeeze::meshing::load_surface(dir / "rod.off");  // welds the shared faces
   fs::remove_all(dir);
   MeshOptions o;
@@ -848,6 +850,37 @@ TEST(MeshingV4, SegmentsWeldedFaceToFaceAreTheirUnion) {
     EXPECT_LE(r.deviation_in, 0.005 * 0.4 * std::sqrt(2.0));
   }
   fs::remove_all(dir);
+}
+
+// A point computed two ways lands a few ulps apart (0.6 × 4/6 = 0.39999999999999997, and 0.4):
+// two rods 4 mm across, 0.6 m long, overlapping by 0.2 m, each in six sections, share their
+// vertices at x = 0.4 only to 6e-17. The loader welds vertices within 1e-12 of the diagonal
+// (LoadOptions::weld_tolerance, since meshing version 18): the rods' shared faces are then one, the
+// union one closed part, meshed exact. Identical coordinates only (tolerance 0) leave some faces
+// apart: not a closed part, and the winding-number route's tetrahedra were 5.1 times its volume.
+TEST(MeshingV4, NearlyCoincidentVerticesAreWelded) {
+  const fs::path dir = fs::temp_directory_path() / ("squeeze_near_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const SurfaceMesh first = box(Vec3(0, 0, 0), Vec3(0.6, 0.004, 0.004), {6, 1, 1}),
+                    second = box(Vec3(0.4, 0, 0), Vec3(1.0, 0.004, 0.004), {6, 1, 1});
+  ASSERT_NE(0.6 * 4 / 6, 0.4);
+  sqt::write_off(dir / "rods.off", join({first, second}));
+  const SurfaceMesh s = squeeze::meshing::load_surface(dir / "rods.off");
+  squeeze::meshing::LoadOptions exact;
+  exact.weld_tolerance = 0;
+  const SurfaceMesh apart = squeeze::meshing::load_surface(dir / "rods.off", exact);
+  fs::remove_all(dir);
+  EXPECT_EQ(s.V.rows(), 4 * 11);  // the rings at x = 0, 0.1, ..., 1.0
+  EXPECT_EQ(apart.V.rows(), 4 * 12);
+  const double diag = Vec3(1, 0.004, 0.004).norm();
+  for (int target : {150, 1000}) {
+    const MeshResult r = mesh(s, target);
+    EXPECT_EQ(r.method, "boundary") << target << ": " << r.fallback_because;
+    EXPECT_NEAR(tet_volume(r.tets) / (1 * 0.004 * 0.004), 1.0, 0.01) << target;
+    EXPECT_LE(r.deviation_out, 0.002 * diag) << target;
+    EXPECT_LE(r.deviation_in, 0.002 * diag) << target;
+    EXPECT_EQ(r.quality.components, 1) << target;
+  }
 }
 
 // Open scans of thin solids whose holes are narrow: the winding-number solid's boundary is not

@@ -324,8 +324,7 @@ TEST_F(SceneTest, ACacheEntryReplacedByAnotherValidMeshIsNotUsed) {
 // fallback, used to give its at most 5000 tetrahedra silently for any larger `tets`).
 TEST_F(SceneTest, ATetCountThatCannotBeMetIsAnError) {
   // Two boxes 0.6 m long that overlap by 0.2 m, each cut into six sections along x, welded where
-  // their vertices coincide (the first's at x = -0.1 lie 3e-17 off the second's, in floating
-  // point: only some faces weld): not closed parts, so mesh_route "convex_shells" has the convex
+  // their vertices coincide (each one's end inside the other): not closed parts, so mesh_route "convex_shells" has the convex
   // shells' fallback mesh them, which makes at most 5,000 tetrahedra (by default, meshing version
   // 11, their winding-number solid's boundary is tetrahedralized, which honours the target). (An
   // open box with a fin was the input until meshing version 17 refused its shells' mesh, 11 times

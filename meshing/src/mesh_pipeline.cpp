@@ -178,8 +178,9 @@ struct DisjointSets {
 // outsides) that the rest of G encloses: at each of its faces, the mean of the winding numbers just
 // off either side is about 1 (0.75 to 1.25; the face's own share is opposite on its two sides, so
 // the mean is the rest's; the winding numbers of G's patches oriented, less twin pairs and the
-// walls found in earlier rounds). The segments' outsides have a mean of 1/2 (inside on one side, outside
-// on the other); a sheet modelled as two faces back to back, 0; a segment inside another, 3/2.
+// walls found in earlier rounds). The segments' outsides have a mean of 1/2 (inside on one side,
+// outside on the other); a sheet modelled as two faces back to back, 0; a segment inside another,
+// 3/2.
 // Walls are dropped from a component (faces joined across any edge) only where that leaves each
 // of its edges in no face or in two with opposite directions along it: the union's closed
 // surface. (Overlapping segments, as the liver's and the lungs', mix means of 1/2, 1 and 3/2 in

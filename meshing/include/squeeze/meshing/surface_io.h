@@ -12,6 +12,8 @@ namespace squeeze::meshing {
 
 struct LoadOptions {
   bool merge_coincident = true;  // weld vertices with identical coordinates (across meshes too)
+  double weld_tolerance = 1e-12; // ... and, with merge_coincident, those within this fraction of the
+                                 // bounding-box diagonal in every coordinate (0: identical only)
   bool drop_degenerate = true;   // drop faces with a repeated vertex index after welding
   bool keep_order = false;       // keep the file's vertices (unreferenced ones too) and faces in file
                                  // order: no welding, no dropping, no assimp post-processing (see below)
