@@ -883,6 +883,26 @@ TEST(MeshingV4, NearlyCoincidentVerticesAreWelded) {
   }
 }
 
+/// A tube open at both ends, no thickness: radius r about the z axis from z = 0 to `length`,
+/// `sides` around and `rings` along, (sides)(rings + 1) vertices.
+SurfaceMesh open_tube(double r, double length, int sides, int rings) {
+  SurfaceMesh s;
+  s.V.resize(sides * (rings + 1), 3);
+  for (int j = 0; j <= rings; ++j)
+    for (int i = 0; i < sides; ++i) {
+      const double t = 2 * M_PI * i / sides;
+      s.V.row(j * sides + i) << r * std::cos(t), r * std::sin(t), length * j / rings;
+    }
+  s.F.resize(2 * sides * rings, 3);
+  for (int j = 0; j < rings; ++j)
+    for (int i = 0; i < sides; ++i) {
+      const int a = j * sides + i, b = j * sides + (i + 1) % sides;
+      s.F.row(2 * (j * sides + i)) << a, b, b + sides;
+      s.F.row(2 * (j * sides + i) + 1) << a, b + sides, a + sides;
+    }
+  return s;
+}
+
 // Open scans of thin solids whose holes are narrow: the winding-number solid's boundary is not
 // found by Mesh_3 about a solid thinner than its seeds' spacing, and Mesh_3's own tetrahedra of it
 // were 8.3 times the volume of a rod 4 mm across with one end open. Since meshing version 18 the
@@ -914,21 +934,7 @@ TEST(MeshingV4, ThinOpenScansAreMeshedWithTheirNarrowHolesCapped) {
   }
   // A pipe 4 mm across and 1 m long, 16 sides, open at both ends, of triangles 50 times as long as
   // they are wide.
-  const int sides = 16, rings = 20;
-  SurfaceMesh pipe;
-  pipe.V.resize(sides * (rings + 1), 3);
-  for (int j = 0; j <= rings; ++j)
-    for (int i = 0; i < sides; ++i) {
-      const double t = 2 * M_PI * i / sides;
-      pipe.V.row(j * sides + i) << 0.002 * std::cos(t), 0.002 * std::sin(t), 1.0 * j / rings;
-    }
-  pipe.F.resize(2 * sides * rings, 3);
-  for (int j = 0; j < rings; ++j)
-    for (int i = 0; i < sides; ++i) {
-      const int a = j * sides + i, b = j * sides + (i + 1) % sides;
-      pipe.F.row(2 * (j * sides + i)) << a, b, b + sides;
-      pipe.F.row(2 * (j * sides + i) + 1) << a, b + sides, a + sides;
-    }
+  const SurfaceMesh pipe = open_tube(0.002, 1.0, 16, 20);
   const double pipe_diag = sqt::diagonal(pipe.V);
   for (int target : {150, 1000}) {
     const std::string what = "pipe at target " + std::to_string(target);
@@ -947,21 +953,7 @@ TEST(MeshingV4, ThinOpenScansAreMeshedWithTheirNarrowHolesCapped) {
 // diagonal off the input. Meshed as an open sheet (a slab) it holds the bounds, and the report says
 // why.
 TEST(MeshingV4, OpenTubeIsMeshedAsASheetWhereItsCapsBreakTheBound) {
-  const int sides = 32, rings = 20;
-  SurfaceMesh s;
-  s.V.resize(sides * (rings + 1), 3);
-  for (int j = 0; j <= rings; ++j)
-    for (int i = 0; i < sides; ++i) {
-      const double t = 2 * M_PI * i / sides;
-      s.V.row(j * sides + i) << 0.05 * std::cos(t), 0.05 * std::sin(t), 0.4 * j / rings;
-    }
-  s.F.resize(2 * sides * rings, 3);
-  for (int j = 0; j < rings; ++j)
-    for (int i = 0; i < sides; ++i) {
-      const int a = j * sides + i, b = j * sides + (i + 1) % sides;
-      s.F.row(2 * (j * sides + i)) << a, b, b + sides;
-      s.F.row(2 * (j * sides + i) + 1) << a, b + sides, a + sides;
-    }
+  const SurfaceMesh s = open_tube(0.05, 0.4, 32, 20);
   const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
   const MeshResult r = mesh(s, 300);
   EXPECT_NE(r.fallback_because.find("holes are wider than the deviation bound"), std::string::npos) << r.fallback_because;
