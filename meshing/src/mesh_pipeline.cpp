@@ -422,13 +422,21 @@ bool winding_solid_of_open_input(const MeshResult& r) {
   return (r.method == "winding_number_boundary" || r.method == "winding_number") && !r.info.closed;
 }
 
+// The largest distance from samples of (V, F) `spacing` apart to the triangles of `to` (a one-sided
+// Hausdorff distance). A sample with a triangle within the largest distance found so far cannot
+// raise it and is skipped (TriangleBvh::any_within); the others are measured: the same maximum as
+// measuring every sample, in whatever order the threads take them.
 double farthest_sample(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const TriangleBvh& to, double spacing) {
   const auto pts = surface_samples(V, F, spacing);
-  std::vector<double> d(pts.size(), 0.0);
-  tbb::parallel_for(size_t(0), pts.size(), [&](size_t i) { d[i] = to.nearest(pts[i]); });
-  double farthest = 0;
-  for (double x : d) farthest = std::max(farthest, x);
-  return farthest;
+  std::atomic<double> farthest{0.0};
+  tbb::parallel_for(size_t(0), pts.size(), [&](size_t i) {
+    double now = farthest.load(std::memory_order_relaxed);
+    if (to.any_within(pts[i], now)) return;
+    const double d = to.nearest(pts[i]);
+    while (d > now && !farthest.compare_exchange_weak(now, d, std::memory_order_relaxed)) {
+    }
+  });
+  return farthest.load();
 }
 
 // The faces of each component: C  #F component id per face (face_components), n components.

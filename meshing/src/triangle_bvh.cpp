@@ -139,6 +139,38 @@ double TriangleBvh::nearest(const Vec3& p, int* face, Vec3* closest, double boun
   return best_face >= 0 ? std::sqrt(best2) : INFINITY;
 }
 
+bool TriangleBvh::any_within(const Vec3& p, double r) const {
+  if (nodes_.empty() || !(r >= 0)) return false;
+  const double r2 = r * r;
+  int stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[static_cast<size_t>(stack[--top])];
+    if (box_distance2(node.lo, node.hi, p) > r2) continue;
+    if (node.left < 0) {
+      for (int i = node.begin; i < node.end; ++i) {
+        const int f = order_[static_cast<size_t>(i)];
+        const Vec3 q = closest_point_on_triangle(p, V_.row(F_(f, 0)).transpose(), V_.row(F_(f, 1)).transpose(),
+                                                 V_.row(F_(f, 2)).transpose());
+        if ((q - p).squaredNorm() <= r2) return true;
+      }
+      continue;
+    }
+    const Node& l = nodes_[static_cast<size_t>(node.left)];
+    const Node& rt = nodes_[static_cast<size_t>(node.right)];
+    // Nearer child on top of the stack.
+    if (box_distance2(l.lo, l.hi, p) <= box_distance2(rt.lo, rt.hi, p)) {
+      stack[top++] = node.right;
+      stack[top++] = node.left;
+    } else {
+      stack[top++] = node.left;
+      stack[top++] = node.right;
+    }
+  }
+  return false;
+}
+
 bool TriangleBvh::first_crossing(const Vec3& a, const Vec3& b, double t_min, double* t_out) const {
   return crossing(a, b, t_min, true, t_out);
 }

@@ -23,6 +23,11 @@ class TriangleBvh {
   double nearest(const Eigen::Vector3d& p, int* face = nullptr, Eigen::Vector3d* closest = nullptr,
                  double bound = INFINITY) const;
 
+  /// Whether some triangle lies within r of p (distance <= r): stops at the first found, so it is
+  /// much cheaper than nearest() where one is near (a one-sided Hausdorff distance skips the
+  /// samples that cannot raise its maximum).
+  bool any_within(const Eigen::Vector3d& p, double r) const;
+
   /// Of the points where the segment a→b crosses a triangle (Möller–Trumbore; parameter t in
   /// [0, 1]), the parameter nearest to `hint`. Returns false when the segment crosses none.
   bool crossing_nearest(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double hint, double* t) const;
