@@ -1450,7 +1450,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     return boundary_route(parts, e, true, [&](const std::string& w) { return shells_route(why + "; on its alpha wrap, " + w); });
   };
   // Open scans whose holes are all narrow (meshing version 18): the cap over each (hole_caps.h)
-  // within half the outer bound of the scan. Where the winding-number solid's boundary fails them
+  // within the outer bound of the scan. Where the winding-number solid's boundary fails them
   // (Mesh_3 does not find it about a solid thinner than its seeds' spacing: a rod 4 mm across and
   // 1 m long with one end open came out 8.3 times its volume), the scan with each hole capped by a
   // fan about its rim's centroid is a closed part, meshed by the boundary route (simplified against
@@ -1465,7 +1465,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       if (loop.size() < 3) return std::nullopt;
       widest = std::max(widest, hole_cap_distance(r.input.V, loop));
     }
-    if (!(widest <= 0.5 * eopt.max_outside)) return std::nullopt;
+    if (!(widest <= eopt.max_outside)) return std::nullopt;
     // Each boundary edge as its face runs along it; a cap face runs the other way.
     std::set<std::pair<int, int>> along;
     {
@@ -1507,8 +1507,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     spdlog::info("meshing the input with its {} holes capped (each cap within {:.3g} of it): {}", loops.size(), widest, why);
     leave_boundary_route("capped_boundary", why + "; its " + std::to_string(loops.size()) + " holes are narrower than "
                          "the bound: meshed capped", static_cast<int>(parts.size()));
-    EnvelopeOptions e = eopt;  // (the caps lie up to `widest` off the input)
-    e.max_outside -= widest;
+    EnvelopeOptions e = eopt;  // (the caps lie up to `widest` off the input; at least a quarter kept, as the wrap's)
+    e.max_outside = std::max(0.25 * eopt.max_outside, eopt.max_outside - widest);
     return boundary_route(parts, e, false, fail);
   };
   // Inputs that are not closed parts (meshing version 11): the boundary of their winding-number
