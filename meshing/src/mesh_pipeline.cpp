@@ -467,14 +467,20 @@ std::vector<Part> closed_components(const SurfaceMesh& s, const std::function<bo
   return parts;
 }
 
-// The volume of the solid {x : winding number of `surface` at x > ½}, the union of overlapping
+// The volume of the solid {x : winding number of `surface` at x ≥ ½}, the union of overlapping
 // or welded segments with each point counted once: the divergence theorem over the faces where the
 // solid's indicator jumps, each face's cone volume weighted by the jump across it (+1 where it is
 // inside behind the face and outside in front, -1 the other way, 0 for walls inside the solid or
-// outside it), the indicator taken at the face's centroid a ten-thousandth of the diagonal to each
-// side (Jacobson et al., "Robust inside-outside segmentation using generalized winding numbers",
-// SIGGRAPH 2013). Exact where every face is wholly on the solid's boundary or wholly not; a face
-// that crosses another counts by its centroid's side.
+// outside it; Jacobson et al., "Robust inside-outside segmentation using generalized winding
+// numbers", SIGGRAPH 2013). The jump is read off the rest of the surface's winding number R at the
+// face's centroid (the face's own ±½ taken out of the values a ten-thousandth of the diagonal to
+// each side, and the two averaged): behind the face it is R + ½, in front R − ½, so the face is on
+// the boundary where R is about ½ (or −½, a cavity's face), inside the solid where R is about 1
+// (a wall between welded segments, in front of which the winding number is ½ exactly: a knife
+// edge for any approximation, meshing version 19) or more, and a sheet where R is about 0. R is
+// taken as the nearest of these, the thresholds a quarter away from each. Exact where every face
+// is wholly on the solid's boundary or wholly not; a face that crosses another counts by its
+// centroid's side.
 double winding_volume(const SurfaceMesh& surface) {
   const FastWindingNumber w(surface.V, surface.F);
   const double eps = 1e-4 * bounding_box_diagonal(surface.V);
@@ -485,7 +491,14 @@ double winding_volume(const SurfaceMesh& surface) {
     const Eigen::RowVector3d n = (b - a).cross(c - a);
     if (!(n.norm() > 0)) return;
     const Eigen::RowVector3d m = (a + b + c) / 3.0, u = n.normalized() * eps;
-    const int jump = (w(m - u) > 0.5 ? 1 : 0) - (w(m + u) > 0.5 ? 1 : 0);
+    auto own = [&](const Eigen::RowVector3d& q) {  // the face's own winding number at q
+      const Eigen::Vector3d x = (a - q).transpose(), y = (b - q).transpose(), z = (c - q).transpose();
+      const double lx = x.norm(), ly = y.norm(), lz = z.norm();
+      const double den = lx * ly * lz + x.dot(y) * lz + y.dot(z) * lx + z.dot(x) * ly;
+      return fast_atan2(x.dot(y.cross(z)), den) / (2 * M_PI);
+    };
+    const double rest = 0.5 * ((w(m - u) - own(m - u)) + (w(m + u) - own(m + u)));
+    const int jump = (rest > -0.25 ? 1 : 0) - (rest > 0.75 ? 1 : 0);
     vol[static_cast<size_t>(f)] = jump * a.dot(b.cross(c)) / 6.0;
   });
   double sum = 0;

@@ -457,7 +457,7 @@ class SpacedPoints {
 class WindingSolid {
  public:
   WindingSolid(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const WindingTetrahedralizeOptions& opt)
-      : V_(V), F_(F), winding_(V, F, 2.0), bvh_(V, F) {
+      : V_(V), F_(F), winding_(V, F, 1.25), bvh_(V, F) {
     if (F.rows() == 0 || V.rows() == 0) throw InputError("tetrahedralize_winding_number: no triangles");
     if (!(opt.facet_distance > 0 && opt.facet_distance < 1)) throw InputError("winding-number facet distance must be in (0, 1)");
     if (!(opt.dilation >= 0 && opt.dilation < 1)) throw InputError("winding-number dilation must be in [0, 1)");
@@ -479,7 +479,7 @@ class WindingSolid {
   // Remembered per point (label_memo.h): Mesh_3 asks about the same points again and again.
   bool inside(const Eigen::Vector3d& p) const {
     return memo_(p, [this](const Eigen::Vector3d& q) {
-      if (dil_ > 0 && bvh_.nearest(q, nullptr, nullptr, dil_) < dil_) return true;
+      if (dil_ > 0 && bvh_.any_within(q, dil_)) return true;
       return winding_(q.transpose()) >= 0.5;
     });
   }

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <numeric>
 
 namespace squeeze::meshing {
@@ -11,7 +12,8 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 constexpr double kInv4Pi = 0.25 / M_PI;
 
-// Signed solid angle of triangle (a,b,c) seen from the origin (a,b,c relative to the query point).
+// Signed solid angle of triangle (a,b,c) seen from the origin (a,b,c relative to the query point),
+// with the library's atan2 (the exact reference, winding_number()).
 inline double solid_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   const double la = a.norm(), lb = b.norm(), lc = c.norm();
   const double det = a.dot(b.cross(c));
@@ -19,7 +21,36 @@ inline double solid_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 2.0 * std::atan2(det, den);
 }
 
+inline double atan2_poly(double y, double x) {
+  // atan(t) on [0, tan(π/8)]: t + t·z·h(z), z = t², h a degree-8 polynomial fitted to
+  // (atan(t)/t − 1)/z by Chebyshev least squares at 4,000 Chebyshev points (numpy, 2026-11-25):
+  // largest error 4.2e-15 over 400,001 points. [tan(π/8), 1] maps onto it by
+  // atan(t) = π/4 + atan((t − 1)/(t + 1)); [1, ∞) by atan(t) = π/2 − atan(1/t). Written as
+  // selects, not branches: the octant of a near triangle's solid angle is unpredictable.
+  constexpr double h[9] = {-0.3333333333335414,  0.20000000004948473,  -0.14285714521837525,
+                           0.11111111354908106,  -0.09090677935795236, 0.07685695705908752,
+                           -0.06580081428765631, 0.05265909942421324,  -0.028562535080168986};
+  constexpr double kTanPi8 = 0.41421356237309503;
+  if (std::isnan(x) || std::isnan(y)) return x + y;
+  const double ax = std::abs(x), ay = std::abs(y);
+  const double num = std::min(ax, ay), den = std::max(ax, ay);
+  if (!(den > 0)) return std::signbit(x) ? std::copysign(M_PI, y) : std::copysign(0.0, y);  // atan2(±0, ±0)
+  const double t0 = num / den;  // in [0, 1]
+  const bool upper = t0 > kTanPi8;
+  const double t1 = (t0 - 1) / (t0 + 1);
+  const double t = upper ? t1 : t0, base = upper ? M_PI_4 : 0.0;
+  const double z = t * t;
+  double p = h[8];
+  for (int k = 7; k >= 0; --k) p = p * z + h[k];
+  double r = base + (t + t * z * p);
+  r = ay > ax ? M_PI_2 - r : r;
+  r = x < 0 ? M_PI - r : r;
+  return std::copysign(r, y);
+}
+
 }  // namespace
+
+double fast_atan2(double y, double x) { return atan2_poly(y, x); }
 
 double winding_number(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::RowVector3d& p) {
   double w = 0.0;
@@ -31,9 +62,11 @@ double winding_number(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, cons
 
 struct FastWindingNumber::Impl {
   struct Node {
-    Vec3 centre;     // area-weighted centroid of its triangles
-    Vec3 area_n;     // sum of area-weighted normals (0.5 × cross products)
-    double radius;   // max distance from centre to any triangle vertex
+    Vec3 centre;       // area-weighted centroid of its triangles
+    Vec3 area_n;       // sum of the triangles' area vectors (0.5 × cross products)
+    Eigen::Matrix3d moment;  // Σ (x̄_t − centre) A_tᵀ: the first moments about the centre times normals
+    Eigen::Matrix3d second[3];  // second[k] = Σ n_tk ∫_t (x − centre)(x − centre)ᵀ dA
+    double reach2;     // (beta × the largest distance from centre to a triangle vertex)²
     int left = -1, right = -1;  // children, or -1 for a leaf
     int begin = 0, end = 0;     // triangle range in order (leaves)
   };
@@ -63,12 +96,19 @@ struct FastWindingNumber::Impl {
     }
     n.centre = area > 0 ? Vec3(weighted / area) : Vec3(0.5 * (lo + hi));
     double r2 = 0.0;
+    n.moment.setZero();
+    for (auto& m : n.second) m.setZero();
     for (int i = begin; i < end; ++i) {
       const int t = order[i];
-      r2 = std::max({r2, (a0[t] - n.centre).squaredNorm(), (b0[t] - n.centre).squaredNorm(),
-                     (c0[t] - n.centre).squaredNorm()});
+      const Vec3 va = a0[t] - n.centre, vb = b0[t] - n.centre, vc = c0[t] - n.centre, g = cen[t] - n.centre;
+      r2 = std::max({r2, va.squaredNorm(), vb.squaredNorm(), vc.squaredNorm()});
+      const Vec3 an = 0.5 * (b0[t] - a0[t]).cross(c0[t] - a0[t]);  // area × normal
+      n.moment += g * an.transpose();
+      // ∫_t δ δᵀ dA = area/12 (Σ v vᵀ + 9 g gᵀ), vertices and centroid relative to the centre.
+      const Eigen::Matrix3d s = (va * va.transpose() + vb * vb.transpose() + vc * vc.transpose() + 9.0 * g * g.transpose()) / 12.0;
+      for (int k = 0; k < 3; ++k) n.second[k] += an(k) * s;
     }
-    n.radius = std::sqrt(r2);
+    n.reach2 = beta * beta * r2;
     if (end - begin > 8) {
       int axis;
       (hi - lo).maxCoeff(&axis);
@@ -83,17 +123,80 @@ struct FastWindingNumber::Impl {
   }
   std::vector<Vec3> a0, b0, c0;  // input order, during build
 
-  double eval(const Vec3& p, int id) const {
-    const Node& n = nodes[id];
-    const Vec3 d = n.centre - p;
-    const double dist = d.norm();
-    if (dist > beta * n.radius && n.radius > 0) return kInv4Pi * d.dot(n.area_n) / (dist * dist * dist);
-    if (n.left < 0) {
-      double w = 0.0;
-      for (int i = n.begin; i < n.end; ++i) w += solid_angle(a[i] - p, b[i] - p, c[i] - p);
-      return w * kInv4Pi;
+  // The traversal's data apart, in tree order: what every visited node needs (centre, reach),
+  // then what a far one adds (its expansion), so that the hot part stays in cache (144-byte nodes
+  // were the queries' cache misses on the heart's 10,000 nodes).
+  struct Hot {
+    Vec3 centre;
+    double reach2;
+    int left, right;  // children, or -1 for a leaf
+    int begin, end;   // triangle range (leaves)
+  };
+  struct Far {
+    Vec3 area_n;
+    Eigen::Matrix3d moment;
+    double moment_trace;
+    Eigen::Matrix3d second[3];
+    Vec3 second_trace;  // tr second[k]
+  };
+  std::vector<Hot> hot;
+  std::vector<Far> far_data;
+  void flatten() {
+    hot.resize(nodes.size());
+    far_data.resize(nodes.size());
+    for (size_t i = 0; i < nodes.size(); ++i) {
+      const Node& n = nodes[i];
+      hot[i] = {n.centre, n.reach2, n.left, n.right, n.begin, n.end};
+      Far& f = far_data[i];
+      f.area_n = n.area_n;
+      f.moment = n.moment;
+      f.moment_trace = n.moment.trace();
+      for (int k = 0; k < 3; ++k) f.second[k] = n.second[k], f.second_trace(k) = n.second[k].trace();
     }
-    return eval(p, n.left) + eval(p, n.right);
+    nodes.clear();
+    nodes.shrink_to_fit();
+  }
+
+  // Far clusters by their expansion to second order, near leaves triangle by triangle; one pass
+  // down the tree with an explicit stack.
+  double eval(const Vec3& p) const {
+    double far = 0.0, near = 0.0;
+    int stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const int id = stack[--top];
+      const Hot& n = hot[static_cast<size_t>(id)];
+      const Vec3 d = n.centre - p;
+      const double d2 = d.squaredNorm();
+      if (d2 > n.reach2 && n.reach2 > 0) {
+        // ∫ f(d + δ)·n dA, f(r) = r / |r|³ = −∇(1/|r|), to second order in δ about the centre:
+        //   f(d)·A + tr(J M) + ½ Σ_kij C_kij T_ijk, with J = I/r³ − 3 d dᵀ/r⁵ and
+        //   T_ijk = 15 d_i d_j d_k / r⁷ − 3 (δ_ij d_k + δ_ik d_j + δ_jk d_i) / r⁵ (−∂³(1/r)),
+        //   C_kij = second[k]_ij (symmetric in ij).
+        const Far& e = far_data[static_cast<size_t>(id)];
+        const double inv2 = 1.0 / d2, inv3 = inv2 * std::sqrt(inv2), inv5 = inv3 * inv2;
+        const Vec3 c0 = e.second[0] * d, c1 = e.second[1] * d, c2 = e.second[2] * d;
+        const double dcd = d(0) * d.dot(c0) + d(1) * d.dot(c1) + d(2) * d.dot(c2);  // Σ_k d_k dᵀ C_k d
+        const double cdk = c0(0) + c1(1) + c2(2);                                  // Σ_k (C_k d)_k
+        far += inv3 * (d.dot(e.area_n) + e.moment_trace) - 3.0 * inv5 * d.dot(e.moment * d) +
+               0.5 * (15.0 * inv5 * inv2 * dcd - 3.0 * inv5 * (d.dot(e.second_trace) + 2.0 * cdk));
+        continue;
+      }
+      if (n.left < 0) {
+        for (int i = n.begin; i < n.end; ++i) {
+          const Vec3 x = a[static_cast<size_t>(i)] - p, y = b[static_cast<size_t>(i)] - p, z = c[static_cast<size_t>(i)] - p;
+          const double lx = x.norm(), ly = y.norm(), lz = z.norm();
+          const double det = x.dot(y.cross(z));
+          const double den = lx * ly * lz + x.dot(y) * lz + y.dot(z) * lx + z.dot(x) * ly;
+          near += atan2_poly(det, den);
+        }
+        continue;
+      }
+      stack[top++] = n.right;
+      stack[top++] = n.left;
+    }
+    return kInv4Pi * far + 2.0 * kInv4Pi * near;
   }
 };
 
@@ -116,6 +219,7 @@ FastWindingNumber::FastWindingNumber(const Eigen::MatrixX3d& V, const Eigen::Mat
   std::iota(order.begin(), order.end(), 0);
   m.nodes.reserve(static_cast<size_t>(2 * nf / 4 + 2));
   if (nf > 0) m.build(order, cen, 0, nf);
+  m.flatten();
   m.a.resize(nf);
   m.b.resize(nf);
   m.c.resize(nf);
@@ -132,8 +236,8 @@ FastWindingNumber::~FastWindingNumber() = default;
 FastWindingNumber::FastWindingNumber(FastWindingNumber&&) noexcept = default;
 
 double FastWindingNumber::operator()(const Eigen::RowVector3d& p) const {
-  if (impl_->nodes.empty()) return 0.0;
-  return impl_->eval(p.transpose(), 0);
+  if (impl_->hot.empty()) return 0.0;
+  return impl_->eval(p.transpose());
 }
 
 }  // namespace squeeze::meshing
