@@ -62,4 +62,42 @@ inline squeeze::meshing::SurfaceMesh with_holes(const squeeze::meshing::SurfaceM
   return m;
 }
 
+// A coil spring along z: wire of radius r (`sides` vertices per ring) wound `turns` times at
+// radius R with `pitch` between turns, `rings` rings along the wire, each end capped by a fan
+// around its centre. A thin closed tube that passes close to itself (the gap between turns is
+// pitch − 2 r).
+inline squeeze::meshing::SurfaceMesh coil_spring(double R, double pitch, double turns, double r, int sides, int rings) {
+  squeeze::meshing::SurfaceMesh s;
+  s.V.resize(sides * (rings + 1) + 2, 3);
+  auto centre = [&](double t) {
+    return Eigen::Vector3d(R * std::cos(2 * M_PI * turns * t), R * std::sin(2 * M_PI * turns * t), pitch * turns * t);
+  };
+  for (int j = 0; j <= rings; ++j) {
+    const double t = static_cast<double>(j) / rings, dt = 1e-6;
+    const Eigen::Vector3d c = centre(t), d = (centre(t + dt) - centre(t - dt)).normalized();
+    const Eigen::Vector3d u = d.cross(Eigen::Vector3d::UnitZ()).normalized(), w = d.cross(u);
+    for (int i = 0; i < sides; ++i) {
+      const double a = 2 * M_PI * i / sides;
+      s.V.row(j * sides + i) = (c + r * (std::cos(a) * u + std::sin(a) * w)).transpose();
+    }
+  }
+  const int c0 = sides * (rings + 1), c1 = c0 + 1;
+  s.V.row(c0) = centre(0).transpose();
+  s.V.row(c1) = centre(1).transpose();
+  std::vector<Eigen::Vector3i> F;
+  for (int j = 0; j < rings; ++j)
+    for (int i = 0; i < sides; ++i) {
+      const int a = j * sides + i, b = j * sides + (i + 1) % sides, c = a + sides, d = b + sides;
+      F.emplace_back(a, c, d);
+      F.emplace_back(a, d, b);
+    }
+  for (int i = 0; i < sides; ++i) {
+    F.emplace_back(c0, (i + 1) % sides, i);
+    F.emplace_back(c1, rings * sides + i, rings * sides + (i + 1) % sides);
+  }
+  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t f = 0; f < F.size(); ++f) s.F.row(static_cast<Eigen::Index>(f)) = F[f].transpose();
+  return s;
+}
+
 }  // namespace sqs
