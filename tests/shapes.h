@@ -100,4 +100,29 @@ inline squeeze::meshing::SurfaceMesh coil_spring(double R, double pitch, double 
   return s;
 }
 
+// A Moebius strip: centre circle of radius R, width w, `around` × `across` quads, the two ends
+// glued with a half twist (one non-orientable open sheet, one boundary loop).
+inline squeeze::meshing::SurfaceMesh mobius_strip(double R, double w, int around, int across) {
+  squeeze::meshing::SurfaceMesh s;
+  s.V.resize(around * (across + 1), 3);
+  for (int i = 0; i < around; ++i)
+    for (int j = 0; j <= across; ++j) {
+      const double t = 2 * M_PI * i / around, v = (static_cast<double>(j) / across - 0.5) * w;
+      s.V.row(i * (across + 1) + j) << (R + v * std::cos(t / 2)) * std::cos(t), (R + v * std::cos(t / 2)) * std::sin(t),
+          v * std::sin(t / 2);
+    }
+  std::vector<Eigen::Vector3i> F;
+  for (int i = 0; i < around; ++i)
+    for (int j = 0; j < across; ++j) {
+      const int a = i * (across + 1) + j, b = a + 1;
+      // the last column meets the first turned over: its (j) is the first's (across - j)
+      const int c = i + 1 < around ? a + (across + 1) : across - j, d = i + 1 < around ? c + 1 : across - j - 1;
+      F.emplace_back(a, c, d);
+      F.emplace_back(a, d, b);
+    }
+  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t f = 0; f < F.size(); ++f) s.F.row(static_cast<Eigen::Index>(f)) = F[f].transpose();
+  return s;
+}
+
 }  // namespace sqs

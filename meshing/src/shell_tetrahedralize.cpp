@@ -306,6 +306,7 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
   // about that deep below it).
   double cover_factor = 0.0;
   const double base_offset = std::min(opt.offset * diag, 0.05 * thickness);
+  constexpr double kMaxOffset = 0.05;  // fraction of the diagonal: the dilation's bound
   TetMesh best;
   double best_score = INFINITY;
   ShellTetrahedralizeStats st;
@@ -316,7 +317,10 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
     if (progress) progress->update(attempt);
     const auto t0 = std::chrono::steady_clock::now();
     const double fd = facet_distance(size);
-    f.offset = std::max(base_offset, cover_factor * fd);
+    // (At most 5 % of the diagonal: shells that leave the points farther out than that do not hold
+    // the input, and dilating them as a multiple of a facet distance that grows with the cell size
+    // made a blob: a Moebius strip's shells at 150 grew to 26 m around a 1 m strip, 8 attempts.)
+    f.offset = std::max(base_offset, std::min(cover_factor * fd, kMaxOffset * diag));
     TetMesh mesh = run(size, fd);
     const double t_run = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     // Mesh_3 may leave a few tetrahedra apart (a sliver of the union at a dilated corner): keep
