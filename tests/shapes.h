@@ -125,4 +125,40 @@ inline squeeze::meshing::SurfaceMesh mobius_strip(double R, double w, int around
   return s;
 }
 
+// A plate L × W × T on a grid of nx × ny square cells, the listed cells cut out as holes: one
+// closed 2-manifold (top and bottom two triangles a cell, walls where a cell meets a hole or the
+// rim). A perforated sheet-metal part.
+inline squeeze::meshing::SurfaceMesh perforated_plate(int nx, int ny, double L, double W, double T,
+                                                       const std::vector<std::pair<int, int>>& holes) {
+  std::vector<char> cell(static_cast<size_t>(nx * ny), 1);
+  for (const auto& [i, j] : holes) cell[static_cast<size_t>(i * ny + j)] = 0;
+  auto solid = [&](int i, int j) { return i >= 0 && i < nx && j >= 0 && j < ny && cell[static_cast<size_t>(i * ny + j)]; };
+  auto vid = [&](int i, int j, int k) { return (i * (ny + 1) + j) * 2 + k; };
+  std::vector<Eigen::Vector3i> F;
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < ny; ++j) {
+      if (!solid(i, j)) continue;
+      const int a[2] = {i, j}, b[2] = {i + 1, j}, c[2] = {i + 1, j + 1}, d[2] = {i, j + 1};
+      F.emplace_back(vid(a[0], a[1], 1), vid(b[0], b[1], 1), vid(c[0], c[1], 1));
+      F.emplace_back(vid(a[0], a[1], 1), vid(c[0], c[1], 1), vid(d[0], d[1], 1));
+      F.emplace_back(vid(a[0], a[1], 0), vid(c[0], c[1], 0), vid(b[0], b[1], 0));
+      F.emplace_back(vid(a[0], a[1], 0), vid(d[0], d[1], 0), vid(c[0], c[1], 0));
+      const int sides[4][6] = {{1, 0, b[0], b[1], c[0], c[1]}, {-1, 0, d[0], d[1], a[0], a[1]},
+                               {0, 1, c[0], c[1], d[0], d[1]}, {0, -1, a[0], a[1], b[0], b[1]}};
+      for (const auto& s : sides) {
+        if (solid(i + s[0], j + s[1])) continue;
+        F.emplace_back(vid(s[2], s[3], 0), vid(s[4], s[5], 0), vid(s[4], s[5], 1));
+        F.emplace_back(vid(s[2], s[3], 0), vid(s[4], s[5], 1), vid(s[2], s[3], 1));
+      }
+    }
+  squeeze::meshing::SurfaceMesh m;
+  m.V.resize((nx + 1) * (ny + 1) * 2, 3);
+  for (int i = 0; i <= nx; ++i)
+    for (int j = 0; j <= ny; ++j)
+      for (int k = 0; k < 2; ++k) m.V.row(vid(i, j, k)) << L * i / nx, W * j / ny, T * k;
+  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t f = 0; f < F.size(); ++f) m.F.row(static_cast<Eigen::Index>(f)) = F[f].transpose();
+  return m;  // (vertices of hole-only corners are left unused: the loader's clean-up drops them)
+}
+
 }  // namespace sqs
