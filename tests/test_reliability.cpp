@@ -271,6 +271,25 @@ TEST_P(FaultTest, OneLineNamingTheFileNonZeroExitBelow64) {
 INSTANTIATE_TEST_SUITE_P(Reliability, FaultTest, ::testing::ValuesIn(faults()),
                          [](const ::testing::TestParamInfo<Fault>& i) { return i.param.name; });
 
+// Blender 2.4x wrote a PLY header line of text with no 'comment' keyword ("Created by Blender3D
+// 247 - www.blender.org, source file: ...", assimp's test model Wuson.ply): it is skipped, as
+// assimp and other readers skip it, and the tetrahedron loads as it does without that line. A
+// keyword line that is broken is still an error (the faults above).
+TEST(Reliability, PlyHeaderTextWithoutCommentKeywordIsSkipped) {
+  TempDir dir("ply_text_line");
+  const std::string header(kPlyHeader);
+  const std::string with = header.substr(0, 21) + "Created by Blender3D 247 - www.blender.org, source file: \n" + header.substr(21);
+  ASSERT_EQ(with.substr(0, 21), "ply\nformat ascii 1.0\n");
+  std::ofstream(dir.path() / "a.ply") << with << kPlyBody;
+  std::ofstream(dir.path() / "b.ply") << header << kPlyBody;
+  const squeeze::meshing::SurfaceMesh a = squeeze::meshing::load_surface(dir.path() / "a.ply");
+  const squeeze::meshing::SurfaceMesh b = squeeze::meshing::load_surface(dir.path() / "b.ply");
+  EXPECT_EQ(a.V.rows(), 4);
+  EXPECT_EQ(a.F.rows(), 4);
+  EXPECT_TRUE(a.V.isApprox(b.V));
+  EXPECT_EQ(a.F, b.F);
+}
+
 // Every input the fuzzer once crashed on (tests/fuzz/fuzz_surface/regression-*, in fuzz_surface's
 // layout: the first byte picks the extension and the load mode, the rest is the file) loads or
 // throws InputError; before the fix, assimp's triangulation aborted the process on the PLY one.

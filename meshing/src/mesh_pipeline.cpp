@@ -1814,7 +1814,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       tbb::this_task_arena::isolate([&] {
         if (others > 0) return;
         std::vector<int> index;
-        const SurfaceMesh m = sub_mesh(r.input, faces[static_cast<size_t>(candidates[i])], &index);
+        SurfaceMesh m = sub_mesh(r.input, faces[static_cast<size_t>(candidates[i])], &index);
+        if (const int split = split_bow_ties(m, &index))  // (holes that touch at a vertex)
+          spdlog::debug("component {}: {} bow-tie vertex cop{} split off", candidates[i], split, split == 1 ? "y" : "ies");
         const SheetEvidence ev = sheet_evidence(m.V, m.F);
         spdlog::debug("component {}: open 2-manifold {}, sheet-like winding numbers over {:.1f}% of its area", candidates[i],
                       ev.open_manifold, 100.0 * ev.sheet_area_fraction);

@@ -8,6 +8,7 @@
 #include <array>
 #include <map>
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -87,6 +88,73 @@ SheetEvidence sheet_evidence(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   for (size_t f = 0; f < face_area.size(); ++f) total += face_area[f], sheet += sheet_area[f];
   e.sheet_area_fraction = total > 0 ? sheet / total : 0.0;
   return e;
+}
+
+int split_bow_ties(SurfaceMesh& m, std::vector<int>* index) {
+  const Eigen::Index nv = m.V.rows();
+  if (m.F.rows() == 0) return 0;
+  // How many faces each undirected edge has.
+  std::map<std::pair<int, int>, int> edge_count;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
+      ++edge_count[{std::min(a, b), std::max(a, b)}];
+    }
+  std::vector<int> rim(static_cast<size_t>(nv), 0);
+  for (const auto& [e, n] : edge_count)
+    if (n == 1) ++rim[static_cast<size_t>(e.first)], ++rim[static_cast<size_t>(e.second)];
+  const std::vector<std::vector<int>> faces_at = vertex_faces(m.F, nv);
+  std::vector<Eigen::RowVector3d> added;
+  int copies = 0;
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    if (rim[static_cast<size_t>(v)] < 4) continue;
+    const std::vector<int>& at = faces_at[static_cast<size_t>(v)];
+    // Fans: faces at v joined across an edge (v, w) in exactly two faces (union-find over `at`).
+    std::vector<int> parent(at.size());
+    for (size_t i = 0; i < at.size(); ++i) parent[i] = static_cast<int>(i);
+    std::function<int(int)> root = [&](int i) { return parent[static_cast<size_t>(i)] == i ? i : parent[static_cast<size_t>(i)] = root(parent[static_cast<size_t>(i)]); };
+    std::map<int, std::vector<size_t>> across;  // w -> faces in `at` with the edge (v, w)
+    for (size_t i = 0; i < at.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        const int w = m.F(at[i], k);
+        if (w != v) across[w].push_back(i);
+      }
+    for (const auto& [w, fs] : across)
+      if (fs.size() == 2 && edge_count[{std::min<int>(static_cast<int>(v), w), std::max<int>(static_cast<int>(v), w)}] == 2)
+        parent[static_cast<size_t>(root(static_cast<int>(fs[0])))] = root(static_cast<int>(fs[1]));
+    std::map<int, std::vector<int>> fans;  // root -> faces
+    for (size_t i = 0; i < at.size(); ++i) fans[root(static_cast<int>(i))].push_back(at[i]);
+    if (fans.size() < 2) continue;
+    bool first = true;
+    for (const auto& [r, fs] : fans) {
+      if (first) {  // (the first fan keeps the vertex)
+        first = false;
+        continue;
+      }
+      Eigen::RowVector3d centroid = Eigen::RowVector3d::Zero();
+      double shortest = INFINITY;
+      for (int f : fs) {
+        for (int k = 0; k < 3; ++k) {
+          centroid += m.V.row(m.F(f, k)) / (3.0 * static_cast<double>(fs.size()));
+          if (m.F(f, k) != v) shortest = std::min(shortest, (m.V.row(m.F(f, k)) - m.V.row(v)).norm());
+        }
+      }
+      const Eigen::RowVector3d toward = centroid - m.V.row(v);
+      const double len = toward.norm();
+      const Eigen::RowVector3d at_v = m.V.row(v);
+      added.push_back(len > 0 && std::isfinite(shortest) ? Eigen::RowVector3d(at_v + 0.01 * shortest * toward / len) : at_v);
+      const int copy = static_cast<int>(nv) + static_cast<int>(added.size()) - 1;
+      for (int f : fs)
+        for (int k = 0; k < 3; ++k)
+          if (m.F(f, k) == v) m.F(f, k) = copy;
+      if (index) index->push_back((*index)[static_cast<size_t>(v)]);
+      ++copies;
+    }
+  }
+  if (copies == 0) return 0;
+  m.V.conservativeResize(nv + static_cast<Eigen::Index>(added.size()), Eigen::NoChange);
+  for (size_t i = 0; i < added.size(); ++i) m.V.row(nv + static_cast<Eigen::Index>(i)) = added[i];
+  return copies;
 }
 
 namespace {

@@ -16,6 +16,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include <spdlog/spdlog.h>
+
 #include "squeeze/common/atomic_file.h"
 #include "squeeze/common/error.h"
 
@@ -152,6 +154,7 @@ void check_ply(const fs::path& path) {
   std::vector<Element> elements;
   bool ascii = true, big_endian = false, format = false, ended = false;
   int lines = 1;
+  std::vector<std::string> skipped;  // header lines of text without a keyword
   const auto bad = [&](const std::string& what) {
     throw InputError(name + ": PLY header line " + std::to_string(lines) + ": " + what);
   };
@@ -208,11 +211,19 @@ void check_ply(const fs::path& path) {
         prop.size = size_of(f[0]);
       }
       elements.back().properties.push_back(prop);
+    } else if (kw.empty()) {
+      continue;  // (a blank line)
     } else {
-      bad("unknown keyword '" + kw + "' (format, element, property, comment, obj_info or end_header expected)");
+      // A line with no keyword is text some exporters write without 'comment' (Blender 2.4x:
+      // "Created by Blender3D 247 - www.blender.org, source file: ..."); readers skip it, so
+      // does this one, and says so once the header is whole (a truncated header's last line is
+      // no text line).
+      skipped.push_back("PLY header line " + std::to_string(lines) + " has no keyword ('" +
+                        (line.size() > 60 ? line.substr(0, 60) + "..." : line) + "'): skipped as a comment");
     }
   }
   if (!ended) throw InputError(name + ": PLY header has no end_header line (truncated?)");
+  for (const std::string& w : skipped) spdlog::warn("{}: {}", name, w);
   if (!format) throw InputError(name + ": PLY header has no format line");
 
   const auto truncated = [&](const Element& e, long long item, const std::string& what) {
