@@ -2,6 +2,7 @@
 // it too). Units: metres.
 #pragma once
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <cmath>
 #include <vector>
@@ -9,6 +10,27 @@
 #include "squeeze/meshing/surface.h"
 
 namespace sqs {
+
+// The faces of a capped tube whose vertices are `rings` + 1 rings of `sides` each (ring j's vertex
+// i at j · sides + i, turning counter-clockwise about the direction from ring j to ring j + 1),
+// then the first end's centre and the last end's: two triangles per side quad, a fan per end,
+// all facing outward. Shared by ringed_rod and coil_spring.
+inline Eigen::MatrixX3i tube_faces(int sides, int rings) {
+  const int c0 = sides * (rings + 1), c1 = c0 + 1;
+  Eigen::MatrixX3i F(2 * sides * rings + 2 * sides, 3);
+  Eigen::Index f = 0;
+  for (int j = 0; j < rings; ++j)
+    for (int i = 0; i < sides; ++i) {
+      const int a = j * sides + i, b = j * sides + (i + 1) % sides, c = a + sides, d = b + sides;
+      F.row(f++) << a, b, d;
+      F.row(f++) << a, d, c;
+    }
+  for (int i = 0; i < sides; ++i) {
+    F.row(f++) << c0, (i + 1) % sides, i;
+    F.row(f++) << c1, rings * sides + i, rings * sides + (i + 1) % sides;
+  }
+  return F;
+}
 
 // A faceted rod along z: `sides` vertices per ring, `rings` + 1 rings over `length`, capped by a
 // fan around each end's centre (a CAD export's tube: side triangles length / rings long and
@@ -21,22 +43,10 @@ inline squeeze::meshing::SurfaceMesh ringed_rod(double r, double length, int sid
       const double t = 2 * M_PI * i / sides;
       s.V.row(j * sides + i) << r * std::cos(t), r * std::sin(t), length * j / rings;
     }
-  const int c0 = sides * (rings + 1), c1 = c0 + 1;
+  const int c0 = sides * (rings + 1);
   s.V.row(c0) << 0, 0, 0;
-  s.V.row(c1) << 0, 0, length;
-  std::vector<Eigen::Vector3i> F;
-  for (int j = 0; j < rings; ++j)
-    for (int i = 0; i < sides; ++i) {
-      const int a = j * sides + i, b = j * sides + (i + 1) % sides, c = a + sides, d = b + sides;
-      F.emplace_back(a, b, d);
-      F.emplace_back(a, d, c);
-    }
-  for (int i = 0; i < sides; ++i) {
-    F.emplace_back(c0, (i + 1) % sides, i);
-    F.emplace_back(c1, rings * sides + i, rings * sides + (i + 1) % sides);
-  }
-  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
-  for (size_t f = 0; f < F.size(); ++f) s.F.row(static_cast<Eigen::Index>(f)) = F[f].transpose();
+  s.V.row(c0 + 1) << 0, 0, length;
+  s.F = tube_faces(sides, rings);
   return s;
 }
 
@@ -84,19 +94,7 @@ inline squeeze::meshing::SurfaceMesh coil_spring(double R, double pitch, double 
   const int c0 = sides * (rings + 1), c1 = c0 + 1;
   s.V.row(c0) = centre(0).transpose();
   s.V.row(c1) = centre(1).transpose();
-  std::vector<Eigen::Vector3i> F;
-  for (int j = 0; j < rings; ++j)
-    for (int i = 0; i < sides; ++i) {
-      const int a = j * sides + i, b = j * sides + (i + 1) % sides, c = a + sides, d = b + sides;
-      F.emplace_back(a, c, d);
-      F.emplace_back(a, d, b);
-    }
-  for (int i = 0; i < sides; ++i) {
-    F.emplace_back(c0, (i + 1) % sides, i);
-    F.emplace_back(c1, rings * sides + i, rings * sides + (i + 1) % sides);
-  }
-  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
-  for (size_t f = 0; f < F.size(); ++f) s.F.row(static_cast<Eigen::Index>(f)) = F[f].transpose();
+  s.F = tube_faces(sides, rings);
   return s;
 }
 
