@@ -934,6 +934,25 @@ TEST(MeshingWindingNumber, FastAtan2IsTheLibrarysWithinItsBound) {
   EXPECT_EQ(squeeze::meshing::fast_atan2(-0.0, -1.0), -M_PI);
 }
 
+// One triangle's winding number (fast_atan2) summed over the sphere of tests/data is the exact
+// winding number (std::atan2) inside, outside and near the surface; its sign is the side.
+TEST(MeshingWindingNumber, TriangleWindingNumbersSumToTheSurfaces) {
+  const SurfaceMesh s = sqt::read_off(sqt::data("sphere.off"));
+  const Eigen::RowVector3d lo = s.V.colwise().minCoeff(), hi = s.V.colwise().maxCoeff();
+  for (int i = 0; i < 50; ++i) {
+    const Eigen::RowVector3d u(std::sin(1.7 * i), std::cos(2.3 * i), std::sin(0.9 * i + 1));
+    const Eigen::RowVector3d p = 0.5 * (lo + hi) + 0.8 * (hi - lo).cwiseProduct(u);
+    double sum = 0;
+    for (Eigen::Index f = 0; f < s.F.rows(); ++f)
+      sum += squeeze::meshing::triangle_winding_number(s.V.row(s.F(f, 0)), s.V.row(s.F(f, 1)), s.V.row(s.F(f, 2)), p);
+    EXPECT_NEAR(sum, squeeze::meshing::winding_number(s.V, s.F, p), 1e-12) << p;
+  }
+  const Eigen::RowVector3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);  // normal +z
+  EXPECT_GT(squeeze::meshing::triangle_winding_number(a, b, c, Eigen::RowVector3d(0.2, 0.2, -1)), 0.0);
+  EXPECT_LT(squeeze::meshing::triangle_winding_number(a, b, c, Eigen::RowVector3d(0.2, 0.2, 1)), 0.0);
+  EXPECT_NEAR(squeeze::meshing::triangle_winding_number(a, b, c, Eigen::RowVector3d(0.2, 0.2, -1e-9)), 0.5, 1e-6);
+}
+
 TEST(MeshingWindingNumber, SecondOrderFarFieldIsCloseToTheExactSumOnTheHeart) {
   // The organ the winding-number route meshes by default (welded, open segments): at points a
   // quarter and twice the route's dilation off its vertices either way, and over its box, the

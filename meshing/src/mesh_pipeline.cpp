@@ -491,12 +491,7 @@ double winding_volume(const SurfaceMesh& surface) {
     const Eigen::RowVector3d n = (b - a).cross(c - a);
     if (!(n.norm() > 0)) return;
     const Eigen::RowVector3d m = (a + b + c) / 3.0, u = n.normalized() * eps;
-    auto own = [&](const Eigen::RowVector3d& q) {  // the face's own winding number at q
-      const Eigen::Vector3d x = (a - q).transpose(), y = (b - q).transpose(), z = (c - q).transpose();
-      const double lx = x.norm(), ly = y.norm(), lz = z.norm();
-      const double den = lx * ly * lz + x.dot(y) * lz + y.dot(z) * lx + z.dot(x) * ly;
-      return fast_atan2(x.dot(y.cross(z)), den) / (2 * M_PI);
-    };
+    auto own = [&](const Eigen::RowVector3d& q) { return triangle_winding_number(a, b, c, q); };
     const double rest = 0.5 * ((w(m - u) - own(m - u)) + (w(m + u) - own(m + u)));
     const int jump = (rest > -0.25 ? 1 : 0) - (rest > 0.75 ? 1 : 0);
     vol[static_cast<size_t>(f)] = jump * a.dot(b.cross(c)) / 6.0;

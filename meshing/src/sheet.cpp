@@ -93,35 +93,30 @@ SheetEvidence sheet_evidence(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
 int split_bow_ties(SurfaceMesh& m, std::vector<int>* index) {
   const Eigen::Index nv = m.V.rows();
   if (m.F.rows() == 0) return 0;
-  // How many faces each undirected edge has.
-  std::map<std::pair<int, int>, int> edge_count;
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
-      ++edge_count[{std::min(a, b), std::max(a, b)}];
-    }
-  std::vector<int> rim(static_cast<size_t>(nv), 0);
-  for (const auto& [e, n] : edge_count)
-    if (n == 1) ++rim[static_cast<size_t>(e.first)], ++rim[static_cast<size_t>(e.second)];
   const std::vector<std::vector<int>> faces_at = vertex_faces(m.F, nv);
   std::vector<Eigen::RowVector3d> added;
   int copies = 0;
   for (Eigen::Index v = 0; v < nv; ++v) {
-    if (rim[static_cast<size_t>(v)] < 4) continue;
     const std::vector<int>& at = faces_at[static_cast<size_t>(v)];
-    // Fans: faces at v joined across an edge (v, w) in exactly two faces (union-find over `at`).
-    std::vector<int> parent(at.size());
-    for (size_t i = 0; i < at.size(); ++i) parent[i] = static_cast<int>(i);
-    std::function<int(int)> root = [&](int i) { return parent[static_cast<size_t>(i)] == i ? i : parent[static_cast<size_t>(i)] = root(parent[static_cast<size_t>(i)]); };
+    // The faces of each edge (v, w) are among v's: edges in one face are boundary edges, fans are
+    // v's faces joined across edges in exactly two (union-find over `at`).
     std::map<int, std::vector<size_t>> across;  // w -> faces in `at` with the edge (v, w)
     for (size_t i = 0; i < at.size(); ++i)
       for (int k = 0; k < 3; ++k) {
         const int w = m.F(at[i], k);
         if (w != v) across[w].push_back(i);
       }
+    int rim = 0;
+    for (const auto& [w, fs] : across) rim += fs.size() == 1 ? 1 : 0;
+    if (rim < 4) continue;
+    std::vector<int> parent(at.size());
+    for (size_t i = 0; i < at.size(); ++i) parent[i] = static_cast<int>(i);
+    std::function<int(int)> root = [&](int i) {
+      int& up = parent[static_cast<size_t>(i)];
+      return up == i ? i : up = root(up);
+    };
     for (const auto& [w, fs] : across)
-      if (fs.size() == 2 && edge_count[{std::min<int>(static_cast<int>(v), w), std::max<int>(static_cast<int>(v), w)}] == 2)
-        parent[static_cast<size_t>(root(static_cast<int>(fs[0])))] = root(static_cast<int>(fs[1]));
+      if (fs.size() == 2) parent[static_cast<size_t>(root(static_cast<int>(fs[0])))] = root(static_cast<int>(fs[1]));
     std::map<int, std::vector<int>> fans;  // root -> faces
     for (size_t i = 0; i < at.size(); ++i) fans[root(static_cast<int>(i))].push_back(at[i]);
     if (fans.size() < 2) continue;

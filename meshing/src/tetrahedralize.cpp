@@ -716,8 +716,9 @@ class Mesher {
   // missing triangle. Returns false if a cap stopped it: the point cap (conformity_cap_), or
   // recovery going round in circles: six rounds of splits in a row, none with a tenth fewer edges
   // to split than the fewest so far, that have added a quarter more points than there were then
-  // (and 200 at least, as the cap allows small surfaces; between the sheets of a 4 mm shell it hovers at 100–240 edges a round, 60 points each, where
-  // a coil spring's wire goes 618, 475, 356, ..., 8, 2 and holds, and a 2 mm fin 7, 7, 6, 4, 1).
+  // (and 200 at least, as the cap allows small surfaces; between the sheets of a 4 mm shell it
+  // hovers at 100–240 edges a round, 60 points each, where a coil spring's wire goes 618, 475,
+  // 356, ..., 8, 2 and holds, and a 2 mm fin 7, 7, 6, 4, 1).
   bool make_conforming() {
     std::vector<uint64_t> flipped;  // each new diagonal once: no flipping back and forth
     size_t fewest = SIZE_MAX, points_then = 0;

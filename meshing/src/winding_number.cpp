@@ -12,13 +12,20 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 constexpr double kInv4Pi = 0.25 / M_PI;
 
-// Signed solid angle of triangle (a,b,c) seen from the origin (a,b,c relative to the query point),
-// with the library's atan2 (the exact reference, winding_number()).
-inline double solid_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+// The signed solid angle of triangle (a,b,c) seen from the origin (a,b,c relative to the query
+// point) is 2 atan2(det, den) (Van Oosterom and Strackee 1983): its two arguments.
+struct HalfSolidAngle {
+  double det, den;
+};
+inline HalfSolidAngle half_solid_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   const double la = a.norm(), lb = b.norm(), lc = c.norm();
-  const double det = a.dot(b.cross(c));
-  const double den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
-  return 2.0 * std::atan2(det, den);
+  return {a.dot(b.cross(c)), la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb};
+}
+
+// The solid angle with the library's atan2 (the exact reference, winding_number()).
+inline double solid_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const HalfSolidAngle h = half_solid_angle(a, b, c);
+  return 2.0 * std::atan2(h.det, h.den);
 }
 
 inline double atan2_poly(double y, double x) {
@@ -52,6 +59,12 @@ inline double atan2_poly(double y, double x) {
 
 double fast_atan2(double y, double x) { return atan2_poly(y, x); }
 
+double triangle_winding_number(const Eigen::RowVector3d& a, const Eigen::RowVector3d& b, const Eigen::RowVector3d& c,
+                               const Eigen::RowVector3d& p) {
+  const HalfSolidAngle h = half_solid_angle((a - p).transpose(), (b - p).transpose(), (c - p).transpose());
+  return atan2_poly(h.det, h.den) / (2 * M_PI);
+}
+
 double winding_number(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::RowVector3d& p) {
   double w = 0.0;
   for (Eigen::Index f = 0; f < F.rows(); ++f)
@@ -61,101 +74,76 @@ double winding_number(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, cons
 }
 
 struct FastWindingNumber::Impl {
-  struct Node {
-    Vec3 centre;       // area-weighted centroid of its triangles
-    Vec3 area_n;       // sum of the triangles' area vectors (0.5 × cross products)
-    Eigen::Matrix3d moment;  // Σ (x̄_t − centre) A_tᵀ: the first moments about the centre times normals
-    Eigen::Matrix3d second[3];  // second[k] = Σ n_tk ∫_t (x − centre)(x − centre)ᵀ dA
-    double reach2;     // (beta × the largest distance from centre to a triangle vertex)²
-    int left = -1, right = -1;  // children, or -1 for a leaf
-    int begin = 0, end = 0;     // triangle range in order (leaves)
+  // The traversal's data in two arrays, in tree order: what every visited node needs (centre,
+  // reach, children), then what a far one adds (its expansion), so that the hot part stays in
+  // cache (144-byte nodes were the queries' cache misses on the heart's 10,000 nodes).
+  struct Hot {
+    Vec3 centre;      // area-weighted centroid of its triangles
+    double reach2;    // (beta × the largest distance from centre to a triangle vertex)²
+    int left, right;  // children, or -1 for a leaf
+    int begin, end;   // triangle range in tree order (leaves)
   };
+  struct Far {
+    Vec3 area_n;                // sum of the triangles' area vectors (0.5 × cross products)
+    Eigen::Matrix3d moment;     // Σ (x̄_t − centre) A_tᵀ: the first moments about the centre times normals
+    double moment_trace;        // tr moment
+    Eigen::Matrix3d second[3];  // second[k] = Σ n_tk ∫_t (x − centre)(x − centre)ᵀ dA
+    Vec3 second_trace;          // tr second[k]
+  };
+  std::vector<Hot> hot;
+  std::vector<Far> far_data;
   std::vector<Vec3> a, b, c;  // triangle corners, in tree order
-  std::vector<Node> nodes;
   double beta;
 
   int build(std::vector<int>& order, std::vector<Vec3>& cen, int begin, int end) {
-    const int id = static_cast<int>(nodes.size());
-    nodes.emplace_back();
-    Node n;
-    n.begin = begin;
-    n.end = end;
+    const int id = static_cast<int>(hot.size());
+    hot.emplace_back();
+    far_data.emplace_back();
+    Hot h{Vec3::Zero(), 0.0, -1, -1, begin, end};
+    Far f;
     Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
     Vec3 weighted = Vec3::Zero();
     double area = 0.0;
-    n.area_n = Vec3::Zero();
+    f.area_n = Vec3::Zero();
     for (int i = begin; i < end; ++i) {
       const int t = order[i];
       lo = lo.cwiseMin(cen[t]);
       hi = hi.cwiseMax(cen[t]);
-      const Vec3 an = 0.5 * (b0[t] - a0[t]).cross(c0[t] - a0[t]);
-      const double ar = an.norm();
-      n.area_n += an;
+      const double ar = an0[t].norm();
+      f.area_n += an0[t];
       weighted += ar * cen[t];
       area += ar;
     }
-    n.centre = area > 0 ? Vec3(weighted / area) : Vec3(0.5 * (lo + hi));
+    h.centre = area > 0 ? Vec3(weighted / area) : Vec3(0.5 * (lo + hi));
     double r2 = 0.0;
-    n.moment.setZero();
-    for (auto& m : n.second) m.setZero();
+    f.moment.setZero();
+    for (auto& m : f.second) m.setZero();
     for (int i = begin; i < end; ++i) {
       const int t = order[i];
-      const Vec3 va = a0[t] - n.centre, vb = b0[t] - n.centre, vc = c0[t] - n.centre, g = cen[t] - n.centre;
+      const Vec3 va = a0[t] - h.centre, vb = b0[t] - h.centre, vc = c0[t] - h.centre, g = cen[t] - h.centre;
       r2 = std::max({r2, va.squaredNorm(), vb.squaredNorm(), vc.squaredNorm()});
-      const Vec3 an = 0.5 * (b0[t] - a0[t]).cross(c0[t] - a0[t]);  // area × normal
-      n.moment += g * an.transpose();
+      f.moment += g * an0[t].transpose();
       // ∫_t δ δᵀ dA = area/12 (Σ v vᵀ + 9 g gᵀ), vertices and centroid relative to the centre.
       const Eigen::Matrix3d s = (va * va.transpose() + vb * vb.transpose() + vc * vc.transpose() + 9.0 * g * g.transpose()) / 12.0;
-      for (int k = 0; k < 3; ++k) n.second[k] += an(k) * s;
+      for (int k = 0; k < 3; ++k) f.second[k] += an0[t](k) * s;
     }
-    n.reach2 = beta * beta * r2;
+    h.reach2 = beta * beta * r2;
+    f.moment_trace = f.moment.trace();
+    for (int k = 0; k < 3; ++k) f.second_trace(k) = f.second[k].trace();
     if (end - begin > 8) {
       int axis;
       (hi - lo).maxCoeff(&axis);
       const int mid = (begin + end) / 2;
       std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
                        [&](int x, int y) { return cen[x][axis] < cen[y][axis] || (cen[x][axis] == cen[y][axis] && x < y); });
-      n.left = build(order, cen, begin, mid);
-      n.right = build(order, cen, mid, end);
+      h.left = build(order, cen, begin, mid);
+      h.right = build(order, cen, mid, end);
     }
-    nodes[id] = n;
+    hot[static_cast<size_t>(id)] = h;
+    far_data[static_cast<size_t>(id)] = f;
     return id;
   }
-  std::vector<Vec3> a0, b0, c0;  // input order, during build
-
-  // The traversal's data apart, in tree order: what every visited node needs (centre, reach),
-  // then what a far one adds (its expansion), so that the hot part stays in cache (144-byte nodes
-  // were the queries' cache misses on the heart's 10,000 nodes).
-  struct Hot {
-    Vec3 centre;
-    double reach2;
-    int left, right;  // children, or -1 for a leaf
-    int begin, end;   // triangle range (leaves)
-  };
-  struct Far {
-    Vec3 area_n;
-    Eigen::Matrix3d moment;
-    double moment_trace;
-    Eigen::Matrix3d second[3];
-    Vec3 second_trace;  // tr second[k]
-  };
-  std::vector<Hot> hot;
-  std::vector<Far> far_data;
-  void flatten() {
-    hot.resize(nodes.size());
-    far_data.resize(nodes.size());
-    for (size_t i = 0; i < nodes.size(); ++i) {
-      const Node& n = nodes[i];
-      hot[i] = {n.centre, n.reach2, n.left, n.right, n.begin, n.end};
-      Far& f = far_data[i];
-      f.area_n = n.area_n;
-      f.moment = n.moment;
-      f.moment_trace = n.moment.trace();
-      for (int k = 0; k < 3; ++k) f.second[k] = n.second[k], f.second_trace(k) = n.second[k].trace();
-    }
-    nodes.clear();
-    nodes.shrink_to_fit();
-  }
+  std::vector<Vec3> a0, b0, c0, an0;  // input order, during build (an0: area × normal)
 
   // Far clusters by their expansion to second order, near leaves triangle by triangle; one pass
   // down the tree with an explicit stack.
@@ -185,11 +173,9 @@ struct FastWindingNumber::Impl {
       }
       if (n.left < 0) {
         for (int i = n.begin; i < n.end; ++i) {
-          const Vec3 x = a[static_cast<size_t>(i)] - p, y = b[static_cast<size_t>(i)] - p, z = c[static_cast<size_t>(i)] - p;
-          const double lx = x.norm(), ly = y.norm(), lz = z.norm();
-          const double det = x.dot(y.cross(z));
-          const double den = lx * ly * lz + x.dot(y) * lz + y.dot(z) * lx + z.dot(x) * ly;
-          near += atan2_poly(det, den);
+          const size_t t = static_cast<size_t>(i);
+          const HalfSolidAngle h = half_solid_angle(a[t] - p, b[t] - p, c[t] - p);
+          near += atan2_poly(h.det, h.den);
         }
         continue;
       }
@@ -208,18 +194,20 @@ FastWindingNumber::FastWindingNumber(const Eigen::MatrixX3d& V, const Eigen::Mat
   m.a0.resize(nf);
   m.b0.resize(nf);
   m.c0.resize(nf);
+  m.an0.resize(nf);
   std::vector<Vec3> cen(nf);
   for (int f = 0; f < nf; ++f) {
     m.a0[f] = V.row(F(f, 0)).transpose();
     m.b0[f] = V.row(F(f, 1)).transpose();
     m.c0[f] = V.row(F(f, 2)).transpose();
     cen[f] = (m.a0[f] + m.b0[f] + m.c0[f]) / 3.0;
+    m.an0[f] = 0.5 * (m.b0[f] - m.a0[f]).cross(m.c0[f] - m.a0[f]);
   }
   std::vector<int> order(nf);
   std::iota(order.begin(), order.end(), 0);
-  m.nodes.reserve(static_cast<size_t>(2 * nf / 4 + 2));
+  m.hot.reserve(static_cast<size_t>(2 * nf / 4 + 2));
+  m.far_data.reserve(m.hot.capacity());
   if (nf > 0) m.build(order, cen, 0, nf);
-  m.flatten();
   m.a.resize(nf);
   m.b.resize(nf);
   m.c.resize(nf);
@@ -228,8 +216,8 @@ FastWindingNumber::FastWindingNumber(const Eigen::MatrixX3d& V, const Eigen::Mat
     m.b[i] = m.b0[order[i]];
     m.c[i] = m.c0[order[i]];
   }
-  m.a0.clear(); m.b0.clear(); m.c0.clear();
-  m.a0.shrink_to_fit(); m.b0.shrink_to_fit(); m.c0.shrink_to_fit();
+  m.a0.clear(); m.b0.clear(); m.c0.clear(); m.an0.clear();
+  m.a0.shrink_to_fit(); m.b0.shrink_to_fit(); m.c0.shrink_to_fit(); m.an0.shrink_to_fit();
 }
 
 FastWindingNumber::~FastWindingNumber() = default;

@@ -25,15 +25,22 @@ double winding_number(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, cons
 /// FastWindingNumber's near triangles.
 double fast_atan2(double y, double x);
 
+/// The winding number of the one triangle (a, b, c) at p: its signed solid angle over 4π (Van
+/// Oosterom and Strackee 1983), with fast_atan2. Positive where p is behind the triangle (its
+/// normal (b − a) × (c − a) pointing away from p), in (−½, ½).
+///   a, b, c, p  positions (units). Throws nothing; NaN in, NaN out.
+double triangle_winding_number(const Eigen::RowVector3d& a, const Eigen::RowVector3d& b, const Eigen::RowVector3d& c,
+                               const Eigen::RowVector3d& p);
+
 /// Precomputed tree for many winding-number queries on one surface, O(log #F) each.
 /// Far clusters (distance > beta × cluster radius) use their Taylor expansion about the cluster's
 /// area-weighted centre to second order in the offset δ of a surface point from it: the dipole
 /// term, ∫ δ nᵀ dA and ∫ n ⊗ δ δᵀ dA, each exact per triangle (Barill et al. 2018, section 3.2,
 /// orders 0–2); near leaves sum their triangles' solid angles (fast_atan2).
-/// Measured (meshing version 19; the largest error against the exact sum at the points of
-/// bench_mesh BM_WindingNumber, time per query here): the heart 0.033 at beta 1.5 (10 µs) and
-/// 0.067 at 1.25 (6.8 µs), where the dipole term alone gave 0.22 at 2 (13 µs, the winding-number
-/// route's until version 18) and 0.096 at 4 (69 µs, the default until then); the bunny 0.027 at
+/// Measured (meshing version 19, one run; the largest error against the exact sum at the points
+/// of bench_mesh BM_WindingNumber, time per query here): the heart 0.033 at beta 1.5 (7.4 µs) and
+/// 0.067 at 1.25 (4.5 µs), where the dipole term alone gave 0.22 at 2 (10.3 µs, the winding-number
+/// route's until version 18) and 0.096 at 4 (51 µs, the default until then); the bunny 0.027 at
 /// 1.5 (0.16 at 1.5, 0.08 at 2 with the dipole alone); the corpus sphere 0.013 at 1.5. The 0.5
 /// inside threshold it serves needs far less.
 class FastWindingNumber {
