@@ -944,7 +944,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // version 15). Kept where its slab and the part's surface lie within the bounds of each other.
     // (A side turns by up to 100° across an edge: a bent sheet-metal bracket; the other side, turned
     // the other way, and the rim, which faces no other side, stay apart.)
-    auto mesh_thin_part = [&](Part& p, const EnvelopeOptions& e) {
+    // `ratio`: how many times its mean thickness L must be (6; 3 where the boundary route has failed).
+    auto mesh_thin_part = [&](Part& p, const EnvelopeOptions& e, double ratio) {
       if (!opt.thin_parts_as_prisms || p.target || p.offset > 0 || p.sheet.F.rows() > 0 || p.surface.F.rows() < 4)
         return false;
       const SurfaceMesh& S = p.surface;
@@ -953,6 +954,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       area_weighted_normals(S.V, S.F, FN, VN);
       const TriangleBvh bvh(S.V, S.F);
       std::vector<double> thick(static_cast<size_t>(nf), -1.0), face_area(static_cast<size_t>(nf), 0.0);
+      std::vector<double> reach(static_cast<size_t>(nf), -1.0);  // to the first face inward, whichever way it faces
       tbb::parallel_for(Eigen::Index(0), nf, [&](Eigen::Index f) {
         const double len = FN.row(f).norm();
         face_area[static_cast<size_t>(f)] = 0.5 * len;
@@ -961,6 +963,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         const Eigen::Vector3d c = (S.V.row(S.F(f, 0)) + S.V.row(S.F(f, 1)) + S.V.row(S.F(f, 2))).transpose() / 3.0;
         double t;
         if (!bvh.first_crossing(c, c - L * n, 1e-6, &t)) return;
+        reach[static_cast<size_t>(f)] = t * L;
         int g = -1;
         bvh.nearest(c - t * L * n, &g);
         if (g >= 0 && FN.row(g).norm() > 0 && FN.row(g).normalized().dot(n.transpose()) < -0.8)
@@ -974,7 +977,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       }
       if (!(paired >= 0.8 * total) || !(paired > 0)) return false;
       thickness /= paired;
-      if (!(L > 6.0 * thickness)) return false;
+      if (!(L > ratio * thickness)) return false;
       // One side: flood from the largest paired face across edges to paired faces turning < 60°,
       // faces paired across more than three times the mean thickness left out (the walls of a
       // perforated plate's holes face the plate's rim or the next hole a few centimetres away:
@@ -983,6 +986,14 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       auto side_face = [&](Eigen::Index g) {
         const double t = thick[static_cast<size_t>(g)];
         return t > 0 && t <= 3.0 * thickness;
+      };
+      // A face beside the side, turned less than 25° from it (a rim is turned further), over a bevel (the other side meets it
+      // at an angle: facing it by less than the pairing's 143°) within three times the thickness is
+      // the side's too (meshing version 20): a roof 4 % of its diagonal thick, whose far end tapers
+      // at 38°, kept those faces out of its side, and the slab left them 0.8 % of the diagonal out.
+      auto beside_side = [&](Eigen::Index g, int f) {
+        const double t = reach[static_cast<size_t>(g)];
+        return t > 0 && t <= 3.0 * thickness && FN.row(g).normalized().dot(FN.row(f).normalized()) > 0.9;
       };
       std::map<std::pair<int, int>, std::vector<int>> edge_faces;
       for (Eigen::Index f = 0; f < nf; ++f)
@@ -1006,7 +1017,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         for (int k = 0; k < 3; ++k) {
           const int a = S.F(f, k), b = S.F(f, (k + 1) % 3);
           for (int g : edge_faces[{std::min(a, b), std::max(a, b)}])
-            if (!side[static_cast<size_t>(g)] && side_face(g) && FN.row(g).normalized().dot(FN.row(f).normalized()) > -0.2) {
+            if (!side[static_cast<size_t>(g)] &&
+                ((side_face(g) && FN.row(g).normalized().dot(FN.row(f).normalized()) > -0.2) || beside_side(g, f))) {
               side[static_cast<size_t>(g)] = 1;
               stack.push_back(g);
             }
@@ -1053,6 +1065,12 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           if (!(half[v] > 0)) half[v] = count[v] > 0 ? sum[v] / count[v] : 0.5 * thickness;
       }
       for (Eigen::Index v = 0; v < mid.V.rows(); ++v) mid.V.row(v) -= half[static_cast<size_t>(v)] * MN.row(v).normalized();
+      // The slab no thinner than a prism Ls wide can be without a tetrahedron under the floor (an
+      // eighth of its width: Ls / 16 each way), where the part tapers to an edge (the roof's 38°
+      // bevel: prisms of no height there, slivers that no split mended; meshing version 20). It
+      // then stands out of the part there by up to that, which accept() checks against the bound.
+      const double thinnest = std::min(Ls / 16.0, 0.25 * thickness);
+      for (double& h : half) h = std::max(h, thinnest);
       // Vertices added by splits: half way between the sides along their normal (rays both ways).
       auto between_sides = [&](Eigen::Index from) {
         Eigen::MatrixX3d N2;
@@ -1064,7 +1082,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           const double reach = 3.0 * thickness;
           if (N2.row(v).norm() > 0 && bvh.first_crossing(x, x + reach * n, 1e-6, &t1) &&
               bvh.first_crossing(x, x - reach * n, 1e-6, &t2)) {
-            half[static_cast<size_t>(v)] = 0.5 * reach * (t1 + t2);
+            half[static_cast<size_t>(v)] = std::max(thinnest, 0.5 * reach * (t1 + t2));
             mid.V.row(v) = (x + 0.5 * reach * (t1 - t2) * n).transpose();
           } else {
             half[static_cast<size_t>(v)] = 0.5 * thickness;
@@ -1107,7 +1125,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             if (mesh_sheet(p)) return;
             p.check = does_self_intersect(p.surface);  // its slab, on the boundary route after all
           }
-          if (mesh_thin_part(p, bounds)) return;
+          if (mesh_thin_part(p, bounds, 6.0)) return;
           EnvelopeOptions e = bounds;
           // A winding-number solid's boundary (Mesh_3's facets: angles of 25° and more, creases
           // where the dilation meets the solid) keeps its triangles that round and its folds no
@@ -1184,6 +1202,12 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             if ((m.T.rows() > 0) != (than.T.rows() > 0)) return m.T.rows() > 0;
             if (st.conforming != than_st.conforming) return st.conforming;
             const TetQuality q = tet_quality(m), q_than = tet_quality(than);
+            // Neither conforming: the one that keeps the part's volume, by more than 5 % (tetrahedra
+            // classified by the winding number where faces were not recovered can drop most of it).
+            if (!st.conforming) {
+              const double lost = std::abs(std::log(q.volume / p.volume)), lost_than = std::abs(std::log(q_than.volume / p.volume));
+              if (std::abs(lost - lost_than) > 0.05) return lost < lost_than;
+            }
             if ((q.components == 1) != (q_than.components == 1)) return q.components == 1;
             return q.min_dihedral > q_than.min_dihedral;
           };
@@ -1198,6 +1222,15 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             p.boundary = std::move(b);
             p.envelope = es;
           };
+          // Where the first attempt does not hold, a part over three times thinner than its
+          // tetrahedra are long is tried as the slab of its mid-surface before any retry (meshing
+          // version 20): a roof 4 % of its diagonal thick, tapering at one end, was not
+          // tetrahedralized conforming by any attempt at 1,000 (5.8 times thinner), and the retries
+          // took 15 s.
+          if (!holds(p.tets, p.tet_stats) && !abandoned && mesh_thin_part(p, bounds, 3.0)) {
+            spdlog::debug("part {}: its boundary did not hold; meshed as the slab of its mid-surface", i);
+            return;
+          }
           if (skinny > 0 && (p.tet_stats.work_exceeded || !holds(p.tets, p.tet_stats)) && !abandoned) {
             const SurfaceMesh split = split_long_edges(p.surface, skinny);
             EnvelopeStats es;
