@@ -945,7 +945,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // (A side turns by up to 100° across an edge: a bent sheet-metal bracket; the other side, turned
     // the other way, and the rim, which faces no other side, stay apart.)
     // `ratio`: how many times its mean thickness L must be (6; 3 where the boundary route has failed).
-    auto mesh_thin_part = [&](Part& p, const EnvelopeOptions& e, double ratio) {
+    // `*below_ratio` (when given): set where that alone stopped it (only then can a smaller ratio
+    // give another answer: the rest is the same work on the same part).
+    auto mesh_thin_part = [&](Part& p, const EnvelopeOptions& e, double ratio, bool* below_ratio) {
       if (!opt.thin_parts_as_prisms || p.target || p.offset > 0 || p.sheet.F.rows() > 0 || p.surface.F.rows() < 4)
         return false;
       const SurfaceMesh& S = p.surface;
@@ -977,7 +979,10 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       }
       if (!(paired >= 0.8 * total) || !(paired > 0)) return false;
       thickness /= paired;
-      if (!(L > ratio * thickness)) return false;
+      if (!(L > ratio * thickness)) {
+        if (below_ratio) *below_ratio = true;
+        return false;
+      }
       // One side: flood from the largest paired face across edges to paired faces turning < 60°,
       // faces paired across more than three times the mean thickness left out (the walls of a
       // perforated plate's holes face the plate's rim or the next hole a few centimetres away:
@@ -987,13 +992,14 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         const double t = thick[static_cast<size_t>(g)];
         return t > 0 && t <= 3.0 * thickness;
       };
-      // A face beside the side, turned less than 25° from it (a rim is turned further), over a bevel (the other side meets it
-      // at an angle: facing it by less than the pairing's 143°) within three times the thickness is
-      // the side's too (meshing version 20): a roof 4 % of its diagonal thick, whose far end tapers
-      // at 38°, kept those faces out of its side, and the slab left them 0.8 % of the diagonal out.
-      auto beside_side = [&](Eigen::Index g, int f) {
+      // A face beside the side, turned less than 25° from it (`turn`: the cosine; a rim is turned
+      // further), over a bevel (the other side meets it at an angle: facing it by less than the
+      // pairing's 143°) within three times the thickness is the side's too (meshing version 20): a
+      // roof 4 % of its diagonal thick, whose far end tapers at 38°, kept those faces out of its
+      // side, and the slab left them 0.8 % of the diagonal out.
+      auto beside_side = [&](Eigen::Index g, double turn) {
         const double t = reach[static_cast<size_t>(g)];
-        return t > 0 && t <= 3.0 * thickness && FN.row(g).normalized().dot(FN.row(f).normalized()) > 0.9;
+        return t > 0 && t <= 3.0 * thickness && turn > 0.9;
       };
       std::map<std::pair<int, int>, std::vector<int>> edge_faces;
       for (Eigen::Index f = 0; f < nf; ++f)
@@ -1016,12 +1022,14 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         side_area += face_area[static_cast<size_t>(f)];
         for (int k = 0; k < 3; ++k) {
           const int a = S.F(f, k), b = S.F(f, (k + 1) % 3);
-          for (int g : edge_faces[{std::min(a, b), std::max(a, b)}])
-            if (!side[static_cast<size_t>(g)] &&
-                ((side_face(g) && FN.row(g).normalized().dot(FN.row(f).normalized()) > -0.2) || beside_side(g, f))) {
+          for (int g : edge_faces[{std::min(a, b), std::max(a, b)}]) {
+            if (side[static_cast<size_t>(g)]) continue;
+            const double turn = FN.row(g).normalized().dot(FN.row(f).normalized());
+            if ((side_face(g) && turn > -0.2) || beside_side(g, turn)) {
               side[static_cast<size_t>(g)] = 1;
               stack.push_back(g);
             }
+          }
         }
       }
       if (!(side_area >= 0.35 * total && side_area <= 0.65 * total)) {
@@ -1125,7 +1133,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             if (mesh_sheet(p)) return;
             p.check = does_self_intersect(p.surface);  // its slab, on the boundary route after all
           }
-          if (mesh_thin_part(p, bounds, 6.0)) return;
+          bool stopped_at_ratio = false;  // (mesh_thin_part's ratio alone stopped it)
+          if (mesh_thin_part(p, bounds, 6.0, &stopped_at_ratio)) return;
           EnvelopeOptions e = bounds;
           // A winding-number solid's boundary (Mesh_3's facets: angles of 25° and more, creases
           // where the dilation meets the solid) keeps its triangles that round and its folds no
@@ -1226,8 +1235,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // tetrahedra are long is tried as the slab of its mid-surface before any retry (meshing
           // version 20): a roof 4 % of its diagonal thick, tapering at one end, was not
           // tetrahedralized conforming by any attempt at 1,000 (5.8 times thinner), and the retries
-          // took 15 s.
-          if (!holds(p.tets, p.tet_stats) && !abandoned && mesh_thin_part(p, bounds, 3.0)) {
+          // took 15 s. (Only where the ratio alone stopped the first try: otherwise it would fail
+          // the same way again.)
+          if (stopped_at_ratio && !holds(p.tets, p.tet_stats) && !abandoned && mesh_thin_part(p, bounds, 3.0, nullptr)) {
             spdlog::debug("part {}: its boundary did not hold; meshed as the slab of its mid-surface", i);
             return;
           }
