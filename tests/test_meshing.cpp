@@ -1117,6 +1117,38 @@ TEST(MeshingSurfaceIO, OwnFormatsInEitherCaseAndTheMessageList) {
   }
 }
 
+// A concave polygon face is ear-clipped, not fanned (a fan from a corner that does not see the
+// whole polygon crosses outside it: trimesh's wallhole.obj came out 1.24 times its volume), and a
+// backslash ending an OBJ line continues it (wallhole.obj too). An L-shaped prism, 1 high, whose
+// two L faces are hexagons listed from a corner whose fan is not the L (the second one over two
+// lines, CRLF): its triangles cover each face once, so their areas sum to the prism's 3 + 3 + 8.
+TEST(MeshingSurfaceIO, ConcavePolygonsAreEarClippedAndBackslashesContinueObjLines) {
+  TempDir dir("concave");
+  const fs::path p = dir / "l_prism.obj";
+  {
+    std::ofstream o(p, std::ios::binary);
+    const double L[6][2] = {{2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}, {0, 0}};
+    for (double z : {0.0, 1.0})
+      for (const auto& c : L) o << "v " << c[0] << " " << c[1] << " " << z << "\r\n";
+    o << "f 6 5 4 3 2 1\r\n";      // z = 0, facing down
+    o << "f 7 8 9 \\\r\n10 11 12\r\n";  // z = 1, facing up, over two lines
+    for (int i = 0; i < 6; ++i) {
+      const int a = 1 + i, b = 1 + (i + 1) % 6;
+      o << "f " << a << " " << b << " " << b + 6 << " " << a + 6 << "\r\n";
+    }
+  }
+  const SurfaceMesh s = squeeze::meshing::load_surface(p);
+  ASSERT_EQ(s.F.rows(), 2 * 4 + 6 * 2);
+  double unsigned_area = 0, volume = 0;
+  for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
+    const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
+    unsigned_area += 0.5 * (b - a).cross(c - a).norm();
+    volume += a.dot(b.cross(c)) / 6.0;
+  }
+  EXPECT_NEAR(unsigned_area, 14.0, 1e-12);  // (fanned from (2, 0): 16, a triangle on each L folded back over its notch)
+  EXPECT_NEAR(std::abs(volume), 3.0, 1e-12);
+}
+
 TEST(MeshingSurfaceIO, BadFilesAreInputErrors) {
   TempDir dir("surfbad");
   auto write = [&](const std::string& name, const std::string& text) {

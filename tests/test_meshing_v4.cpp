@@ -127,7 +127,9 @@ double tet_volume(const squeeze::meshing::TetMesh& m) {
 /// out and in within the given fractions of the diagonal, the dihedral floor of 5°, `components`
 /// pieces.
 void expect_within(const MeshResult& r, double diag, double volume, double out, double in, int components) {
-  if (r.deviation_out <= 0.015 * diag) EXPECT_EQ(r.deviation_exceeded_because, "");  // (1.5 × the default bound)
+  if (r.deviation_out <= 0.015 * diag) {
+    EXPECT_EQ(r.deviation_exceeded_because, "");  // (1.5 × the default bound)
+  }
   ASSERT_TRUE(r.volume_ratio.has_value());
   EXPECT_NEAR(*r.volume_ratio, 1.0, volume);
   EXPECT_LE(r.deviation_out, out * diag);
