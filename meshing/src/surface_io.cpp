@@ -81,7 +81,8 @@ void collect(const std::string& name, const aiScene* scene, const aiNode* node, 
 // it (trimesh's wallhole.obj, a wall whose faces are 8- and 11-gons around a window: 1.24 times its
 // volume, 8.9 % of the diagonal out as fans). Corners at the same point as an ear's (a keyhole's
 // bridge walked both ways) do not block it. Where no ear is left (a degenerate polygon), the rest
-// is fanned.
+// is fanned; so is a polygon of over 512 corners (ear clipping's cubic worst case would let one
+// line of a file take minutes).
 void triangulate_polygon(const std::vector<std::array<double, 3>>& pts, const std::vector<long>& poly,
                          std::vector<std::array<int, 3>>& tris) {
   const size_t n = poly.size();
@@ -89,7 +90,7 @@ void triangulate_polygon(const std::vector<std::array<double, 3>>& pts, const st
     for (size_t j = 2; j < c.size(); ++j)
       tris.push_back({static_cast<int>(c[0]), static_cast<int>(c[j - 1]), static_cast<int>(c[j])});
   };
-  bool known = n > 3 && n <= 4096;
+  bool known = n > 3 && n <= 512;
   for (long v : poly) known = known && v >= 0 && v < static_cast<long>(pts.size());
   if (!known) return fan(poly);
   double nx = 0, ny = 0, nz = 0;  // Newell's normal
