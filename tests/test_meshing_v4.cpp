@@ -1038,29 +1038,12 @@ TEST(MeshingV4, ThinTubesAndFinsAreRecoveredConforming) {
 // takes them in, the slab is no thinner than a quarter of the mean thickness, and the slab is tried
 // where the first attempt does not hold (L over 3 times the thickness: 5.8 at 1,000).
 // A CAD cylinder as trimesh's cylinder.stl has it (radius 1, height 8, 104 sides, caps fanned from
-// their centres): at 150 its simplified boundary's first tetrahedralization splits its edges about
-// nine times per face and is not conforming. It takes no retry (each had split as much and not
-// held: 3 retries, 94 s on a busy machine) and goes to its winding-number solid at once, within the
-// bounds (meshing version 21).
+// their centres: cylinder() above): at 150 its boundary's first tetrahedralization splits its
+// edges about eight times per face (3,315 for 416) and is not conforming. It takes no retry (each
+// had split as much and not held: 3 retries, 94 s on a busy machine) and goes to its
+// winding-number solid at once, within the bounds (meshing version 21).
 TEST(MeshingV4, BoundaryThatSplitsFarOverItsFacesGoesToItsSolidWithoutRetries) {
-  const int n = 104;
-  SurfaceMesh s;
-  s.V.resize(2 + 2 * n, 3);
-  s.V.row(0) << 0, 0, 0;
-  s.V.row(1) << 0, 0, 8;
-  for (int k = 0; k < 2; ++k)
-    for (int i = 0; i < n; ++i) {
-      const double a = 2 * M_PI * i / n;
-      s.V.row(2 + k * n + i) << std::cos(a), std::sin(a), 8.0 * k;
-    }
-  s.F.resize(4 * n, 3);
-  for (int i = 0; i < n; ++i) {
-    const int b0 = 2 + i, b1 = 2 + (i + 1) % n, t0 = b0 + n, t1 = b1 + n;
-    s.F.row(4 * i) << 0, b1, b0;
-    s.F.row(4 * i + 1) << 1, t0, t1;
-    s.F.row(4 * i + 2) << b0, b1, t1;
-    s.F.row(4 * i + 3) << b0, t1, t0;
-  }
+  const SurfaceMesh s = cylinder(Vec3(0, 0, 0), Vec3(0, 0, 8), 1.0, 104);
   const MeshResult r = mesh(s, 150);
   EXPECT_EQ(r.boundary_retries, 0);
   EXPECT_EQ(r.parts_by_winding_number, 1);

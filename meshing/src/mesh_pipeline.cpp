@@ -1237,7 +1237,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // tetrahedralized conforming by any attempt at 1,000 (5.8 times thinner), and the retries
           // took 15 s. (Only where the ratio alone stopped the first try: otherwise it would fail
           // the same way again.)
-          if (stopped_at_ratio && !holds(p.tets, p.tet_stats) && !abandoned && mesh_thin_part(p, bounds, 3.0, nullptr)) {
+          const bool first_holds = holds(p.tets, p.tet_stats);  // (p.tets stays the first attempt's until a retry)
+          if (stopped_at_ratio && !first_holds && !abandoned && mesh_thin_part(p, bounds, 3.0, nullptr)) {
             spdlog::debug("part {}: its boundary did not hold; meshed as the slab of its mid-surface", i);
             return;
           }
@@ -1250,12 +1251,11 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // splits for 1,744 faces), the first attempt split under twice per face; in the corpus,
           // the organs and the generated shapes the only other first attempt that did not hold
           // split under once per face (the sacrum's).
-          const bool hopeless = !holds(p.tets, p.tet_stats) &&
-                                p.tet_stats.boundary_splits > 4 * static_cast<int>(p.boundary.F.rows());
+          const bool hopeless = !first_holds && p.tet_stats.boundary_splits > 4 * static_cast<int>(p.boundary.F.rows());
           if (hopeless)
             spdlog::debug("part {}: its first attempt split {} boundary edges for {} faces and did not hold: no retry", i,
                           p.tet_stats.boundary_splits, p.boundary.F.rows());
-          if (skinny > 0 && (p.tet_stats.work_exceeded || !holds(p.tets, p.tet_stats)) && !abandoned && !hopeless) {
+          if (skinny > 0 && (p.tet_stats.work_exceeded || !first_holds) && !abandoned && !hopeless) {
             const SurfaceMesh split = split_long_edges(p.surface, skinny);
             EnvelopeStats es;
             SurfaceMesh b = simplify_envelope(split, e, &es, nullptr);  // (skinny > 0: no p.target)
