@@ -1147,6 +1147,21 @@ TEST(MeshingSurfaceIO, ConcavePolygonsAreEarClippedAndBackslashesContinueObjLine
   }
   EXPECT_NEAR(unsigned_area, 14.0, 1e-12);  // (fanned from (2, 0): 16, a triangle on each L folded back over its notch)
   EXPECT_NEAR(std::abs(volume), 3.0, 1e-12);
+  // A continued statement that is malformed is one error naming its first line; a backslash ending
+  // the file continues nothing.
+  const fs::path bad = dir / "bad.obj";
+  std::ofstream(bad, std::ios::binary) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \\\r\nx 3\n";
+  try {
+    squeeze::meshing::load_surface(bad);
+    ADD_FAILURE() << "no error for " << bad;
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("bad.obj: line 4: malformed face"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  }
+  const fs::path tail = dir / "tail.obj";
+  std::ofstream(tail, std::ios::binary) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 \\";
+  EXPECT_EQ(squeeze::meshing::load_surface(tail).F.rows(), 1);
 }
 
 TEST(MeshingSurfaceIO, BadFilesAreInputErrors) {
