@@ -35,7 +35,9 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       "mesh",
       "Tetrahedralize a surface into a coarse mesh of its own shape: each closed part's boundary,\n"
       "simplified within --max-deviation, is tetrahedralized (a part much thinner than its tetrahedra,\n"
-      "a plate or a bowl: one layer of prisms across its thickness, the report's thin_parts); open\n"
+      "a plate or a bowl: one layer of prisms across its thickness, the report's thin_parts; a CAD\n"
+      "part whose long, thin triangles do not tetrahedralize: its surface remeshed into round ones\n"
+      "first, the report's parts_remeshed); open\n"
       "sheets (one layer of triangles: a curtain, a cloth) become thin slabs around them\n"
       "(--sheet-thickness), one layer of prisms; open scans of solids (holes) and inputs with welded,\n"
       "non-manifold or self-intersecting segments become the solid their winding number encloses (a\n"

@@ -18,6 +18,7 @@
 #include "squeeze/common/error.h"
 #include "squeeze/meshing/envelope.h"
 #include "squeeze/meshing/mesh_pipeline.h"
+#include "squeeze/meshing/remesh.h"
 #include "squeeze/meshing/shell_tetrahedralize.h"
 #include "squeeze/meshing/split_long_edges.h"
 #include "squeeze/meshing/surface_io.h"
@@ -1039,16 +1040,76 @@ TEST(MeshingV4, ThinTubesAndFinsAreRecoveredConforming) {
 // where the first attempt does not hold (L over 3 times the thickness: 5.8 at 1,000).
 // A CAD cylinder as trimesh's cylinder.stl has it (radius 1, height 8, 104 sides, caps fanned from
 // their centres: cylinder() above): at 150 its boundary's first tetrahedralization splits its
-// edges about eight times per face (3,315 for 416) and is not conforming. It takes no retry (each
-// had split as much and not held: 3 retries, 94 s on a busy machine) and goes to its
-// winding-number solid at once, within the bounds (meshing version 21).
-TEST(MeshingV4, BoundaryThatSplitsFarOverItsFacesGoesToItsSolidWithoutRetries) {
+// edges about eight times per face (3,315 for 416) and is not conforming. It takes none of the
+// retries that start from its own triangles (each had split as much and not held: 3 retries, 94 s
+// on a busy machine; meshing version 21: its winding-number solid at once). Since version 22 its
+// surface remeshed into round triangles is tried first, and holds: one retry, no solid.
+TEST(MeshingV4, BoundaryThatSplitsFarOverItsFacesIsRemeshedWithoutOtherRetries) {
   const SurfaceMesh s = cylinder(Vec3(0, 0, 0), Vec3(0, 0, 8), 1.0, 104);
   const MeshResult r = mesh(s, 150);
-  EXPECT_EQ(r.boundary_retries, 0);
-  EXPECT_EQ(r.parts_by_winding_number, 1);
-  expect_within(r, bounding_box_diagonal(s.V), 0.2, 0.015, 0.005, 1);
+  EXPECT_EQ(r.boundary_retries, 1);
+  EXPECT_EQ(r.parts_by_winding_number, 0);
+  EXPECT_EQ(r.parts_remeshed, 1);
+  expect_within(r, bounding_box_diagonal(s.V), 0.05, 0.015, 0.005, 1);
   EXPECT_TRUE(r.tet_stats.conforming);
+  MeshOptions o;
+  o.tetrahedralize.target_tets = 150;
+  o.remesh_retry = false;  // as version 21
+  const MeshResult old = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_EQ(old.boundary_retries, 0);
+  EXPECT_EQ(old.parts_by_winding_number, 1);
+  EXPECT_EQ(old.parts_remeshed, 0);
+}
+
+// remesh_isotropic: a box whose long faces are strips 20 times longer than wide (a CAD
+// tessellation: those triangles under 3°) comes out as round triangles about the edge length
+// long, and the same box: its creases and corners kept, every vertex on its faces, the volume
+// exact, closed.
+TEST(MeshingV4, RemeshIsotropicMakesRoundTrianglesOfTheSameBox) {
+  const SurfaceMesh s = box(Vec3(0, 0, 0), Vec3(2, 1, 0.1), {40, 1, 1});
+  auto min_angles = [](const SurfaceMesh& m) {
+    std::vector<double> a;
+    for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+      double least = 180;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 p = m.V.row(m.F(f, k)), q = m.V.row(m.F(f, (k + 1) % 3)), r = m.V.row(m.F(f, (k + 2) % 3));
+        const Vec3 u = q - p, w = r - p;
+        least = std::min(least, std::atan2(u.cross(w).norm(), u.dot(w)) * 180 / M_PI);
+      }
+      a.push_back(least);
+    }
+    return a;
+  };
+  auto share_under = [](const std::vector<double>& a, double deg) {
+    return static_cast<double>(std::count_if(a.begin(), a.end(), [&](double x) { return x < deg; })) / a.size();
+  };
+  EXPECT_GT(share_under(min_angles(s), 5.0), 0.45);  // the strips of its two largest sides: 2.9°
+  squeeze::meshing::RemeshOptions o;
+  o.edge_length = 0.1;
+  const SurfaceMesh r = squeeze::meshing::remesh_isotropic(s, o);
+  ASSERT_GT(r.F.rows(), 100);
+  EXPECT_LT(share_under(min_angles(r), 20.0), 0.05);
+  double volume = 0;
+  for (Eigen::Index f = 0; f < r.F.rows(); ++f)
+    volume += Vec3(r.V.row(r.F(f, 0))).dot(Vec3(r.V.row(r.F(f, 1))).cross(Vec3(r.V.row(r.F(f, 2))))) / 6.0;
+  EXPECT_NEAR(volume, 0.2, 1e-9);
+  const Vec3 hi(2, 1, 0.1);
+  for (Eigen::Index v = 0; v < r.V.rows(); ++v) {
+    double off = INFINITY;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_GE(r.V(v, k), -1e-12);
+      EXPECT_LE(r.V(v, k), hi(k) + 1e-12);
+      off = std::min({off, std::abs(r.V(v, k)), std::abs(r.V(v, k) - hi(k))});
+    }
+    EXPECT_LT(off, 1e-12) << "vertex " << v << " off the box's faces";
+  }
+  std::map<std::pair<int, int>, int> uses;
+  for (Eigen::Index f = 0; f < r.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++uses[{r.F(f, k), r.F(f, (k + 1) % 3)}];
+  for (const auto& [e, n] : uses) EXPECT_EQ(n + uses.count({e.second, e.first}) - 1, 1) << "edge not closed and oriented";
+  for (const Eigen::Index c : {0, 1, 2, 3})  // corners kept
+    EXPECT_TRUE((r.V.rowwise() - s.V.row(c)).rowwise().norm().minCoeff() < 1e-12);
+  EXPECT_THROW(squeeze::meshing::remesh_isotropic(s, squeeze::meshing::RemeshOptions{}), squeeze::InputError);
 }
 
 TEST(MeshingV4, ThinRoofTaperingAtOneEndIsOneLayerOfPrisms) {

@@ -1,6 +1,7 @@
 // CGAL translation unit: the envelope's edge collapses (Surface_mesh_simplification), and the
 // isotropic remeshing of open sheets (sheet.h; Polygon_mesh_processing), on the same Surface_mesh.
 #include "squeeze/meshing/envelope.h"
+#include "squeeze/meshing/remesh.h"
 #include "squeeze/meshing/sheet.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -588,6 +589,65 @@ SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int itera
     const VD kept = CGAL::Euler::collapse_edge(m.edge(h), m);
     m.point(kept) = at;
     corner[kept] = ca || cb;
+  }
+  m.collect_garbage();
+  return from_cgal(m);
+}
+
+SurfaceMesh remesh_isotropic(const SurfaceMesh& surface, const RemeshOptions& options) {
+  if (!(options.edge_length > 0) || !std::isfinite(options.edge_length))
+    throw InputError("remesh_isotropic: the edge length must be positive and finite");
+  Mesh m;
+  try {
+    m = to_cgal(surface, "remesh_isotropic: the surface is not a 2-manifold");
+  } catch (const InputError& e) {
+    spdlog::debug("{}", e.what());
+    return {};
+  }
+  if (!CGAL::is_closed(m)) {
+    spdlog::debug("remesh_isotropic: the surface is not closed");
+    return {};
+  }
+  // Creases: split and collapsed along themselves, never flipped, their vertices kept on them.
+  auto crease = m.add_property_map<Mesh::Edge_index, bool>("e:crease", false).first;
+  const double cos_crease = std::cos(options.sharp_angle * M_PI / 180.0);
+  for (auto e : m.edges()) {
+    const HD h = m.halfedge(e);
+    const Vec3 a = vec(m.point(m.source(h))), b = vec(m.point(m.target(h)));
+    const Vec3 c = vec(m.point(m.target(m.next(h)))), d = vec(m.point(m.target(m.next(m.opposite(h)))));
+    const Vec3 n1 = (b - a).cross(c - a), n2 = (a - b).cross(d - b);
+    if (!(n1.norm() > 0 && n2.norm() > 0) || n1.dot(n2) < cos_crease * n1.norm() * n2.norm()) crease[e] = true;
+  }
+  // Corners: where other than two creases meet, or two meet turning by over 30° (a pocket's
+  // corner): they stay where they are, or collapses along the creases would cut them.
+  auto corner = m.add_property_map<VD, bool>("v:corner", false).first;
+  {
+    const double cos_turn = std::cos(30.0 * M_PI / 180.0);
+    for (VD v : m.vertices()) {
+      std::vector<Vec3> dirs;
+      for (HD h : CGAL::halfedges_around_target(m.halfedge(v), m))
+        if (crease[m.edge(h)]) dirs.push_back(vec(m.point(m.source(h))) - vec(m.point(v)));
+      if (dirs.empty()) continue;
+      if (dirs.size() != 2) corner[v] = true;
+      else {
+        const Vec3 u = -dirs[0], w = dirs[1];  // along the crease through v
+        if (!(u.norm() > 0 && w.norm() > 0) || u.dot(w) < cos_turn * u.norm() * w.norm()) corner[v] = true;
+      }
+    }
+  }
+  // Creases longer than the edge length split into equal pieces first (their new vertices on them).
+  std::vector<Mesh::Edge_index> creases;
+  for (auto e : m.edges())
+    if (crease[e]) creases.push_back(e);
+  try {
+    CGAL::Polygon_mesh_processing::split_long_edges(creases, options.edge_length, m,
+                                                    CGAL::parameters::edge_is_constrained_map(crease));
+    CGAL::Polygon_mesh_processing::isotropic_remeshing(
+        faces(m), options.edge_length, m,
+        CGAL::parameters::number_of_iterations(options.iterations).edge_is_constrained_map(crease).vertex_is_constrained_map(corner).protect_constraints(options.protect_creases));
+  } catch (const std::exception& e) {
+    spdlog::debug("remesh_isotropic: CGAL failed: {}", e.what());
+    return {};
   }
   m.collect_garbage();
   return from_cgal(m);
