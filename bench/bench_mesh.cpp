@@ -20,6 +20,9 @@
 //  BM_HeartShellsRelocated/<N>, BM_HeartShellsPerturbed/<N>  the heart's convex shells meshed by
 //                             Mesh_3 (--shells-fallback): slivers relocated and flipped after the
 //                             exuder (version 17) against Mesh_3's sliver perturber (version 16)
+//  BM_FlipSlivers, BM_FlipSliversOneCallPerFlip  flip_slivers on 9,669 tetrahedra (the sphere
+//                             without the exuder) under 25°: every flip in one call (since the 25th session)
+//                             against one call per flip (the work each flip did before)
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
 //                             of points the winding-number route's Mesh_3 oracle asks about: the
 //                             input's vertices moved along their normals by 0.5-8 times the
@@ -44,6 +47,7 @@
 #include "squeeze/meshing/mesh_pipeline.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/surface_normals.h"
+#include "squeeze/meshing/tet_cleanup.h"
 #include "squeeze/meshing/tetrahedralize.h"
 #include "squeeze/meshing/winding_number.h"
 
@@ -293,6 +297,41 @@ void BM_HeartShellsRelocated(benchmark::State& state) { heart_shells(state, fals
 void BM_HeartShellsPerturbed(benchmark::State& state) { heart_shells(state, true); }
 BENCHMARK(BM_HeartShellsRelocated)->Arg(300)->Arg(500)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_HeartShellsPerturbed)->Arg(300)->Arg(500)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// flip_slivers on the sphere of tests/data tetrahedralized without the exuder (9,669 tetrahedra),
+// flipping everything under 25°: all flips in one call (its qualities, vertex lists and slivers
+// kept up to date flip by flip, since the twenty-fifth session) against one call per flip (each call measuring every
+// tetrahedron and listing every vertex's again, as every flip did before).
+squeeze::meshing::TetMesh flip_bench_mesh() {
+  squeeze::meshing::TetrahedralizeOptions o;
+  o.target_tets = 20000;
+  o.exude = false;
+  o.max_attempts = 1;
+  return squeeze::meshing::tetrahedralize(squeeze::meshing::load_surface(data("sphere.off")), o);
+}
+void BM_FlipSlivers(benchmark::State& state) {
+  const squeeze::meshing::TetMesh mesh = flip_bench_mesh();
+  int flips = 0;
+  for (auto _ : state) {
+    squeeze::meshing::TetMesh m = mesh;
+    flips = squeeze::meshing::flip_slivers(m, 25.0, 100000);
+  }
+  state.counters["tets"] = static_cast<double>(mesh.T.rows());
+  state.counters["flips"] = flips;
+}
+void BM_FlipSliversOneCallPerFlip(benchmark::State& state) {
+  const squeeze::meshing::TetMesh mesh = flip_bench_mesh();
+  int flips = 0;
+  for (auto _ : state) {
+    squeeze::meshing::TetMesh m = mesh;
+    flips = 0;
+    while (squeeze::meshing::flip_slivers(m, 25.0, 1) == 1) ++flips;
+  }
+  state.counters["tets"] = static_cast<double>(mesh.T.rows());
+  state.counters["flips"] = flips;
+}
+BENCHMARK(BM_FlipSlivers)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
+BENCHMARK(BM_FlipSliversOneCallPerFlip)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 // FastWindingNumber on the heart: the inside test of the winding-number route (winding_tetrahedralize.h),
 // 71 % of the heart's meshing samples in perf before meshing version 19.
