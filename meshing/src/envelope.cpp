@@ -517,6 +517,26 @@ SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surfa
 
 }  // namespace
 
+namespace {
+// The edges of m where its two faces meet at over `degrees` (the angle between their normals), as
+// the property map "e:crease": the remeshers' constraints. Border edges are none; an edge beside a
+// face of no area is one where `degenerate_is_crease` (its normal is unknown, so it may be sharp).
+Mesh::Property_map<Mesh::Edge_index, bool> mark_creases(Mesh& m, double degrees, bool degenerate_is_crease) {
+  auto crease = m.add_property_map<Mesh::Edge_index, bool>("e:crease", false).first;
+  const double cos_crease = std::cos(degrees * M_PI / 180.0);
+  for (auto e : m.edges()) {
+    const HD h = m.halfedge(e);
+    if (m.is_border(h) || m.is_border(m.opposite(h))) continue;
+    const Vec3 a = vec(m.point(m.source(h))), b = vec(m.point(m.target(h)));
+    const Vec3 c = vec(m.point(m.target(m.next(h)))), d = vec(m.point(m.target(m.next(m.opposite(h)))));
+    const Vec3 n1 = (b - a).cross(c - a), n2 = (a - b).cross(d - b);
+    const bool degenerate = !(n1.norm() > 0 && n2.norm() > 0);
+    if (degenerate ? degenerate_is_crease : n1.dot(n2) < cos_crease * n1.norm() * n2.norm()) crease[e] = true;
+  }
+  return crease;
+}
+}  // namespace
+
 SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions& options, EnvelopeStats* stats,
                               Progress* progress) {
   return simplify(surface, nullptr, options, stats, progress);
@@ -554,16 +574,7 @@ SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int itera
   // Creases (faces meeting at over 60°: a bent bracket's bend) are constraints too: split and
   // collapsed along themselves, their vertices kept on them, so the remeshed sheet keeps its bends
   // instead of cutting them by up to half an edge (meshing version 15).
-  auto crease = m.add_property_map<Mesh::Edge_index, bool>("e:crease", false).first;
-  const double cos_crease = std::cos(60.0 * M_PI / 180.0);
-  for (auto e : m.edges()) {
-    const HD h = m.halfedge(e);
-    if (m.is_border(h) || m.is_border(m.opposite(h))) continue;
-    const Vec3 a = vec(m.point(m.source(h))), b = vec(m.point(m.target(h)));
-    const Vec3 c = vec(m.point(m.target(m.next(h)))), d = vec(m.point(m.target(m.next(m.opposite(h)))));
-    const Vec3 n1 = (b - a).cross(c - a), n2 = (a - b).cross(d - b);
-    if (n1.norm() > 0 && n2.norm() > 0 && n1.dot(n2) < cos_crease * n1.norm() * n2.norm()) crease[e] = true;
-  }
+  auto crease = mark_creases(m, 60.0, false);
   CGAL::Polygon_mesh_processing::isotropic_remeshing(
       faces(m), edge_length, m,
       CGAL::parameters::number_of_iterations(iterations).vertex_is_constrained_map(corner).edge_is_constrained_map(crease));
@@ -609,15 +620,7 @@ SurfaceMesh remesh_isotropic(const SurfaceMesh& surface, const RemeshOptions& op
     return {};
   }
   // Creases: split and collapsed along themselves, never flipped, their vertices kept on them.
-  auto crease = m.add_property_map<Mesh::Edge_index, bool>("e:crease", false).first;
-  const double cos_crease = std::cos(options.sharp_angle * M_PI / 180.0);
-  for (auto e : m.edges()) {
-    const HD h = m.halfedge(e);
-    const Vec3 a = vec(m.point(m.source(h))), b = vec(m.point(m.target(h)));
-    const Vec3 c = vec(m.point(m.target(m.next(h)))), d = vec(m.point(m.target(m.next(m.opposite(h)))));
-    const Vec3 n1 = (b - a).cross(c - a), n2 = (a - b).cross(d - b);
-    if (!(n1.norm() > 0 && n2.norm() > 0) || n1.dot(n2) < cos_crease * n1.norm() * n2.norm()) crease[e] = true;
-  }
+  auto crease = mark_creases(m, options.sharp_angle, true);  // (closed: no border edges)
   // Corners: where other than two creases meet, or two meet turning by over 30° (a pocket's
   // corner): they stay where they are, or collapses along the creases would cut them.
   auto corner = m.add_property_map<VD, bool>("v:corner", false).first;

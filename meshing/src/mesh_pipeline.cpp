@@ -16,6 +16,7 @@
 #include <set>
 #include <cmath>
 #include <functional>
+#include <initializer_list>
 #include <map>
 #include <memory>
 #include <optional>
@@ -70,6 +71,16 @@ class StageTimer {
   std::string name_;
   std::chrono::steady_clock::time_point t0_;
 };
+
+// The spacing of the points at which a deviation between surfaces is sampled (farthest_sample,
+// surface_samples): 0.2 % of `diag`, coarser where that would be more than about 200,000 points
+// on a surface of one of `areas` (units²). The largest distance is then found to within
+// spacing / √3.
+double deviation_spacing(double diag, std::initializer_list<double> areas) {
+  double spacing = 2e-3 * diag;
+  for (double a : areas) spacing = std::max(spacing, std::sqrt(a / 2e5));
+  return spacing;
+}
 
 }  // namespace
 
@@ -518,7 +529,7 @@ void measure(MeshResult& r, const MeshOptions& opt) {
   // Deviations, at points at most 0.2% of the diagonal apart (coarser if that would be more than
   // about 200,000 points on either surface): the largest distance is then found to within
   // spacing / √3 (0.12% of the diagonal).
-  const double spacing = std::max({2e-3 * diag, std::sqrt(area(r.input) / 2e5), std::sqrt(area(SurfaceMesh{r.tets.V, tet_boundary}) / 2e5)});
+  const double spacing = deviation_spacing(diag, {area(r.input), area(SurfaceMesh{r.tets.V, tet_boundary})});
   r.deviation_sample_spacing = spacing;
   r.deviation_out = farthest_sample(r.tets.V, tet_boundary, input_surface, spacing);
   {
@@ -1276,7 +1287,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           if (!held && !abandoned && p.offset == 0 && !p.target && opt.remesh_retry) {
             const TriangleBvh own(p.surface.V, p.surface.F);
             const double part_area = area(p.surface);
-            const double spacing = std::max(2e-3 * bounding_box_diagonal(p.surface.V), std::sqrt(part_area / 2e5));
+            const double spacing = deviation_spacing(bounding_box_diagonal(p.surface.V), {part_area});
             EnvelopeOptions er = e;  // the remeshed surface's triangles are round: kept round
             er.min_triangle_angle = std::max(er.min_triangle_angle, 25.0);
             er.min_fold_angle = std::max(er.min_fold_angle, 45.0);
@@ -1306,10 +1317,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               if (b.F.rows() == 0 || abandoned) break;
               const double out = farthest_sample(b.V, b.F, own, spacing);
               const double in = farthest_sample(p.surface.V, p.surface.F, TriangleBvh(b.V, b.F), spacing);
-              const bool crossed = out <= e.max_outside && in <= e.max_inside && does_self_intersect(b);
               spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): {} faces, {:.3g} / {:.3g} off its surface (bounds "
-                            "{:.3g} / {:.3g}){}", i, h, b.F.rows(), out, in, e.max_outside, e.max_inside,
-                            crossed ? ", intersects itself" : "");
+                            "{:.3g} / {:.3g})", i, h, b.F.rows(), out, in, e.max_outside, e.max_inside);
               if (out > e.max_outside || in > e.max_inside) {
                 // Off by about a third of the edge length where creases collapse across small
                 // features: shorter in proportion, with a margin (at most 4 times shorter).
@@ -1324,7 +1333,10 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                 h *= 0.5;
                 continue;
               }
-              if (crossed) break;
+              if (does_self_intersect(b)) {  // (tested last: the most work)
+                spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): intersects itself", i, h);
+                break;
+              }
               EnvelopeStats es;
               b = simplify_envelope(b, p.surface, er, &es, nullptr);
               if (does_self_intersect(b) || !volume_kept(b)) {
@@ -1607,7 +1619,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     if (wrap.F.rows() == 0) return shells_route(why + "; its alpha wrap is empty");
     wrap.F = orient_outward(wrap.V, wrap.F);
     r.wrap.deviation = farthest_sample(wrap.V, wrap.F, TriangleBvh(r.input.V, r.input.F),
-                                       std::max(2e-3 * diag, std::sqrt(area(wrap) / 2e5)));
+                                       deviation_spacing(diag, {area(wrap)}));
     r.wrap.used = true;
     r.wrap.alpha = wo.alpha;
     r.wrap.offset = wo.offset;
@@ -2132,7 +2144,9 @@ std::string deviation_exceeded_because(const MeshResult& r, const MeshOptions& o
   if (winding_solid_of_open_input(r))
     return "the input's winding-number solid closes its holes, and its caps over holes wider than the bound lie " + off +
            " (a closed solid can do no better); no slab of the input within the bounds could be made (welded or "
-           "overlapping segments have none, and an open scan's may fold over itself or leave slivers)";
+           "overlapping segments have none, and an open scan's may fold over itself or leave slivers); --wrap meshes "
+           "its alpha wrap instead, a thin closed shell that goes into holes wider than --wrap-alpha and around both "
+           "sides of the input: far nearer to it, at many times the tetrahedra and seconds";
   return "the mesh's boundary lies " + off;
 }
 
