@@ -317,10 +317,11 @@ int flip_slivers(TetMesh& m, double min_degrees, int max_flips) {
   auto has = [&](int t, int v) { return (m.T.row(t).array() == v).any(); };
   // Kept up to date flip by flip (twenty-fifth session, the same meshes; before, each flip
   // measured every tetrahedron and rebuilt the vertex lists again: 31 s for 1,000 flips in a
-  // 65,000-tetrahedron mesh, trimesh's ADIS16480.STL): each tetrahedron's quality, the tetrahedra at each vertex, the slivers ordered worst
-  // first (ties by row, as a stable sort of the rows gives), and which slivers were found to take
-  // no flip since anything within one vertex of them last changed. The flips made are the same:
-  // each round takes the worst sliver that takes a flip, as when all were tried again.
+  // 65,000-tetrahedron mesh, trimesh's ADIS16480.STL): each tetrahedron's quality, the
+  // tetrahedra at each vertex, the slivers ordered worst first (ties by row, as a stable sort of
+  // the rows gives), and which slivers were found to take no flip since anything within one
+  // vertex of them last changed. The flips made are the same: each round takes the worst sliver
+  // that takes a flip, as when all were tried again.
   int nt = static_cast<int>(m.T.rows());
   std::vector<double> q(static_cast<size_t>(nt));
   std::vector<std::vector<int>> around(static_cast<size_t>(m.V.rows()));
@@ -354,7 +355,7 @@ int flip_slivers(TetMesh& m, double min_degrees, int max_flips) {
     for (int k = 0; k < 4; ++k) around[static_cast<size_t>(m.T(t, k))].push_back(t);
     if (q[static_cast<size_t>(t)] < min_degrees) bad.emplace(q[static_cast<size_t>(t)], t);
   };
-  std::vector<int> touched;  // vertices of the rows a flip changed, before and after
+  std::vector<int> touched;  // vertices of the rows a flip changes (its new rows use only these)
   auto touch = [&](int t) {
     for (int k = 0; k < 4; ++k) touched.push_back(m.T(t, k));
   };
@@ -391,7 +392,7 @@ int flip_slivers(TetMesh& m, double min_degrees, int max_flips) {
       q.push_back(0.0);
       stuck.push_back(0);
       ++nt;
-      for (int s : {t, u, nt - 1}) list(s), touch(s);
+      for (int s : {t, u, nt - 1}) list(s);
       return true;
     }
     // 3-2 flips: an interior edge (i, j) with exactly three tetrahedra around it, whose other
@@ -437,9 +438,7 @@ int flip_slivers(TetMesh& m, double min_degrees, int max_flips) {
         stuck.pop_back();
         nt = last;
         list(ring[0]), list(ring[1]);
-        if (ring[2] != last) list(ring[2]);
-        for (int s : {ring[0], ring[1]}) touch(s);
-        if (ring[2] != last) touch(ring[2]), stuck[static_cast<size_t>(ring[2])] = 0;  // (a new row)
+        if (ring[2] != last) list(ring[2]);  // (the last row, moved: its vertices touched above)
         return true;
       }
     return false;
