@@ -168,6 +168,9 @@ class Mesher {
 
   RunResult run(Progress* progress) {
     RunResult r;
+    using Clock = std::chrono::steady_clock;
+    auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+    const auto t_start = Clock::now();
     build_delaunay();
     // Recovery by splits may add up to four points per point before it gives up: a thin tube's
     // simplified boundary (a coil spring of 3 mm wire at 150 tetrahedra: long triangles whose
@@ -177,6 +180,8 @@ class Mesher {
     r.conforming = make_conforming();
     r.recovered = r.conforming;
     classify(r.conforming);
+    const double t_recover = since(t_start);
+    const auto t_refine = Clock::now();
     // Quality splits stop at edges a third as long as the shorter of the interior edge length
     // and the surface's median edge (near a sharp crease refinement would otherwise not end).
     std::vector<double> len;
@@ -186,7 +191,8 @@ class Mesher {
     const bool split_bound = !len.empty() && L_ < len[len.size() / 2];  // RunResult::length_bound
     const int max_vertices = std::max(64, opt_.max_tets / 3);
     // Refinement leans on the surface faces being faces of the triangulation; where they are not
-    // (a failed recovery), it runs for a few rounds only. Where a refinement round loses them (its
+    // (a failed recovery), it runs for a few rounds only, within a work bound
+    // (TetrahedralizeOptions::unrecovered_refine_work). Where a refinement round loses them (its
     // splits near a thin part could not be recovered), refinement stops there: further rounds
     // would refine a triangulation classified by the winding number, adding points without end
     // (a 4 mm hemispherical shell at 150: 2,000 → 6,000 points in six rounds, 8 s, 18,000
@@ -207,15 +213,29 @@ class Mesher {
                     r.conforming, splits_, steiner_, conflict_cells_);
       if (was_conforming && !r.conforming) break;
       if (r.work_exceeded) break;
+      if (!r.recovered && opt_.unrecovered_refine_work > 0 &&
+          static_cast<double>(conflict_cells_) > opt_.unrecovered_refine_work) {
+        spdlog::debug("refinement of a boundary not recovered stopped after round {}: {} conflict-zone cells searched",
+                      round, conflict_cells_);
+        break;
+      }
     }
     if (!r.conforming)
       spdlog::debug("tetrahedralize: some boundary faces are not faces of the triangulation; tetrahedra classified by "
                     "the winding number at their centroids");
+    const double refine_s = since(t_refine);
+    const auto t_exude = Clock::now();
     setup_complex();
     // (Not after the work bound: the mesh is left for another boundary, and the exuder can take its
-    // time limit over such a one.)
-    if (opt_.exude && !r.work_exceeded) r.exuder_stopped = !exude();
+    // time limit over such a one. Nor where the boundary is not conforming: its complex is the
+    // faces between cells classified by the winding number, and on such ones the exuder ran to its
+    // 30 s time limit (trimesh's round.stl, octagonal_pocket.ply and ADIS16480.STL at 150, each a
+    // run that lost its boundary in refinement), where on conforming runs it takes under a second.)
+    if (opt_.exude && !r.work_exceeded && r.conforming) r.exuder_stopped = !exude();
+    const double exude_s = since(t_exude);
     r.mesh = extract();
+    spdlog::debug("tetrahedralize run: recovery {:.2f} s (conforming {}), refinement {:.2f} s, exudation {:.2f} s",
+                  t_recover, r.recovered, refine_s, exude_s);
     // Boundary tetrahedra still below the floor (flat caps over the surface that refinement could
     // not reach without splitting the surface below min_split_) are peeled off where that moves the
     // boundary by at most peel_max_height (a coarse mesh's 4° sliver can be 2 % of the diagonal
@@ -1142,6 +1162,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
       st.boundary_splits = r.boundary_splits;
       st.steiner_points = r.steiner;
       st.conforming = r.conforming;
+      st.recovered = r.recovered;
       st.peeled = r.peeled;
       best = std::move(r);
     }

@@ -55,6 +55,12 @@ struct TetrahedralizeOptions {
                                   // Real meshes search under 0.2 million per attempt; a rod of long,
                                   // thin triangles 21 million in its first (squeeze mesh bounds the
                                   // parts it has a rounder boundary for: mesh_pipeline.h)
+  double unrecovered_refine_work = 1e6;  // cells of the conflict zones the refinement of one run
+                                  // may search where its boundary was not recovered before
+                                  // refinement (its tetrahedra classified by the winding number, a
+                                  // mesh retries usually replace): its rounds stop beyond it. Such
+                                  // runs searched up to 27 million in their 8 rounds (trimesh's
+                                  // plate_holes.STL: 18 s of a 35 s row). 0: no bound
 };
 
 /// What tetrahedralize() reports beside the mesh.
@@ -70,6 +76,9 @@ struct TetrahedralizeStats {
   int flips = 0;                 // 2-3 and 3-2 flips of interior slivers under min_dihedral at the
                                  // end (tet_cleanup.h: flip_slivers; boundary and volume unchanged)
   bool conforming = true;        // every boundary triangle (after splits) is a face of the mesh
+  bool recovered = true;         // ... already before refinement, in the run kept (not so: its
+                                 // refinement was bounded by unrecovered_refine_work, its
+                                 // tetrahedra classified by the winding number)
   int exuder_nan_stops = 0;      // attempts whose CGAL exuder met a NaN weight beside a numerically flat
                                  // cell and stopped there, instead of the process dying of SIGFPE
   double refine_work = 0;        // cells of the conflict zones refinement searched, all attempts
