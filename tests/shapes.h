@@ -123,6 +123,31 @@ inline squeeze::meshing::SurfaceMesh mobius_strip(double R, double w, int around
   return s;
 }
 
+// A knife: a prism `length` long (along z) whose cross-section is the right triangle of legs
+// `depth` (x) and `back` (y), so its edge along z has the dihedral angle atan(back / depth); the
+// sides split into `rings` strips along it. A blade, a fin, a wedge of sheet metal.
+inline squeeze::meshing::SurfaceMesh knife(double depth, double back, double length, int rings) {
+  squeeze::meshing::SurfaceMesh s;
+  s.V.resize(3 * (rings + 1), 3);
+  for (int j = 0; j <= rings; ++j) {
+    const double z = length * j / rings;
+    s.V.row(3 * j) << 0, 0, z;
+    s.V.row(3 * j + 1) << depth, 0, z;
+    s.V.row(3 * j + 2) << 0, back, z;
+  }
+  s.F.resize(6 * rings + 2, 3);
+  int f = 0;
+  for (int j = 0; j < rings; ++j)
+    for (int k = 0; k < 3; ++k) {
+      const int a = 3 * j + k, b = 3 * j + (k + 1) % 3;
+      s.F.row(f++) << a, b, a + 3;
+      s.F.row(f++) << b, b + 3, a + 3;
+    }
+  s.F.row(f++) << 0, 1, 2;
+  s.F.row(f++) << 3 * rings, 3 * rings + 2, 3 * rings + 1;
+  return s;
+}
+
 // A plate L × W × T on a grid of nx × ny square cells, the listed cells cut out as holes: one
 // closed 2-manifold (top and bottom two triangles a cell, walls where a cell meets a hole or the
 // rim). A perforated sheet-metal part.

@@ -1126,7 +1126,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       if (prisms_without_slivers(
               mid, [&](const SurfaceMesh& s, TetMesh& m, SurfaceMesh& slab, std::vector<int>*) { return sheet_tets(s, half, m, &slab); },
               accept,
-              nullptr, between_sides, 3, 1.0, "part: thin", layer) != Layer::kClean)
+              nullptr, between_sides, 6, 1.0, "part: thin", layer) != Layer::kClean)  // (six rounds: a knife whose edge
+        // is 1.1° sharp still had 2 of 685 faces over slivers after three, none after four; version 23)
         return false;
       p.thin = thickness;
       keep_prisms(p, layer, 1, Ls, area(one) / (0.433 * wanted * wanted));
