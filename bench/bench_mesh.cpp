@@ -23,6 +23,10 @@
 //  BM_FlipSlivers, BM_FlipSliversOneCallPerFlip  flip_slivers on 9,669 tetrahedra (the sphere
 //                             without the exuder) under 25°: every flip in one call (since the 25th session)
 //                             against one call per flip (the work each flip did before)
+//  BM_TetrahedralizeNotRecovered/<bounded>  tetrahedralize() of the sacrum's own surface at 150
+//                             (scenes/assets; its boundary is not recovered before refinement):
+//                             refinement stopped past unrecovered_refine_work (1, version 23)
+//                             against no bound (0), with the conflict-zone cells searched
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
 //                             of points the winding-number route's Mesh_3 oracle asks about: the
 //                             input's vertices moved along their normals by 0.5-8 times the
@@ -330,6 +334,26 @@ void BM_FlipSliversOneCallPerFlip(benchmark::State& state) {
   state.counters["tets"] = static_cast<double>(mesh.T.rows());
   state.counters["flips"] = flips;
 }
+// tetrahedralize() of a surface whose boundary is not recovered before refinement (the sacrum's
+// own, at 150: the mesh is classified by the winding number, one squeeze mesh's retries replace):
+// its refinement bounded by unrecovered_refine_work (Arg 1, the default since version 23) against
+// none (Arg 0, the eight rounds before). Runs that are not conforming are not exuded either way.
+void BM_TetrahedralizeNotRecovered(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh s =
+      squeeze::meshing::load_surface(fs::path(SQUEEZE_SOURCE_DIR) / "scenes" / "assets" / "sacrum_coccyx.off");
+  squeeze::meshing::TetrahedralizeOptions o;
+  o.target_tets = 150;
+  o.max_attempts = 1;
+  if (state.range(0) == 0) o.unrecovered_refine_work = 0;
+  squeeze::meshing::TetrahedralizeStats st;
+  squeeze::meshing::TetMesh m;
+  for (auto _ : state) m = squeeze::meshing::tetrahedralize(s, o, &st);
+  state.counters["tets"] = static_cast<double>(m.T.rows());
+  state.counters["recovered"] = st.recovered;
+  state.counters["refine_work"] = st.refine_work;
+}
+BENCHMARK(BM_TetrahedralizeNotRecovered)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
 BENCHMARK(BM_FlipSlivers)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
 BENCHMARK(BM_FlipSliversOneCallPerFlip)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 

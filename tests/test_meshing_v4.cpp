@@ -1750,7 +1750,7 @@ TEST(MeshingV4, ABoundaryNotRecoveredIsRefinedWithinItsBoundAndNotExuded) {
 // A knife 1 m long and deep whose edge is 1.1° sharp (back 2 cm): a thin part whose mid-surface's
 // prisms at the edge, as thin as the slab is allowed there, needed four rounds of splits before
 // none held a tetrahedron under 5° (2 of 685 faces still did after three). With three rounds it
-// went to the boundary route: 8 % of the diagonal in (the edge peeled off) and 24 s at 150; a
+// went to the boundary route: 8 % of the diagonal in and 24 s at 150; a
 // knife of 0.29° ran for minutes there. The thin-part route now takes up to six rounds.
 TEST(MeshingV4, KnifeEdgeIsASlabWithinTheBounds) {
   const SurfaceMesh s = sqs::knife(1.0, 0.02, 1.0, 10);
