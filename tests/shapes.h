@@ -184,4 +184,58 @@ inline squeeze::meshing::SurfaceMesh perforated_plate(int nx, int ny, double L, 
   return m;  // (vertices of hole-only corners are left unused: the loader's clean-up drops them)
 }
 
+// A closed box [0, size]³ with a cavity: the box [wall, size − wall]³ faces inward. A thin hollow
+// part whose sides are two closed surfaces (a tank, a closed casing).
+inline squeeze::meshing::SurfaceMesh hollow_box(double size, double wall) {
+  squeeze::meshing::SurfaceMesh s;
+  s.V.resize(16, 3);
+  s.F.resize(24, 3);
+  const int box[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
+                          {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
+  for (int k = 0; k < 2; ++k) {
+    const double lo = k == 0 ? 0.0 : wall, hi = k == 0 ? size : size - wall;
+    for (int i = 0; i < 8; ++i) s.V.row(8 * k + i) << (i & 4 ? hi : lo), (i & 2 ? hi : lo), (i & 1 ? hi : lo);
+    for (int f = 0; f < 12; ++f)
+      s.F.row(12 * k + f) << 8 * k + box[f][0], 8 * k + (k == 0 ? box[f][1] : box[f][2]), 8 * k + (k == 0 ? box[f][2] : box[f][1]);
+  }
+  return s;
+}
+
+// The solid of revolution about z of a closed profile in the (r, z) half-plane: `profile` runs
+// counter-clockwise from a point on the axis (r = 0) to another, the axis closing it; `sides`
+// vertices around each ring, one vertex on the axis for each profile point there. A bottle, a cup.
+inline squeeze::meshing::SurfaceMesh revolved(const std::vector<Eigen::Vector2d>& profile, int sides) {
+  std::vector<Eigen::RowVector3d> V;
+  std::vector<int> first;  // each profile point's first vertex
+  for (const Eigen::Vector2d& q : profile) {
+    first.push_back(static_cast<int>(V.size()));
+    const int n = q(0) > 0 ? sides : 1;
+    for (int i = 0; i < n; ++i)
+      V.emplace_back(q(0) * std::cos(2 * M_PI * i / sides), q(0) * std::sin(2 * M_PI * i / sides), q(1));
+  }
+  auto at = [&](size_t k, int i) { return profile[k](0) > 0 ? first[k] + i % sides : first[k]; };
+  std::vector<Eigen::RowVector3i> F;
+  for (size_t k = 0; k + 1 < profile.size(); ++k)
+    for (int i = 0; i < sides; ++i) {
+      const int a = at(k, i), b = at(k + 1, i), c = at(k + 1, i + 1), d = at(k, i + 1);
+      if (a != d) F.emplace_back(a, d, c);
+      if (b != c) F.emplace_back(a, c, b);
+    }
+  squeeze::meshing::SurfaceMesh s;
+  s.V.resize(static_cast<Eigen::Index>(V.size()), 3);
+  for (size_t i = 0; i < V.size(); ++i) s.V.row(static_cast<Eigen::Index>(i)) = V[i];
+  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t f = 0; f < F.size(); ++f) s.F.row(static_cast<Eigen::Index>(f)) = F[f];
+  return s;
+}
+
+// A bottle 23 cm tall with a wall 1.5 mm thick (revolved, 64 sides): body 8 cm across, a 32°
+// shoulder, a neck 3 cm across, open at its rim. A thin part whose sides curve tighter than its
+// prisms are long.
+inline squeeze::meshing::SurfaceMesh thin_bottle() {
+  return revolved({{0, 0}, {0.04, 0}, {0.04, 0.15}, {0.015, 0.19}, {0.015, 0.23}, {0.0135, 0.23}, {0.0135, 0.1906},
+                   {0.0385, 0.1494}, {0.0385, 0.0015}, {0, 0.0015}},
+                  64);
+}
+
 }  // namespace sqs

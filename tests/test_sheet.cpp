@@ -566,3 +566,45 @@ TEST(Sheet, OneTriangleIsASheetAndAZeroAreaOneIsAnErrorNamingTheFile) {
 }
 
 }  // namespace
+
+// remesh_sheet's max_border_sag: a disc whose outline is a 64-gon of radius 0.1, remeshed at
+// 0.08, keeps outline vertices within the sag of every input outline vertex's chord; without it
+// the outline is a few chords 0.08 long, their sag about 8 mm (meshing version 24).
+TEST(Sheet, RemeshKeepsItsOutlineWithinTheSag) {
+  const double pi = std::acos(-1.0);
+  SurfaceMesh disc;
+  disc.V.resize(65, 3);
+  disc.F.resize(64, 3);
+  disc.V.row(64) << 0, 0, 0;
+  for (int k = 0; k < 64; ++k) {
+    disc.V.row(k) << 0.1 * std::cos(2 * pi * k / 64), 0.1 * std::sin(2 * pi * k / 64), 0;
+    disc.F.row(k) << 64, k, (k + 1) % 64;
+  }
+  // The farthest input outline vertex from the remeshed outline (its border edges).
+  auto sag = [&](const SurfaceMesh& m) {
+    std::map<std::pair<int, int>, int> count;
+    for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
+        ++count[{std::min(a, b), std::max(a, b)}];
+      }
+    double worst = 0;
+    for (int k = 0; k < 64; ++k) {
+      const Vec3 x = disc.V.row(k);
+      double nearest = INFINITY;
+      for (const auto& [e, n] : count) {
+        if (n != 1) continue;
+        const Vec3 a = m.V.row(e.first), d = Vec3(m.V.row(e.second)) - a;
+        const double t = std::clamp((x - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+        nearest = std::min(nearest, (x - a - t * d).norm());
+      }
+      worst = std::max(worst, nearest);
+    }
+    return worst;
+  };
+  const double plain = sag(squeeze::meshing::remesh_sheet(disc, 0.08));
+  const SurfaceMesh held = squeeze::meshing::remesh_sheet(disc, 0.08, 3, 0.001);
+  EXPECT_GT(plain, 0.005);
+  EXPECT_LE(sag(held), 0.001 + 1e-9);
+  EXPECT_EQ(squeeze::meshing::analyse_surface(held).boundary_edges > 0, true);
+}

@@ -69,6 +69,7 @@ SheetEvidence sheet_evidence(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   // bow tie), which no offset or remeshing takes.
   for (int n : rim_edges) manifold = manifold && (n == 0 || n == 2);
   e.open_manifold = manifold && boundary > 0;
+  e.closed_manifold = manifold && boundary == 0;
   if (!e.open_manifold) return e;
   const FastWindingNumber w(V, F);
   const double diag = (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();

@@ -24,6 +24,9 @@ struct SheetEvidence {
                                // edge in two faces traversed once each way (consistently
                                // oriented), and every boundary vertex on two boundary edges (no
                                // bow tie): a 2-manifold with boundary, offsettable
+  bool closed_manifold = false;  // no boundary edge, no edge in three or more faces, every edge
+                               // traversed once each way: a closed, oriented 2-manifold (one side
+                               // of a hollow thin part, say; sheet_area_fraction is not measured)
   double sheet_area_fraction = 0;  // the share of its area (0..1) where the component's own
                                // winding number on both sides of the face, a ten-thousandth of the
                                // diagonal away, is between 0.25 and 0.75 in magnitude: about ½ on
@@ -76,10 +79,17 @@ SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness);
 /// `edge_length` (corners a pixel apart on a staircase outline) are then collapsed, shortest
 /// first, to their midpoint or onto their corner: the outline may move by up to an eighth of
 /// `edge_length`, which the caller measures.
-///   sheet        an open, oriented 2-manifold (units); edge_length > 0 (units)
+/// Where max_border_sag is finite, the outline first keeps, as corners, the vertices of each border
+/// polyline that a greedy walk needs so that no chord between consecutive kept ones passes farther
+/// than max_border_sag from the vertices it skips (nor is longer than edge_length): a curved
+/// outline (a bottle's rim 14 mm across, remeshed at 12 mm: an octagon 1.9 mm inside its circle)
+/// keeps its sag within that, its edges shorter there (meshing version 24).
+///   sheet        an open or closed, oriented 2-manifold (units); edge_length > 0 (units)
+///   max_border_sag  units (INFINITY: the outline follows edge_length alone)
 /// Throws InputError if edge_length is not positive or the sheet is not an oriented 2-manifold.
 /// (Implemented in envelope.cpp, the CGAL surface-mesh translation unit.)
-SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int iterations = 3);
+SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int iterations = 3,
+                         double max_border_sag = INFINITY);
 
 /// Splits the longest edge of each listed face of `sheet` at its midpoint, moved onto `onto` (the
 /// input sheet) when given, and every face on a split edge with it (one split edge: two triangles;
