@@ -7,6 +7,11 @@ lbracket.off, pipe.off (3 mm wall), spheres40.off (40 separate spheres), hemishe
 bowl1mm.off, leg.off (10-segment cylinder), spider.obj (+ .mtl: body, head, 8 legs through the
 body); with --elephant, elephant_holes_{0.01,0.02,0.03}.off (six holes of that radius, as a fraction
 of the diagonal, around seeded random vertices). Then: scripts/mesh_matrix.py DIR/*.off DIR/*.obj
+With --version24, the shapes of docs/meshing.md, "Version 24", instead: staircase, comb (12 teeth
+2 mm thick, 4 mm apart), urchin (20 spikes), washer (1 mm), bottle (1.5 mm wall, open neck) and
+bottle_pinhole (a 4 mm hole through its base), spiral (3 mm wall, 3 turns), plate_cubes (a 1 m
+plate and ten 1 cm cubes), hollow_box (3 mm wall), ribbon (2 mm, one twist), star (7 points),
+hollow_sphere (2 mm), hollow_torus (3 mm), can (1 mm), egg_shell (7-25 mm wall).
 """
 import argparse
 import os
@@ -112,15 +117,152 @@ def uv_sphere(c, scale, nu=16, nv=10):
     return np.array(V) * np.array(scale) + c, F
 
 
+def earclip(P):
+    """Triangles of a simple counter-clockwise polygon (a list of (x, y)), fattest ear first."""
+    P = [np.array(p, float) for p in P]
+    idx = list(range(len(P)))
+    cross = lambda o, a, b: (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    T = []
+    while len(idx) > 3:
+        n, best = len(idx), None
+        for k in range(n):
+            i0, i1, i2 = idx[k - 1], idx[k], idx[(k + 1) % n]
+            a, b, c = P[i0], P[i1], P[i2]
+            if cross(a, b, c) <= 1e-15:
+                continue
+            if any(cross(a, b, P[j]) >= 0 and cross(b, c, P[j]) >= 0 and cross(c, a, P[j]) >= 0
+                   for j in idx if j not in (i0, i1, i2)):
+                continue
+            q = cross(a, b, c) / (np.linalg.norm(b - a) * np.linalg.norm(c - b) * np.linalg.norm(a - c))
+            if best is None or q > best[0]:
+                best = (q, k)
+        k = best[1]
+        T.append((idx[k - 1], idx[k], idx[(k + 1) % n]))
+        idx.pop(k)
+    return T + [tuple(idx)]
+
+
+def extrude(P, h, z0=0.0):
+    n, T = len(P), earclip(P)
+    V = [(x, y, z0) for x, y in P] + [(x, y, z0 + h) for x, y in P]
+    F = [(a, c, b) for a, b, c in T] + [(a + n, b + n, c + n) for a, b, c in T]
+    for i in range(n):
+        j = (i + 1) % n
+        F += [(i, j, j + n), (i, j + n, i + n)]
+    return np.array(V), F
+
+
+def revolve(prof, nu):
+    """The surface of revolution about z of a closed (r, z) polygon, counter-clockwise, r > 0 (a
+    ring), or of a polyline from the axis to the axis (r = 0 at both ends: a solid)."""
+    V, F, ids = [], [], {}
+    closed = prof[0][0] > 0
+
+    def vid(i, j):
+        r, z = prof[i % len(prof)]
+        key = ("axis", i) if r == 0 else (i % len(prof), j % nu)
+        if key not in ids:
+            a = 2 * np.pi * (j % nu) / nu
+            ids[key] = len(V)
+            V.append((r * np.cos(a), r * np.sin(a), z))
+        return ids[key]
+
+    for j in range(nu):
+        for i in range(len(prof) if closed else len(prof) - 1):
+            a, b, c, d = vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)
+            F += [t for t in ((a, c, b), (a, d, c)) if len(set(t)) == 3]
+    return np.array(V), F
+
+
+def merge(*parts):
+    V, F = [], []
+    for v, f in parts:
+        F += [(a + len(V), b + len(V), c + len(V)) for a, b, c in f]
+        V += list(v)
+    return np.array(V), F
+
+
+def box(lo, hi):
+    V = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    F = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1), (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4),
+         (1, 5, 7), (1, 7, 3)]
+    return V, F
+
+
+def inward(vf):
+    return vf[0], [(a, c, b) for a, b, c in vf[1]]
+
+
+def version24(out):
+    P = [(0, 0), (1.6, 0), (1.6, 1.2)]
+    for i in range(8, 1, -1):
+        P += [(0.2 * (i - 1), 0.15 * i), (0.2 * (i - 1), 0.15 * (i - 1))]
+    write_off(out("staircase.off"), *extrude(P + [(0, 0.15)], 1.0))
+    P = [(0, 0), (0.072, 0), (0.072, 0.01)]
+    for k in range(11, -1, -1):
+        x0 = k * 0.006 + 0.002
+        P += [(x0 + 0.002, 0.01), (x0 + 0.002, 0.06), (x0, 0.06), (x0, 0.01)]
+    write_off(out("comb.off"), *extrude(P + [(0, 0.01)], 0.03))
+    V, F = uv_sphere(np.zeros(3), (1, 1, 1), 64, 40)
+    D = np.random.default_rng(7).normal(size=(20, 3))
+    D /= np.linalg.norm(D, axis=1)[:, None]
+    N = V / np.linalg.norm(V, axis=1)[:, None]
+    s = np.clip((N @ D.T - 0.97) / 0.03, 0, None).max(1)
+    write_off(out("urchin.off"), N * (0.1 * (1 + 1.5 * s ** 2))[:, None], F)
+    write_off(out("washer.off"), *revolve([(0.01, 0), (0.03, 0), (0.03, 0.001), (0.01, 0.001)], 96))
+    neck = [(0.04, 0), (0.04, 0.15), (0.015, 0.19), (0.015, 0.23), (0.0135, 0.23), (0.0135, 0.1906), (0.0385, 0.1494),
+            (0.0385, 0.0015)]
+    write_off(out("bottle.off"), *revolve([(0, 0)] + neck + [(0, 0.0015)], 64))
+    write_off(out("bottle_pinhole.off"), *revolve([(0.002, 0)] + neck + [(0.002, 0.0015)], 64))
+    t = np.linspace(0, 6 * np.pi, 300)
+    r = 0.05 + 0.02 * t / (2 * np.pi)
+    P = [((q - 0.0015) * np.cos(a), (q - 0.0015) * np.sin(a)) for q, a in zip(r, t)]
+    P += [((q + 0.0015) * np.cos(a), (q + 0.0015) * np.sin(a)) for q, a in zip(r[::-1], t[::-1])]
+    write_off(out("spiral.off"), *extrude(P[::-1], 0.05))
+    parts = [extrude([(0, 0), (1, 0), (1, 1), (0, 1)], 0.02)]
+    for i in range(10):
+        x = 0.05 + 0.09 * i
+        parts.append(extrude([(x, 0.5), (x + 0.01, 0.5), (x + 0.01, 0.51), (x, 0.51)], 0.01, 0.03))
+    write_off(out("plate_cubes.off"), *merge(*parts))
+    write_off(out("hollow_box.off"), *merge(box((0, 0, 0), (0.3, 0.3, 0.3)), inward(box((0.003,) * 3, (0.297,) * 3))))
+    n, V, F = 200, [], []
+    sec = [(-0.025, -0.001), (0.025, -0.001), (0.025, 0.001), (-0.025, 0.001)]
+    for i in range(n + 1):
+        x, a = i / n, 2 * np.pi * i / n
+        V += [(x, u * np.cos(a) - v * np.sin(a), u * np.sin(a) + v * np.cos(a)) for u, v in sec]
+    for i in range(n):
+        for k in range(4):
+            a, b, c, d = i * 4 + k, i * 4 + (k + 1) % 4, (i + 1) * 4 + (k + 1) % 4, (i + 1) * 4 + k
+            F += [(a, b, c), (a, c, d)]
+    F += [(0, 2, 1), (0, 3, 2), (4 * n, 4 * n + 1, 4 * n + 2), (4 * n, 4 * n + 2, 4 * n + 3)]
+    write_off(out("ribbon.off"), np.array(V), F)
+    P = [((1.0 if k % 2 == 0 else 0.15) * np.cos(np.pi * k / 7), (1.0 if k % 2 == 0 else 0.15) * np.sin(np.pi * k / 7))
+         for k in range(14)]
+    write_off(out("star.off"), *extrude(P, 0.2))
+    write_off(out("hollow_sphere.off"),
+              *merge(uv_sphere(np.zeros(3), (0.2,) * 3, 48, 32), inward(uv_sphere(np.zeros(3), (0.198,) * 3, 48, 32))))
+    tor = lambda t: np.array([0.3 * np.cos(t), 0.3 * np.sin(t), 0])
+    dtor = lambda t: np.array([-np.sin(t), np.cos(t), 0])
+    write_off(out("hollow_torus.off"), *merge(tube(tor, dtor, 0.05, 96, 24), inward(tube(tor, dtor, 0.047, 96, 24))))
+    write_off(out("can.off"), *merge(cylinder(np.zeros(3), np.array([0, 0, 0.12]), 0.05, 48),
+                                     inward(cylinder(np.array([0, 0, 0.001]), np.array([0, 0, 0.119]), 0.049, 48))))
+    write_off(out("egg_shell.off"), *merge(uv_sphere(np.zeros(3), (0.3, 0.2, 0.15), 48, 32),
+                                           inward(uv_sphere(np.array([0.01, 0, 0]), (0.285, 0.19, 0.143), 48, 32))))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("dir")
     ap.add_argument("--elephant", help="the corpus elephant.off, to cut holes into")
+    ap.add_argument("--version24", action="store_true", help="the shapes of version 24 instead")
     args = ap.parse_args()
     if args.elephant and not os.path.isfile(args.elephant):
         ap.error("--elephant: no such file: " + args.elephant)
     os.makedirs(args.dir, exist_ok=True)
     out = lambda name: os.path.join(args.dir, name)
+    if args.version24:
+        version24(out)
+        return
 
     tre = lambda t: 0.1 * np.array([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)])
     dtre = lambda t: 0.1 * np.array([np.cos(t) + 4 * np.cos(2 * t), -np.sin(t) + 4 * np.sin(2 * t), -3 * np.cos(3 * t)])
