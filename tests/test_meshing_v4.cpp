@@ -1796,3 +1796,32 @@ TEST(MeshingV4, ThinBottleIsASlabWithinTheBounds) {
   EXPECT_EQ(r.thin_parts, 1);
   expect_within(r, diag, 0.02, 0.01, 0.005, 1);
 }
+
+// TetrahedralizeOptions::run_refine_work, the safety net every run's refinement has: on the
+// elephant (recovered, conforming) the default bound, far above its work, changes nothing; a
+// bound at a third of its work stops the run there, which is counted, and leaves a conforming
+// mesh with fewer tetrahedra.
+TEST(MeshingV4, EveryRunsRefinementStopsAtItsWorkBound) {
+  const SurfaceMesh s = squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/tests/data/elephant.off");
+  auto run = [&](double bound, squeeze::meshing::TetrahedralizeStats& st) {
+    squeeze::meshing::TetrahedralizeOptions o;
+    o.target_tets = 1000;
+    o.max_attempts = 1;
+    o.run_refine_work = bound;
+    return squeeze::meshing::tetrahedralize(s, o, &st);
+  };
+  squeeze::meshing::TetrahedralizeStats unbounded, by_default, bounded;
+  const squeeze::meshing::TetMesh m0 = run(0, unbounded);
+  ASSERT_TRUE(unbounded.conforming);
+  ASSERT_GT(unbounded.refine_work, 0);
+  EXPECT_EQ(unbounded.runs_at_work_bound, 0);
+  const squeeze::meshing::TetMesh m1 = run(squeeze::meshing::TetrahedralizeOptions{}.run_refine_work, by_default);
+  EXPECT_EQ(by_default.runs_at_work_bound, 0);
+  EXPECT_TRUE(m0.V == m1.V && m0.T == m1.T);
+  const squeeze::meshing::TetMesh m2 = run(unbounded.refine_work / 3, bounded);
+  EXPECT_EQ(bounded.runs_at_work_bound, 1);
+  EXPECT_LT(bounded.refine_work, 0.6 * unbounded.refine_work);
+  EXPECT_TRUE(bounded.conforming);
+  EXPECT_GT(m2.T.rows(), 0);
+  EXPECT_LT(m2.T.rows(), m0.T.rows());
+}

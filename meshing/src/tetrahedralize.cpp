@@ -147,6 +147,7 @@ struct RunResult {
   bool length_bound = false;
   double work = 0;             // conflict-zone cells refinement searched (Mesher::conflict_cells_)
   bool work_exceeded = false;  // ... beyond the Mesher's budget: refinement stopped there
+  bool run_bound = false;      // ... beyond TetrahedralizeOptions::run_refine_work: stopped there
 };
 
 class Mesher {
@@ -213,6 +214,13 @@ class Mesher {
                     r.conforming, splits_, steiner_, conflict_cells_);
       if (was_conforming && !r.conforming) break;
       if (r.work_exceeded) break;
+      if (over_run_bound()) {
+        r.run_bound = true;
+        spdlog::warn("tetrahedralize: refinement stopped at its work bound ({} conflict-zone cells searched in round {}; "
+                     "TetrahedralizeOptions::run_refine_work): the mesh may keep flat tetrahedra",
+                     conflict_cells_, round + 1);
+        break;
+      }
       if (!r.recovered && opt_.unrecovered_refine_work > 0 &&
           static_cast<double>(conflict_cells_) > opt_.unrecovered_refine_work) {
         spdlog::debug("refinement of a boundary not recovered stopped after round {}: {} conflict-zone cells searched",
@@ -248,6 +256,12 @@ class Mesher {
     r.length_bound = split_bound || size_driven_ > 0;
     r.work = static_cast<double>(conflict_cells_);
     return r;
+  }
+
+  // Whether refinement has searched more conflict-zone cells than any run may
+  // (TetrahedralizeOptions::run_refine_work).
+  bool over_run_bound() const {
+    return opt_.run_refine_work > 0 && static_cast<double>(conflict_cells_) > opt_.run_refine_work;
   }
 
   // Inside or outside, per cell: by the parity of surface crossings where every surface face is a
@@ -978,7 +992,7 @@ class Mesher {
       return Try::inserted;
     };
     for (const Bad& b : bad) {
-      if (static_cast<int>(P_.size()) > opt_.max_tets / 3) break;
+      if (static_cast<int>(P_.size()) > opt_.max_tets / 3 || over_run_bound()) break;
       Ch c;
       if (!tr_.is_cell(vh_[b.v[0]], vh_[b.v[1]], vh_[b.v[2]], vh_[b.v[3]], c)) { ++why_gone; continue; }
       const double R = (P_[b.v[0]] - b.x).norm();
@@ -1145,6 +1159,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
     st.attempts = attempt + 1;
     st.exuder_nan_stops += r.exuder_stopped;
     st.refine_work += r.work;
+    st.runs_at_work_bound += r.run_bound;
     const bool exceeded = r.work_exceeded;
     st.work_exceeded = st.work_exceeded || exceeded;
     // A mesh that is not conforming (its tetrahedra classified by the winding number) is judged by

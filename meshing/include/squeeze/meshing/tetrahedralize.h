@@ -61,6 +61,11 @@ struct TetrahedralizeOptions {
                                   // mesh retries usually replace): its rounds stop beyond it. Such
                                   // runs searched up to 27 million in their 8 rounds (trimesh's
                                   // plate_holes.STL: 18 s of a 35 s row). 0: no bound
+  double run_refine_work = 4e7;   // cells of the conflict zones the refinement of any one run may
+                                  // search: a safety net against runs that do not end (its rounds
+                                  // and its last round stop beyond it, warned). The most measured
+                                  // in a run that held: 10.6 million (trimesh's tray, version 23);
+                                  // the corpus's and organs' under 60,000. 0: no bound
 };
 
 /// What tetrahedralize() reports beside the mesh.
@@ -81,6 +86,7 @@ struct TetrahedralizeStats {
                                  // tetrahedra classified by the winding number)
   int exuder_nan_stops = 0;      // attempts whose CGAL exuder met a NaN weight beside a numerically flat
                                  // cell and stopped there, instead of the process dying of SIGFPE
+  int runs_at_work_bound = 0;    // runs whose refinement stopped at run_refine_work (all attempts)
   double refine_work = 0;        // cells of the conflict zones refinement searched, all attempts
   bool work_exceeded = false;    // refinement stopped at TetrahedralizeOptions::max_refine_work
 };
