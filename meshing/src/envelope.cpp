@@ -572,8 +572,9 @@ SurfaceMesh remesh_sheet(const SurfaceMesh& sheet, double edge_length, int itera
     if (!(u.norm() > 0 && w.norm() > 0) || u.dot(w) < cos_turn * u.norm() * w.norm()) corner[m.target(h)] = true;
   }
   // A curved outline keeps its sag (max_border_sag): along each border loop, from a corner where
-  // it has one, the farthest vertex whose chord from the last kept one passes within the sag of
-  // the vertices between (and is at most edge_length long) is kept, as a corner.
+  // it has one, the chord from the last vertex kept is extended vertex by vertex while it passes
+  // within the sag of the vertices between and is at most edge_length long; the last vertex it
+  // held to is kept, as a corner (greedy, as in polyline simplification).
   auto sag_kept = m.add_property_map<VD, bool>("v:sag_kept", false).first;
   if (std::isfinite(max_border_sag) && max_border_sag > 0) {
     std::vector<char> done(m.number_of_halfedges(), 0);

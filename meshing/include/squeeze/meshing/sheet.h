@@ -81,7 +81,8 @@ SurfaceMesh thicken_sheet(const SurfaceMesh& sheet, double half_thickness);
 /// `edge_length`, which the caller measures.
 /// Where max_border_sag is finite, the outline first keeps, as corners, the vertices of each border
 /// polyline that a greedy walk needs so that no chord between consecutive kept ones passes farther
-/// than max_border_sag from the vertices it skips (nor is longer than edge_length): a curved
+/// than max_border_sag from the vertices it skips (nor is longer than edge_length); creases are
+/// kept over the angle a chord of edge_length would cut by more than it (20-60°, else 60°): a curved
 /// outline (a bottle's rim 14 mm across, remeshed at 12 mm: an octagon 1.9 mm inside its circle)
 /// keeps its sag within that, its edges shorter there (meshing version 24).
 ///   sheet        an open or closed, oriented 2-manifold (units); edge_length > 0 (units)
