@@ -184,23 +184,6 @@ inline squeeze::meshing::SurfaceMesh perforated_plate(int nx, int ny, double L, 
   return m;  // (vertices of hole-only corners are left unused: the loader's clean-up drops them)
 }
 
-// A closed box [0, size]³ with a cavity: the box [wall, size − wall]³ faces inward. A thin hollow
-// part whose sides are two closed surfaces (a tank, a closed casing).
-inline squeeze::meshing::SurfaceMesh hollow_box(double size, double wall) {
-  squeeze::meshing::SurfaceMesh s;
-  s.V.resize(16, 3);
-  s.F.resize(24, 3);
-  const int box[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
-                          {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
-  for (int k = 0; k < 2; ++k) {
-    const double lo = k == 0 ? 0.0 : wall, hi = k == 0 ? size : size - wall;
-    for (int i = 0; i < 8; ++i) s.V.row(8 * k + i) << (i & 4 ? hi : lo), (i & 2 ? hi : lo), (i & 1 ? hi : lo);
-    for (int f = 0; f < 12; ++f)
-      s.F.row(12 * k + f) << 8 * k + box[f][0], 8 * k + (k == 0 ? box[f][1] : box[f][2]), 8 * k + (k == 0 ? box[f][2] : box[f][1]);
-  }
-  return s;
-}
-
 // The solid of revolution about z of a closed profile in the (r, z) half-plane: `profile` runs
 // counter-clockwise from a point on the axis (r = 0) to another, the axis closing it; `sides`
 // vertices around each ring, one vertex on the axis for each profile point there. A bottle, a cup.

@@ -79,6 +79,14 @@ SurfaceMesh box(const Vec3& lo, const Vec3& hi, std::array<int, 3> n = {1, 1, 1}
   return surface_of(V, F);
 }
 
+/// The part `outer` with the closed surface `inner` (inside it) as its cavity: inner's faces turned
+/// to face into the hollow, as CAD exports a hollow part.
+SurfaceMesh with_cavity(const SurfaceMesh& outer, const SurfaceMesh& inner) {
+  SurfaceMesh m = join({outer, inner});
+  for (Eigen::Index f = outer.F.rows(); f < m.F.rows(); ++f) std::swap(m.F(f, 1), m.F(f, 2));
+  return m;
+}
+
 /// An icosphere (`levels` subdivisions of the icosahedron) of radius r about c.
 SurfaceMesh sphere(const Vec3& c, double r, int levels) {
   const double t = (1 + std::sqrt(5.0)) / 2;
@@ -137,6 +145,19 @@ void expect_within(const MeshResult& r, double diag, double volume, double out, 
   EXPECT_LE(r.deviation_in, in * diag);
   EXPECT_GE(r.quality.min_dihedral, 5.0);
   EXPECT_EQ(r.quality.components, components);
+}
+
+/// A closed part meshed at each target as one thin part (one layer of prisms), conforming, within
+/// expect_within's bounds (one piece).
+void expect_one_slab(const SurfaceMesh& s, std::initializer_list<int> targets, double volume, double out, double in) {
+  const double diag = bounding_box_diagonal(s.V);
+  for (int target : targets) {
+    SCOPED_TRACE("target " + std::to_string(target));
+    const MeshResult r = mesh(s, target);
+    EXPECT_EQ(r.thin_parts, 1);
+    EXPECT_TRUE(r.tet_stats.conforming);
+    expect_within(r, diag, volume, out, in, 1);
+  }
 }
 
 struct BoxCase {
@@ -1223,14 +1244,7 @@ TEST(MeshingV4, PerforatedPlateIsOneLayerOfPrisms) {
   std::vector<std::pair<int, int>> holes;
   for (int i = 2; i < 30; i += 4)
     for (int j = 2; j < 20; j += 6) holes.emplace_back(i, j);
-  const SurfaceMesh s = sqs::perforated_plate(30, 20, 0.6, 0.4, 0.003, holes);
-  const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
-  for (int target : {150, 1000}) {
-    SCOPED_TRACE("target " + std::to_string(target));
-    const MeshResult r = mesh(s, target);
-    EXPECT_EQ(r.thin_parts, 1);
-    expect_within(r, diag, 0.01, 0.002, 0.002, 1);
-  }
+  expect_one_slab(sqs::perforated_plate(30, 20, 0.6, 0.4, 0.003, holes), {150, 1000}, 0.01, 0.002, 0.002);
 }
 
 // A crumpled open sheet, 1 m square, 40 × 40 quads whose heights are white noise of 2 cm: no coarser
@@ -1590,8 +1604,7 @@ TEST(MeshingV4, InwardInnerShellIsACavity) {
   const SurfaceMesh outer = sphere(Vec3::Zero(), 0.1, 2);
   SurfaceMesh inner = sphere(Vec3::Zero(), 0.08, 2);
   const double shell = std::abs(signed_volume(outer)) - std::abs(signed_volume(inner));
-  SurfaceMesh hollow = join({outer, inner});
-  for (Eigen::Index f = outer.F.rows(); f < hollow.F.rows(); ++f) std::swap(hollow.F(f, 1), hollow.F(f, 2));
+  const SurfaceMesh hollow = with_cavity(outer, inner);
   for (int target : {300, 1000}) {
     SCOPED_TRACE(target);
     const MeshResult r = mesh(hollow, target);
@@ -1755,13 +1768,7 @@ TEST(MeshingV4, ABoundaryNotRecoveredIsRefinedWithinItsBoundAndNotExuded) {
 TEST(MeshingV4, KnifeEdgeIsASlabWithinTheBounds) {
   const SurfaceMesh s = sqs::knife(1.0, 0.02, 1.0, 10);
   ASSERT_GT(signed_volume(s), 0.0);
-  const double diag = bounding_box_diagonal(s.V);
-  for (int target : {150, 1000}) {
-    SCOPED_TRACE("target " + std::to_string(target));
-    const MeshResult r = mesh(s, target);
-    EXPECT_GT(r.thin_parts, 0);
-    expect_within(r, diag, 0.1, 0.01, 0.005, 1);
-  }
+  expect_one_slab(s, {150, 1000}, 0.1, 0.01, 0.005);
 }
 
 // A hollow box 0.3 m across whose wall is 3 mm thick: a thin part whose two sides are closed
@@ -1771,16 +1778,9 @@ TEST(MeshingV4, KnifeEdgeIsASlabWithinTheBounds) {
 // and at 150 the part kept 46 tetrahedra and 2.8 % of its volume, 23 % of the diagonal in. Now a
 // closed slab of prisms, exact as boxes are.
 TEST(MeshingV4, HollowThinBoxIsAClosedSlab) {
-  const SurfaceMesh s = sqs::hollow_box(0.3, 0.003);
+  const SurfaceMesh s = with_cavity(box(Vec3::Zero(), Vec3::Constant(0.3)), box(Vec3::Constant(0.003), Vec3::Constant(0.297)));
   ASSERT_GT(signed_volume(s), 0.0);
-  const double diag = bounding_box_diagonal(s.V);
-  for (int target : {150, 1000}) {
-    SCOPED_TRACE("target " + std::to_string(target));
-    const MeshResult r = mesh(s, target);
-    EXPECT_EQ(r.thin_parts, 1);
-    EXPECT_TRUE(r.tet_stats.conforming);
-    expect_within(r, diag, 0.01, 0.002, 0.002, 1);
-  }
+  expect_one_slab(s, {150, 1000}, 0.01, 0.002, 0.002);
 }
 
 // A bottle with a 1.5 mm wall, open at its rim (sqs::thin_bottle): its prisms 12 mm wide at 300
@@ -1791,10 +1791,7 @@ TEST(MeshingV4, HollowThinBoxIsAClosedSlab) {
 TEST(MeshingV4, ThinBottleIsASlabWithinTheBounds) {
   const SurfaceMesh s = sqs::thin_bottle();
   ASSERT_GT(signed_volume(s), 0.0);
-  const double diag = bounding_box_diagonal(s.V);
-  const MeshResult r = mesh(s, 300);
-  EXPECT_EQ(r.thin_parts, 1);
-  expect_within(r, diag, 0.02, 0.01, 0.005, 1);
+  expect_one_slab(s, {300}, 0.02, 0.01, 0.005);
 }
 
 // TetrahedralizeOptions::run_refine_work, the safety net every run's refinement has: on the
