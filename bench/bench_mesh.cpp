@@ -27,6 +27,8 @@
 //                             (scenes/assets; its boundary is not recovered before refinement):
 //                             refinement stopped past unrecovered_refine_work (1, version 23)
 //                             against no bound (0), with the conflict-zone cells searched
+//  BM_ThinBottle/<prisms>       squeeze mesh's pipeline on a 1.5 mm bottle at 300: one layer of
+//                             prisms (1, version 24) against the boundary route (0, as before it)
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
 //                             of points the winding-number route's Mesh_3 oracle asks about: the
 //                             input's vertices moved along their normals by 0.5-8 times the
@@ -352,6 +354,22 @@ void BM_TetrahedralizeNotRecovered(benchmark::State& state) {
   state.counters["recovered"] = st.recovered;
   state.counters["refine_work"] = st.refine_work;
 }
+// squeeze mesh's pipeline on a bottle with a 1.5 mm wall at 300 (sqs::thin_bottle): one layer of
+// prisms since version 24 (Arg 1), against the boundary route it took before, whose slab lay off
+// the bounds (Arg 0: MeshOptions::thin_parts_as_prisms off), with the deviation inward.
+void BM_ThinBottle(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh bottle = sqs::thin_bottle();
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 300;
+  o.thin_parts_as_prisms = state.range(0) != 0;
+  squeeze::meshing::MeshResult r;
+  for (auto _ : state) r = squeeze::meshing::mesh_surface(bottle, o);
+  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  state.counters["thin_parts"] = r.thin_parts;
+  state.counters["deviation_in"] = r.deviation_in;
+}
+BENCHMARK(BM_ThinBottle)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
 BENCHMARK(BM_TetrahedralizeNotRecovered)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 BENCHMARK(BM_FlipSlivers)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
