@@ -221,4 +221,79 @@ inline squeeze::meshing::SurfaceMesh thin_bottle() {
                   64);
 }
 
+// The prism of a simple polygon in the xy plane (counter-clockwise, no repeated point) extruded
+// along z from 0 to `depth`: each cap triangulated by ear clipping, each side a quad of two
+// triangles, all facing outward. A comb, a ribbed plate, a bracket's section.
+inline squeeze::meshing::SurfaceMesh extruded(const std::vector<Eigen::Vector2d>& P, double depth) {
+  const int n = static_cast<int>(P.size());
+  auto cross = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+    return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+  };
+  std::vector<Eigen::RowVector3i> F;
+  std::vector<int> left(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) left[static_cast<size_t>(i)] = i;
+  while (left.size() > 3) {  // an ear: a convex corner whose triangle holds no other corner
+    const size_t m = left.size();
+    size_t ear = m;
+    for (size_t k = 0; k < m && ear == m; ++k) {
+      const int a = left[(k + m - 1) % m], b = left[k], c = left[(k + 1) % m];
+      if (cross(P[a], P[b], P[c]) <= 0) continue;
+      bool empty = true;
+      for (int q : left)
+        if (q != a && q != b && q != c && cross(P[a], P[b], P[q]) >= 0 && cross(P[b], P[c], P[q]) >= 0 &&
+            cross(P[c], P[a], P[q]) >= 0)
+          empty = false;
+      if (empty) ear = k;
+    }
+    if (ear == m) break;  // (not simple)
+    F.emplace_back(left[(ear + m - 1) % m], left[(ear + 1) % m], left[ear]);  // the bottom cap faces -z
+    left.erase(left.begin() + static_cast<long>(ear));
+  }
+  F.emplace_back(left[0], left[2], left[1]);
+  const size_t cap = F.size();
+  for (size_t f = 0; f < cap; ++f) F.emplace_back(F[f](0) + n, F[f](2) + n, F[f](1) + n);  // the top, +z
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    F.emplace_back(i, j, j + n);
+    F.emplace_back(i, j + n, i + n);
+  }
+  squeeze::meshing::SurfaceMesh s;
+  s.V.resize(2 * n, 3);
+  for (int i = 0; i < n; ++i) {
+    s.V.row(i) << P[static_cast<size_t>(i)].x(), P[static_cast<size_t>(i)].y(), 0;
+    s.V.row(i + n) << P[static_cast<size_t>(i)].x(), P[static_cast<size_t>(i)].y(), depth;
+  }
+  s.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t f = 0; f < F.size(); ++f) s.F.row(static_cast<Eigen::Index>(f)) = F[f];
+  return s;
+}
+
+// A comb 3 cm deep: a spine 72 × 10 mm and 12 teeth 2 mm thick, 50 mm long, 4 mm apart
+// (scripts/gen_unseen_shapes.py --version24's comb.off). Thin walls that branch, closer to each
+// other than its tetrahedra are long.
+inline squeeze::meshing::SurfaceMesh comb() {
+  std::vector<Eigen::Vector2d> P{{0, 0}, {0.072, 0}, {0.072, 0.01}};
+  for (int k = 11; k >= 0; --k) {
+    const double x0 = k * 0.006 + 0.002;
+    for (const Eigen::Vector2d& q : {Eigen::Vector2d(x0 + 0.002, 0.01), Eigen::Vector2d(x0 + 0.002, 0.06),
+                                    Eigen::Vector2d(x0, 0.06), Eigen::Vector2d(x0, 0.01)})
+      P.push_back(q);
+  }
+  P.emplace_back(0, 0.01);
+  return extruded(P, 0.03);
+}
+
+// A plate 0.3 × 0.3 m and 3 mm thick with three ribs 3 mm thick and 30 mm tall along it, at
+// 0.075, 0.15 and 0.225 m: a thin part whose sides are not two (its ribs branch off it).
+inline squeeze::meshing::SurfaceMesh ribbed_plate() {
+  const double t = 0.003, h = 0.03;
+  std::vector<Eigen::Vector2d> P{{0, 0}, {0.3, 0}, {0.3, t}};
+  for (double x : {0.225, 0.15, 0.075})
+    for (const Eigen::Vector2d& q : {Eigen::Vector2d(x + t / 2, t), Eigen::Vector2d(x + t / 2, t + h),
+                                    Eigen::Vector2d(x - t / 2, t + h), Eigen::Vector2d(x - t / 2, t)})
+      P.push_back(q);
+  P.emplace_back(0, t);
+  return extruded(P, 0.3);
+}
+
 }  // namespace sqs

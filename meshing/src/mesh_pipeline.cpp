@@ -374,6 +374,7 @@ struct Part {
   bool by_winding_number = false;  // meshed as its winding-number solid after its boundary failed
   bool remeshed = false;           // meshed from its own surface remeshed (retry 0, version 22)
   int exuder_nan_stops = 0;   // its attempts' exuders that met a NaN weight (TetrahedralizeStats)
+  int exuder_pump_bounds = 0;  // ... that stopped at their pump bound (TetrahedralizeStats)
   SurfaceMesh sheet;          // an open sheet (sheet.h), when `surface` is its slab: meshed as one
                               // layer of prisms (sheet_tets) where it can be
   bool sheet_capped = false;  // ... with more tetrahedra than its share of the target (thinness)
@@ -1224,6 +1225,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             tb.max_attempts = std::min(tb.max_attempts, attempts);
             TetMesh m = tetrahedralize(b, tb, st, pr);
             p.exuder_nan_stops += st->exuder_nan_stops;
+            p.exuder_pump_bounds += st->exuder_pump_bounds;
             if (const int debris = drop_debris_components(m, 0.005); debris > 0) {
               remove_unused_vertices(m);
               spdlog::debug("part {}: {} tetrahedra in pieces under 0.5 % of its volume dropped", i, debris);
@@ -1231,6 +1233,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             return m;
           };
           p.tets = tetrahedralize_part(p.boundary, &p.tet_stats, t.max_tets, t.max_attempts);
+          const SurfaceMesh first_boundary = p.boundary;  // (retry 4's)
+          const EnvelopeStats first_envelope = p.envelope;
           t.max_refine_work = 0;  // the bound is the first boundary's only (the retries below have their own)
           // A boundary whose tetrahedralization is not conforming or keeps a dihedral angle below the
           // floor (the simplification brought two sheets of a thin part close) is tried again,
@@ -1439,6 +1443,52 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             ++p.retries;
             if (better(m, st, p.tets, p.tet_stats)) adopt(m, st, b, es);
           }
+          // Retry 4 (meshing version 25), where none held: the first boundary again, from a finer
+          // start, at 1/2 then 1/4 of the first edge length (TetrahedralizeOptions::
+          // edge_length_scale; one attempt each, not exuded), kept where it holds. Walls thinner
+          // than the spacing of the boundary's points and closer to each other than it, that
+          // branch (so not a thin part: its sides are not two), put each other's points in the
+          // diametral balls of their triangles, and recovery by splits gave up at its cap in every
+          // attempt: a comb of 2 mm teeth 4 mm apart at 150 kept 12,176 tetrahedra, not
+          // conforming, 1.8 % of the diagonal in; from a quarter of the length, its 204 faces give
+          // about 5,300 tetrahedra, the comb exactly, in about a second. (Last: it is not the
+          // target's count, and the retries above hold at fewer where they hold.)
+          // Not for a boundary of mostly skinny triangles (its retry above): its faces' shape, not
+          // their points' spacing, keeps them out of the triangulation (a CAD cylinder of 104
+          // sides, 8 long, caps fanned: with remesh_retry off it held here at a quarter, 18,060
+          // tetrahedra in 55 s, where its winding-number solid takes a second). Its refinement
+          // has the skinny parts' work bound.
+          for (double scale : {0.5, 0.25}) {
+            if (holds(p.tets, p.tet_stats) || abandoned || p.offset > 0 || skinny > 0) break;
+            TetrahedralizeOptions saved = t;
+            t.edge_length_scale = scale;
+            t.max_refine_work = opt.skinny_refine_work;
+            t.exude = false;  // (its walls' tetrahedra are as flat as the walls are thin: the exuder
+                              // cannot improve them, and on the comb it ran to its 30 s time limit)
+            TetrahedralizeStats st;
+            TetMesh m = tetrahedralize_part(first_boundary, &st, t.max_tets, 1);
+            t = saved;
+            ++p.retries;
+            // Held, and its boundary within the bounds of the part's surface both ways: peeling
+            // boundary slivers moves it inward (an urchin's 20 spikes at 150: 0.50 % of the
+            // diagonal in, where its winding-number solid, below, holds the bounds).
+            bool held_now = holds(m, st);
+            double out = 0, in = 0;
+            if (held_now) {
+              const Eigen::MatrixX3i bf = boundary_faces(m.T);
+              const double spacing = deviation_spacing(bounding_box_diagonal(p.surface.V), {area(p.surface)});
+              out = farthest_sample(m.V, bf, TriangleBvh(p.surface.V, p.surface.F), spacing);
+              in = farthest_sample(p.surface.V, p.surface.F, TriangleBvh(m.V, bf), spacing);
+              held_now = out <= e.max_outside && in <= e.max_inside;
+            }
+            spdlog::debug("part {}: retry 4 (a finer start, {:.2f} of the edge length): {} tetrahedra, conforming {}, "
+                          "{:.3g} / {:.3g} off its surface (bounds {:.3g} / {:.3g}), holds {}",
+                          i, scale, m.T.rows(), st.conforming, out, in, e.max_outside, e.max_inside, held_now);
+            if (held_now) {
+              SurfaceMesh b = first_boundary;
+              adopt(m, st, b, first_envelope);
+            }
+          }
           // A part whose boundary still does not hold (a cone's sharp tip between thin triangles,
           // whose recovery splits them ten times over: 52 of 90 generated cones failed, some not
           // conforming with 8 % of the diagonal out) is meshed as the solid its own surface's
@@ -1540,6 +1590,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         s.relocated += p.tet_stats.relocated;
         s.flips += p.tet_stats.flips;
         s.exuder_nan_stops += p.exuder_nan_stops;
+        s.exuder_pump_bounds += p.exuder_pump_bounds;
         s.conforming = s.conforming && p.tet_stats.conforming;
       }
       r.boundary = concatenate(b, &SurfaceMesh::F);
@@ -2332,7 +2383,8 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"peeled_slivers", r.method == "convex_shells" ? r.shell_stats.peeled_slivers : r.tet_stats.peeled},
         {"relocated_sliver_vertices", r.tet_stats.relocated},  // 0 unless tetrahedralize() meshed it
         {"flipped_slivers", r.tet_stats.flips},
-        {"exuder_nan_stops", r.tet_stats.exuder_nan_stops}}},
+        {"exuder_nan_stops", r.tet_stats.exuder_nan_stops},
+        {"exuder_pump_bounds", r.tet_stats.exuder_pump_bounds}}},
       {"winding_number",  // Mesh_3 of the winding-number solid: its tetrahedra, or its boundary's surface
        r.method == "winding_number" || r.method == "winding_number_boundary"
            ? json{{"attempts", r.winding_stats.attempts},

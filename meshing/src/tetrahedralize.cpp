@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstdlib>
 #include <deque>
@@ -148,6 +149,7 @@ struct RunResult {
   double work = 0;             // conflict-zone cells refinement searched (Mesher::conflict_cells_)
   bool work_exceeded = false;  // ... beyond the Mesher's budget: refinement stopped there
   bool run_bound = false;      // ... beyond TetrahedralizeOptions::run_refine_work: stopped there
+  bool exuder_pump_bound = false;  // the exuder stopped at TetrahedralizeOptions::exude_pumps_per_sliver
 };
 
 class Mesher {
@@ -239,7 +241,7 @@ class Mesher {
     // faces between cells classified by the winding number, and on such ones the exuder ran to its
     // 30 s time limit (trimesh's round.stl, octagonal_pocket.ply and ADIS16480.STL at 150, each a
     // run that lost its boundary in refinement), where on conforming runs it takes under a second.)
-    if (opt_.exude && !r.work_exceeded && r.conforming) r.exuder_stopped = !exude();
+    if (opt_.exude && !r.work_exceeded && r.conforming) r.exuder_stopped = !exude(r);
     const double exude_s = since(t_exude);
     r.mesh = extract();
     spdlog::debug("tetrahedralize run: recovery {:.2f} s (conforming {}), refinement {:.2f} s, exudation {:.2f} s",
@@ -1045,12 +1047,40 @@ class Mesher {
   // edge and collinear with it up to rounding, CGAL 5.5's exuder can take a NaN weight and die of
   // SIGFPE; it then stops there, its earlier pumps kept.)
   // Returns false where it stopped at a NaN weight.
-  bool exude() {
+  // Its pumps (a vertex's weight changed to lift a sliver) are counted, and bounded by
+  // TetrahedralizeOptions::exude_pumps_per_sliver: where the slivers cannot be lifted the exuder
+  // can pump round in a circle until its time limit (a comb of 2 mm teeth at 1000: 571,216 pumps
+  // in 30 s for 233 slivers, where the corpus's and organs' runs take about one per sliver).
+  struct PumpBound {};  // thrown by the visitor between two pumps (the triangulation consistent)
+  struct PumpCounter {
+    long* pumps;
+    long bound;
+    void after_cell_pumped(std::size_t) {
+      if (++*pumps >= bound) throw PumpBound{};
+    }
+  };
+  bool exude(RunResult& r) {
+    long slivers = 0;
+    for (auto c = tr_.finite_cells_begin(); c != tr_.finite_cells_end(); ++c)
+      if (c->subdomain_index() != 0)
+        slivers += min_dihedral(P_[id(c->vertex(0))], P_[id(c->vertex(1))], P_[id(c->vertex(2))], P_[id(c->vertex(3))]) <
+                   opt_.sliver_bound;
+    const long bound = opt_.exude_pumps_per_sliver > 0 ? std::max(1000L, opt_.exude_pumps_per_sliver * slivers) : LONG_MAX;
     CGAL::Mesh_optimization_return_code code = CGAL::BOUND_REACHED;
+    long pumps = 0;
     const bool whole = detail::run_unless_sigfpe([&] {
-      code = CGAL::exude_mesh_3(c3t3_, CGAL::parameters::sliver_bound = opt_.sliver_bound,
-                                CGAL::parameters::time_limit = opt_.exude_seconds);
+      using Criterion = CGAL::Mesh_3::Min_dihedral_angle_criterion<Tr>;
+      Criterion criterion(opt_.sliver_bound, c3t3_.triangulation());
+      CGAL::Mesh_3::Slivers_exuder<C3t3, Criterion, PumpCounter> exuder(c3t3_, criterion);
+      exuder.set_time_limit(opt_.exude_seconds);
+      try {
+        code = exuder(PumpCounter{&pumps, bound});
+      } catch (const PumpBound&) {
+        r.exuder_pump_bound = true;
+      }
     });
+    spdlog::debug("tetrahedralize: exuder: {} pumps for {} tetrahedra under {} degrees{}", pumps, slivers, opt_.sliver_bound,
+                  r.exuder_pump_bound ? " (its bound)" : "");
     if (!whole)
       spdlog::debug("tetrahedralize: CGAL's sliver exuder met a NaN weight (a numerically flat cell) and stopped there");
     if (code == CGAL::TIME_LIMIT_REACHED)
@@ -1116,6 +1146,8 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
   if (input_boundary.F.rows() == 0) throw InputError("tetrahedralize: the surface has no face");
   if (opt.target_tets < 1) throw InputError("--target-tets must be at least 1");
   if (opt.max_attempts < 1) throw InputError("tetrahedralize: max_attempts must be at least 1");
+  if (!(opt.edge_length_scale > 0) || !std::isfinite(opt.edge_length_scale))
+    throw InputError("tetrahedralize: edge_length_scale must be positive and finite");
   // Long edges split first (TetrahedralizeOptions::long_edge), never below a twentieth of the
   // diagonal: a large flat face beside fine detail is cut into a few hundred pieces, not millions.
   const double split_above = std::max(opt.long_edge * median_edge_length(input_boundary),
@@ -1135,7 +1167,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
   volume = std::abs(volume);
   const double target = opt.target_tets;
   // A regular tetrahedron of edge L has volume L³ / (6√2); Delaunay meshes average about half that.
-  double L = std::cbrt(6.0 * std::sqrt(2.0) * volume / (0.5 * target));
+  double L = opt.edge_length_scale * std::cbrt(6.0 * std::sqrt(2.0) * volume / (0.5 * target));
   CGAL::get_default_random() = CGAL::Random(static_cast<int>(opt.seed));
   const FastWindingNumber wn(boundary.V, boundary.F);
   TetrahedralizeStats st;
@@ -1158,6 +1190,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     st.attempts = attempt + 1;
     st.exuder_nan_stops += r.exuder_stopped;
+    st.exuder_pump_bounds += r.exuder_pump_bound;
     st.refine_work += r.work;
     st.runs_at_work_bound += r.run_bound;
     const bool exceeded = r.work_exceeded;

@@ -29,6 +29,11 @@ struct TetrahedralizeOptions {
                                   // improve and on which it ran into exude_seconds)
   double exude_seconds = 30.0;    // the exuder's time limit (0: none): a bound for pathological inputs,
                                   // far above what it takes on real meshes (reaching it is warned)
+  long exude_pumps_per_sliver = 20;  // the exuder stops after this many pumps per tetrahedron under
+                                  // sliver_bound (1,000 at least): a deterministic bound where it
+                                  // would pump round in a circle to exude_seconds (thin walls whose
+                                  // flat tetrahedra it cannot lift); real meshes take about one
+                                  // per sliver. 0: no bound
   double min_dihedral = 5.0;      // degrees: the floor the result is checked against (stats)
   double peel_max_height = INFINITY;  // units: boundary slivers are peeled off only where that moves the
                                   // boundary by at most this (peel_boundary_slivers); thicker ones
@@ -61,6 +66,10 @@ struct TetrahedralizeOptions {
                                   // mesh retries usually replace): its rounds stop beyond it. Such
                                   // runs searched up to 27 million in their 8 rounds (trimesh's
                                   // plate_holes.STL: 18 s of a 35 s row). 0: no bound
+  double edge_length_scale = 1.0; // the first attempt's interior edge length, × this: below 1 its
+                                  // boundary points (crease points and the lattice on flat patches,
+                                  // spaced by the length) start denser (squeeze mesh: a part whose
+                                  // boundary no attempt recovered, at 1/2 then 1/4)
   double run_refine_work = 4e7;   // cells of the conflict zones the refinement of any one run may
                                   // search: a safety net against runs that do not end (its rounds
                                   // and its last round stop beyond it, warned). The most measured
@@ -86,6 +95,7 @@ struct TetrahedralizeStats {
                                  // tetrahedra classified by the winding number)
   int exuder_nan_stops = 0;      // attempts whose CGAL exuder met a NaN weight beside a numerically flat
                                  // cell and stopped there, instead of the process dying of SIGFPE
+  int exuder_pump_bounds = 0;    // attempts whose exuder stopped at exude_pumps_per_sliver
   int runs_at_work_bound = 0;    // runs whose refinement stopped at run_refine_work (all attempts)
   double refine_work = 0;        // cells of the conflict zones refinement searched, all attempts
   bool work_exceeded = false;    // refinement stopped at TetrahedralizeOptions::max_refine_work
