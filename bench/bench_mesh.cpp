@@ -29,6 +29,8 @@
 //                             against no bound (0), with the conflict-zone cells searched
 //  BM_ThinBottle/<prisms>       squeeze mesh's pipeline on a 1.5 mm bottle at 300: one layer of
 //                             prisms (1, version 24) against the boundary route (0, as before it)
+//  BM_CombExuder/<bounded>     squeeze mesh's pipeline on a comb of 2 mm teeth at 1000: the exuder
+//                             stopped at 20 pumps per sliver (1, version 25) against no bound (0)
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
 //                             of points the winding-number route's Mesh_3 oracle asks about: the
 //                             input's vertices moved along their normals by 0.5-8 times the
@@ -369,6 +371,23 @@ void BM_ThinBottle(benchmark::State& state) {
   state.counters["deviation_in"] = r.deviation_in;
 }
 BENCHMARK(BM_ThinBottle)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+// squeeze mesh's pipeline on the comb (sqs::comb, read from an OFF file as squeeze mesh reads it) at
+// 1000: the exuder of its first attempt stopped at 20 pumps per sliver since version 25 (Arg 1),
+// against no pump bound (Arg 0: it pumps round in a circle to its 30 s time limit).
+void BM_CombExuder(benchmark::State& state) {
+  const fs::path path = fs::temp_directory_path() / ("squeeze_bench_comb_" + std::to_string(getpid()) + ".off");
+  squeeze::meshing::save_surface(path, sqs::comb());
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 1000;
+  o.tetrahedralize.exude_pumps_per_sliver = state.range(0) != 0 ? 20 : 0;
+  squeeze::meshing::MeshResult r;
+  for (auto _ : state) r = squeeze::meshing::mesh_file(path, o);
+  fs::remove(path);
+  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  state.counters["pump_bounds"] = r.tet_stats.exuder_pump_bounds;
+  state.counters["volume_ratio"] = r.volume_ratio.value_or(0);
+}
+BENCHMARK(BM_CombExuder)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 BENCHMARK(BM_TetrahedralizeNotRecovered)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
