@@ -4,10 +4,12 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 #include <vector>
 
 #include "squeeze/meshing/surface.h"
+#include "squeeze/meshing/triangulate_polygon.h"
 
 namespace sqs {
 
@@ -222,36 +224,22 @@ inline squeeze::meshing::SurfaceMesh thin_bottle() {
 }
 
 // The prism of a simple polygon in the xy plane (counter-clockwise, no repeated point) extruded
-// along z from 0 to `depth`: each cap triangulated by ear clipping, each side a quad of two
-// triangles, all facing outward. A comb, a ribbed plate, a bracket's section.
+// along z from 0 to `depth`: each cap triangulated by squeeze::meshing::triangulate_polygon (ear
+// clipping), each side a quad of two triangles, all facing outward. A comb, a ribbed plate, a
+// bracket's section.
 inline squeeze::meshing::SurfaceMesh extruded(const std::vector<Eigen::Vector2d>& P, double depth) {
   const int n = static_cast<int>(P.size());
-  auto cross = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-    return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
-  };
-  std::vector<Eigen::RowVector3i> F;
-  std::vector<int> left(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) left[static_cast<size_t>(i)] = i;
-  while (left.size() > 3) {  // an ear: a convex corner whose triangle holds no other corner
-    const size_t m = left.size();
-    size_t ear = m;
-    for (size_t k = 0; k < m && ear == m; ++k) {
-      const int a = left[(k + m - 1) % m], b = left[k], c = left[(k + 1) % m];
-      if (cross(P[a], P[b], P[c]) <= 0) continue;
-      bool empty = true;
-      for (int q : left)
-        if (q != a && q != b && q != c && cross(P[a], P[b], P[q]) >= 0 && cross(P[b], P[c], P[q]) >= 0 &&
-            cross(P[c], P[a], P[q]) >= 0)
-          empty = false;
-      if (empty) ear = k;
-    }
-    if (ear == m) break;  // (not simple)
-    F.emplace_back(left[(ear + m - 1) % m], left[(ear + 1) % m], left[ear]);  // the bottom cap faces -z
-    left.erase(left.begin() + static_cast<long>(ear));
+  std::vector<std::array<double, 3>> pts;
+  std::vector<long> poly;
+  for (int i = 0; i < n; ++i) {
+    pts.push_back({P[static_cast<size_t>(i)].x(), P[static_cast<size_t>(i)].y(), 0.0});
+    poly.push_back(i);
   }
-  F.emplace_back(left[0], left[2], left[1]);
-  const size_t cap = F.size();
-  for (size_t f = 0; f < cap; ++f) F.emplace_back(F[f](0) + n, F[f](2) + n, F[f](1) + n);  // the top, +z
+  std::vector<std::array<int, 3>> cap;  // counter-clockwise: facing +z
+  squeeze::meshing::triangulate_polygon(pts, poly, cap);
+  std::vector<Eigen::RowVector3i> F;
+  for (const auto& t : cap) F.emplace_back(t[0], t[2], t[1]);              // the bottom, -z
+  for (const auto& t : cap) F.emplace_back(t[0] + n, t[1] + n, t[2] + n);  // the top, +z
   for (int i = 0; i < n; ++i) {
     const int j = (i + 1) % n;
     F.emplace_back(i, j, j + n);

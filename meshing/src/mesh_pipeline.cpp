@@ -453,6 +453,17 @@ double farthest_sample(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, con
   return farthest.load();
 }
 
+// How far a candidate boundary (V, F) lies from a part's surface S both ways, as its deviation
+// bounds judge it: `out` the farthest of its samples from S (S_bvh, S's triangles), `in` the
+// farthest of S's samples from it, each `spacing` apart (farthest_sample).
+struct TwoWayDistance {
+  double out = 0, in = 0;
+};
+TwoWayDistance farthest_both_ways(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const SurfaceMesh& S,
+                                  const TriangleBvh& S_bvh, double spacing) {
+  return {farthest_sample(V, F, S_bvh, spacing), farthest_sample(S.V, S.F, TriangleBvh(V, F), spacing)};
+}
+
 // The faces of each component: C  #F component id per face (face_components), n components.
 std::vector<std::vector<int>> faces_by_component(const Eigen::VectorXi& C, int n) {
   std::vector<std::vector<int>> faces(static_cast<size_t>(n));
@@ -1127,8 +1138,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         // split, their new vertices put between the sides.
         auto accept = [&](const SurfaceMesh& slab) {
           const double spacing = std::max(0.25 * Ls, 1e-3 * bounding_box_diagonal(S.V));
-          const TriangleBvh slab_bvh(slab.V, slab.F);
-          const double out = farthest_sample(slab.V, slab.F, bvh, spacing), in = farthest_sample(S.V, S.F, slab_bvh, spacing);
+          const auto [out, in] = farthest_both_ways(slab.V, slab.F, S, bvh, spacing);
           spdlog::debug("part: thin ({:.3g} thick, tetrahedra {:.3g} long): mid-surface of {} triangles, slab {:.3g} / {:.3g} "
                         "from its surface (bounds {:.3g} / {:.3g})",
                         thickness, L, mid.F.rows(), out, in, e.max_outside, e.max_inside);
@@ -1343,8 +1353,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               ro.edge_length = h;
               SurfaceMesh b = remesh_isotropic(p.surface, ro);
               if (b.F.rows() == 0 || abandoned) break;
-              const double out = farthest_sample(b.V, b.F, own, spacing);
-              const double in = farthest_sample(p.surface.V, p.surface.F, TriangleBvh(b.V, b.F), spacing);
+              const auto [out, in] = farthest_both_ways(b.V, b.F, p.surface, own, spacing);
               spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): {} faces, {:.3g} / {:.3g} off its surface (bounds "
                             "{:.3g} / {:.3g})", i, h, b.F.rows(), out, in, e.max_outside, e.max_inside);
               if (out > e.max_outside || in > e.max_inside) {
@@ -1473,17 +1482,15 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             // boundary slivers moves it inward (an urchin's 20 spikes at 150: 0.50 % of the
             // diagonal in, where its winding-number solid, below, holds the bounds).
             bool held_now = holds(m, st);
-            double out = 0, in = 0;
+            TwoWayDistance off;
             if (held_now) {
-              const Eigen::MatrixX3i bf = boundary_faces(m.T);
               const double spacing = deviation_spacing(bounding_box_diagonal(p.surface.V), {area(p.surface)});
-              out = farthest_sample(m.V, bf, TriangleBvh(p.surface.V, p.surface.F), spacing);
-              in = farthest_sample(p.surface.V, p.surface.F, TriangleBvh(m.V, bf), spacing);
-              held_now = out <= e.max_outside && in <= e.max_inside;
+              off = farthest_both_ways(m.V, boundary_faces(m.T), p.surface, TriangleBvh(p.surface.V, p.surface.F), spacing);
+              held_now = off.out <= e.max_outside && off.in <= e.max_inside;
             }
             spdlog::debug("part {}: retry 4 (a finer start, {:.2f} of the edge length): {} tetrahedra, conforming {}, "
                           "{:.3g} / {:.3g} off its surface (bounds {:.3g} / {:.3g}), holds {}",
-                          i, scale, m.T.rows(), st.conforming, out, in, e.max_outside, e.max_inside, held_now);
+                          i, scale, m.T.rows(), st.conforming, off.out, off.in, e.max_outside, e.max_inside, held_now);
             if (held_now) {
               SurfaceMesh b = first_boundary;
               adopt(m, st, b, first_envelope);
