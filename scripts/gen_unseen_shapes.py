@@ -12,6 +12,12 @@ With --version24, the shapes of docs/meshing.md, "Version 24", instead: staircas
 bottle_pinhole (a 4 mm hole through its base), spiral (3 mm wall, 3 turns), plate_cubes (a 1 m
 plate and ten 1 cm cubes), hollow_box (3 mm wall), ribbon (2 mm, one twist), star (7 points),
 hollow_sphere (2 mm), hollow_torus (3 mm), can (1 mm), egg_shell (7-25 mm wall).
+With --version26, those of "Version 26": wavy_curtain (1 x 2 m, 1 cm, waved), figure8_knot,
+torus_knot25 (a (2,5) torus knot), slot_jaws (two boxes 5 cm apart), gear (24 teeth, 1 cm),
+spring (6 turns of 5 mm wire, open ends capped), table (a top and four legs through it), chain
+(four linked tori), single_quad (two triangles), open_box (no lid, zero thickness),
+rotated_thin_box (1 x 0.6 x 0.02 m, turned and moved 100 m), inside_out_sphere, two_cubes_touching,
+rod (2 m, 2 cm across, 16 sides, one ring), sphere_holes (five holes).
 """
 import argparse
 import os
@@ -250,11 +256,125 @@ def version24(out):
                                            inward(uv_sphere(np.array([0.01, 0, 0]), (0.285, 0.19, 0.143), 48, 32))))
 
 
+def version26(out):
+    """The shapes tried in the twenty-ninth session (docs/meshing.md, "Version 26")."""
+    rng = np.random.default_rng(7)
+    def grid_sheet(f, nx, ny, th):
+        # closed thin sheet around the surface (x,y)->f(x,y) in [0,1]^2 scaled; thickness th along z
+        V = []
+        for s in (0, 1):
+            for i in range(nx + 1):
+                for j in range(ny + 1):
+                    x, y = i / nx, j / ny
+                    p = np.array(f(x, y)); p[2] += (th / 2 if s else -th / 2); V.append(p)
+        idx = lambda s, i, j: s * (nx + 1) * (ny + 1) + i * (ny + 1) + j
+        F = []
+        for i in range(nx):
+            for j in range(ny):
+                a, b, c, d = idx(1, i, j), idx(1, i + 1, j), idx(1, i + 1, j + 1), idx(1, i, j + 1)
+                F += [(a, b, c), (a, c, d)]
+                a, b, c, d = idx(0, i, j), idx(0, i + 1, j), idx(0, i + 1, j + 1), idx(0, i, j + 1)
+                F += [(a, c, b), (a, d, c)]
+        ring = [(i, 0) for i in range(nx)] + [(nx, j) for j in range(ny)] + [(i, ny) for i in range(nx, 0, -1)] + [(0, j) for j in range(ny, 0, -1)]
+        for k in range(len(ring)):
+            (i0, j0), (i1, j1) = ring[k], ring[(k + 1) % len(ring)]
+            a, b, c, d = idx(0, i0, j0), idx(0, i1, j1), idx(1, i1, j1), idx(1, i0, j0)
+            F += [(a, b, c), (a, c, d)]
+        return np.array(V), F
+
+    write_off(out("wavy_curtain.off"), *grid_sheet(lambda x, y: (x, 2 * y, 0.1 * np.sin(2 * np.pi * x / 0.5)), 40, 8, 0.01))
+
+    def knot(c, dc, r, n=240, m=12):
+        return tube(c, dc, r, n, m)
+    f8 = lambda t: np.array([(2 + np.cos(2 * t)) * np.cos(3 * t), (2 + np.cos(2 * t)) * np.sin(3 * t), np.sin(4 * t)]) * 0.1
+    df8 = lambda t, h=1e-5: (f8(t + h) - f8(t - h)) / (2 * h)
+    write_off(out("figure8_knot.off"), *knot(f8, df8, 0.03))
+    tk = lambda t: np.array([(1 + 0.4 * np.cos(5 * t)) * np.cos(2 * t), (1 + 0.4 * np.cos(5 * t)) * np.sin(2 * t), 0.4 * np.sin(5 * t)])
+    dtk = lambda t, h=1e-5: (tk(t + h) - tk(t - h)) / (2 * h)
+    write_off(out("torus_knot25.off"), *knot(tk, dtk, 0.05, 400, 10))
+
+    write_off(out("slot_jaws.off"), *merge(box((0, 0, 0), (0.3, 0.5, 0.1)), box((0.35, 0, 0), (0.65, 0.5, 0.1))))
+
+    P = []
+    for k in range(24):
+        for a, r in ((0.0, 0.09), (0.3, 0.09), (0.45, 0.1), (0.75, 0.1)):
+            t = 2 * np.pi * (k + a) / 24
+            P.append((r * np.cos(t), r * np.sin(t)))
+    write_off(out("gear.off"), *extrude(P, 0.01))
+
+    def open_tube(c, dc, r, n, m, T):
+        V, F = [], []
+        for i in range(n + 1):
+            t = T * i / n
+            p, d = c(t), dc(t); d = d / np.linalg.norm(d)
+            a = np.array([0, 0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0, 0])
+            u = np.cross(d, a); u /= np.linalg.norm(u); w = np.cross(d, u)
+            for j in range(m):
+                s = 2 * np.pi * j / m
+                V.append(p + r * (np.cos(s) * u + np.sin(s) * w))
+        for i in range(n):
+            for j in range(m):
+                a, b = i * m + j, (i + 1) * m + j
+                cc, d = (i + 1) * m + (j + 1) % m, i * m + (j + 1) % m
+                F += [(a, b, cc), (a, cc, d)]
+        V.append(c(0)); V.append(c(T)); c0, c1 = len(V) - 2, len(V) - 1
+        for j in range(m):
+            F.append((c0, (j + 1) % m, j)); F.append((c1, n * m + j, n * m + (j + 1) % m))
+        return np.array(V), F
+    hel = lambda t: np.array([0.05 * np.cos(t), 0.05 * np.sin(t), 0.2 * t / (12 * np.pi)])
+    dhel = lambda t, h=1e-5: (hel(t + h) - hel(t - h)) / (2 * h)
+    write_off(out("spring.off"), *open_tube(hel, dhel, 0.005, 360, 10, 12 * np.pi))
+
+    parts = [box((0, 0, 0.7), (1.2, 0.8, 0.74))]
+    for x, y in ((0.05, 0.05), (1.1, 0.05), (0.05, 0.7), (1.1, 0.7)):
+        parts.append(box((x, y, 0), (x + 0.05, y + 0.05, 0.72)))
+    write_off(out("table.off"), *merge(*parts))
+
+    def torus(c, R, r, axis, nu=32, nv=12):
+        V, F = [], []
+        for i in range(nu):
+            a = 2 * np.pi * i / nu
+            for j in range(nv):
+                b = 2 * np.pi * j / nv
+                p = np.array([(R + r * np.cos(b)) * np.cos(a), (R + r * np.cos(b)) * np.sin(a), r * np.sin(b)])
+                if axis == 1: p = np.array([p[0], p[2], p[1]])
+                V.append(p + c)
+        for i in range(nu):
+            for j in range(nv):
+                a, b = i * nv + j, ((i + 1) % nu) * nv + j
+                cc, d = ((i + 1) % nu) * nv + (j + 1) % nv, i * nv + (j + 1) % nv
+                F += [(a, b, cc), (a, cc, d)] if axis == 0 else [(a, cc, b), (a, d, cc)]
+        return np.array(V), F
+    write_off(out("chain.off"), *merge(*[torus(np.array([0.15 * k, 0, 0]), 0.1, 0.02, k % 2) for k in range(4)]))
+
+    write_off(out("single_quad.off"), np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]]), [(0, 1, 2), (0, 2, 3)])
+    V, F = box((0, 0, 0), (1, 1, 1)); F = [f for f in F if not all(V[i][2] == 1 for i in f)]
+    write_off(out("open_box.off"), V, F)
+
+    V, F = box((0, 0, 0), (1, 0.6, 0.02))
+    ax = np.array([1, 2, 3.0]); ax /= np.linalg.norm(ax); th = 0.7
+    K = np.array([[0, -ax[2], ax[1]], [ax[2], 0, -ax[0]], [-ax[1], ax[0], 0]])
+    Rm = np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K
+    write_off(out("rotated_thin_box.off"), V @ Rm.T + np.array([100, -40, 7.0]), F)
+
+    write_off(out("inside_out_sphere.off"), *inward(uv_sphere(np.zeros(3), (0.3, 0.3, 0.3), 32, 16)))
+    write_off(out("two_cubes_touching.off"), *merge(box((0, 0, 0), (1, 1, 1)), box((1, 0, 0), (2, 1, 1))))
+    write_off(out("rod.off"), *cylinder(np.array([0, 0, 0.0]), np.array([2, 0, 0.0]), 0.01, 16))
+
+    V, F = uv_sphere(np.zeros(3), (1, 1, 1), 64, 32)
+    bad = set()
+    for k in range(5):
+        c = V[rng.integers(len(V))]
+        bad |= {fi for fi, f in enumerate(F) if np.linalg.norm(V[list(f)].mean(0) - c) < 0.12}
+    write_off(out("sphere_holes.off"), V, [f for fi, f in enumerate(F) if fi not in bad])
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("dir")
     ap.add_argument("--elephant", help="the corpus elephant.off, to cut holes into")
     ap.add_argument("--version24", action="store_true", help="the shapes of version 24 instead")
+    ap.add_argument("--version26", action="store_true", help="the shapes of version 26 instead")
     args = ap.parse_args()
     if args.elephant and not os.path.isfile(args.elephant):
         ap.error("--elephant: no such file: " + args.elephant)
@@ -262,6 +382,9 @@ def main():
     out = lambda name: os.path.join(args.dir, name)
     if args.version24:
         version24(out)
+        return
+    if args.version26:
+        version26(out)
         return
 
     tre = lambda t: 0.1 * np.array([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)])
