@@ -732,12 +732,11 @@ TEST(MeshingV4, RodOfLongThinTrianglesIsSplitAndMeshedWithinTheBounds) {
 // length now shrinks toward 2 % lost (meshing version 26), and the remesh holds.
 TEST(MeshingV4, RodOfOneRingIsRemeshedShortEnoughToKeepItsVolume) {
   const SurfaceMesh s = sqs::ringed_rod(0.01, 2.0, 16, 1);
-  const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
   const MeshResult r = mesh(s, 150);
   EXPECT_EQ(r.method, "boundary") << r.fallback_because;
   EXPECT_EQ(r.parts_remeshed, 1);
   EXPECT_TRUE(r.tet_stats.conforming);
-  expect_within(r, diag, 0.05, 0.015, 0.005, 1);
+  expect_within(r, bounding_box_diagonal(s.V), 0.05, 0.015, 0.005, 1);
   EXPECT_LT(r.quality.tets, 1000);
 }
 
