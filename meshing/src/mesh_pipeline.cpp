@@ -1200,6 +1200,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // A surface made mostly of long, thin triangles (a faceted rod) has a rounder version
           // (skinny_split_length): used where its own is too much work to refine or does not hold.
           const double skinny = opt.split_skinny && !p.target && p.offset == 0 ? skinny_split_length(p.surface) : 0.0;
+          if (skinny > 0) spdlog::debug("part {}: mostly skinny triangles: their split length {:.4g}", i, skinny);
           e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
           p.target_faces = e.target_faces;
           p.boundary = simplify(p, e, &p.envelope, progress_here ? progress : nullptr);
@@ -1322,6 +1323,33 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // this retry 1,140 tetrahedra, 0.998, 6.7°, 12.6 s). The first attempts the hopeless gate
           // above turns away are of this kind, so this comes before it takes effect.
           bool held = first_holds;
+          // A boundary of mostly skinny triangles goes first to its rounder version (above), before
+          // retry 0 (meshing version 26): where its simplification coarsens it (version 14's rod,
+          // 1 m long, 3 mm across, 12 sides and 40 rings, at 150: 204 faces, 152 tetrahedra, volume
+          // 1.000), it is the better mesh, and retry 0's remesh of the same rod held only at 1.3 mm
+          // (646 tetrahedra, 0.982). Where it does not coarsen (a rod 2 m long, 2 cm across, 16
+          // sides and one ring, turned off the axes: 23,360 faces split, 17,762 simplified, whose
+          // refinement took 46 s for 2.7°), it is not tetrahedralized: over max(4,000, 8 × the
+          // target's faces), as retry 2's bound.
+          if (skinny > 0 && (p.tet_stats.work_exceeded || !held) && !abandoned && !hopeless) {
+            const SurfaceMesh split = split_long_edges(p.surface, skinny);
+            EnvelopeStats es;
+            SurfaceMesh b = simplify_envelope(split, e, &es, nullptr);  // (skinny > 0: no p.target)
+            if (b.F.rows() > std::max(4000, 8 * e.target_faces)) {
+              spdlog::debug("part {}: boundary of mostly skinny triangles: split at {:.4g} to {} faces, simplified to {}: "
+                            "too many to tetrahedralize", i, skinny, split.F.rows(), b.F.rows());
+            } else if (!(p.check && does_self_intersect(b))) {
+              TetrahedralizeStats st;
+              TetMesh m = tetrahedralize_part(b, &st, t.max_tets, t.max_attempts);
+              spdlog::debug("part {}: boundary of mostly skinny triangles ({} tetrahedra, refinement work {:.3g}{}): split "
+                            "at {:.4g} to {} faces, simplified to {}: {} tetrahedra, conforming {}",
+                            i, p.tets.T.rows(), p.tet_stats.refine_work, p.tet_stats.work_exceeded ? ", over its bound" : "",
+                            skinny, split.F.rows(), b.F.rows(), m.T.rows(), st.conforming);
+              ++p.retries;
+              if (p.tet_stats.work_exceeded || better(m, st, p.tets, p.tet_stats)) adopt(m, st, b, es);
+              held = held || holds(p.tets, p.tet_stats);
+            }
+          }
           if (!held && !abandoned && p.offset == 0 && !p.target && opt.remesh_retry) {
             const TriangleBvh own(p.surface.V, p.surface.F);
             const double part_area = area(p.surface);
@@ -1367,15 +1395,13 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               auto volume_kept = [&](const SurfaceMesh& m) { return std::abs(signed_volume(m) / p.volume - 1.0) <= 0.03; };
               if (!volume_kept(b)) {
                 // Chords of a curved surface lose volume as the square of their length: shorter
-                // toward 2 % lost, at most twice (a rod 2 m long, 2 cm across, 16 sides, at 150:
-                // 3.0 % lost at 5.1 mm, where half of it was over the triangles' cap; meshing
-                // version 26). Halved where the skinny parts' retry comes after this one: it
-                // holds such a rod with fewer tetrahedra where it runs (1 m, 3 mm across, 12
-                // sides, 40 rings, at 150: 152 tetrahedra, volume 1.000, against 646 and 0.982
-                // from a remesh at 1.3 mm).
+                // toward 2 % lost, 0.3-0.8 times (meshing version 26). A rod 2 m long, 2 cm
+                // across, 16 sides, at 150, lost 11.9 % at 10 mm and 3.0 % at 5.1 mm; halving
+                // again went over the triangles' cap. Now 10 mm, then 4.2 mm, which holds; the
+                // remesh at 5.1 mm it skips took 6 s of CGAL's time (12 s with 32 sides).
                 const double lost = std::abs(signed_volume(b) / p.volume - 1.0);
                 spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): {:.3f} of its volume", i, h, signed_volume(b) / p.volume);
-                h *= skinny > 0 && !hopeless ? 0.5 : std::clamp(std::sqrt(0.02 / lost), 0.5, 0.8);
+                h *= std::clamp(std::sqrt(0.02 / lost), 0.3, 0.8);
                 continue;
               }
               if (does_self_intersect(b)) {  // (tested last: the most work)
@@ -1400,21 +1426,6 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                 p.remeshed = true;
               }
               break;  // (held, or a shorter length would hold no better: thin walls want the slab)
-            }
-          }
-          if (skinny > 0 && (p.tet_stats.work_exceeded || !held) && !abandoned && !hopeless) {
-            const SurfaceMesh split = split_long_edges(p.surface, skinny);
-            EnvelopeStats es;
-            SurfaceMesh b = simplify_envelope(split, e, &es, nullptr);  // (skinny > 0: no p.target)
-            if (!(p.check && does_self_intersect(b))) {
-              TetrahedralizeStats st;
-              TetMesh m = tetrahedralize_part(b, &st, t.max_tets, t.max_attempts);
-              spdlog::debug("part {}: boundary of mostly skinny triangles ({} tetrahedra, refinement work {:.3g}{}): split "
-                            "at {:.4g} to {} faces, simplified to {}: {} tetrahedra, conforming {}",
-                            i, p.tets.T.rows(), p.tet_stats.refine_work, p.tet_stats.work_exceeded ? ", over its bound" : "",
-                            skinny, split.F.rows(), b.F.rows(), m.T.rows(), st.conforming);
-              ++p.retries;
-              if (p.tet_stats.work_exceeded || better(m, st, p.tets, p.tet_stats)) adopt(m, st, b, es);
             }
           }
           const Eigen::Index first_count = p.tets.T.rows();
