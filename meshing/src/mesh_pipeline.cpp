@@ -1272,10 +1272,6 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             if ((q.components == 1) != (q_than.components == 1)) return q.components == 1;
             return q.min_dihedral > q_than.min_dihedral;
           };
-          // Its boundary split to rounder triangles (edges at most `skinny` long), simplified
-          // within the same bounds: the simplification can then collapse along the part (a 1 m rod
-          // of 3 mm radius, 12 sides and 40 rings: 165 tetrahedra, 9.4°, 0.6 s at 150, where its
-          // own boundary's refinement took 21 s for 2.2°, not conforming).
           // A retry's mesh, its stats, its boundary and that boundary's simplification replace the part's.
           auto adopt = [&](TetMesh& m, const TetrahedralizeStats& st, SurfaceMesh& b, const EnvelopeStats& es) {
             p.tets = std::move(m);
@@ -1308,7 +1304,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           if (hopeless)
             spdlog::debug("part {}: its first attempt split {} boundary edges for {} faces and did not hold: no retry but the remeshed surface", i,
                           p.tet_stats.boundary_splits, p.boundary.F.rows());
-          // Retry 0 (meshing version 22), before the others: the part's own surface remeshed into
+          // Retry 0 (meshing version 22), before the others (but a boundary of mostly skinny
+          // triangles' split version, below, since version 26): the part's own surface remeshed into
           // round triangles (remesh_isotropic: a quarter of the interior edge length; creases over
           // 40° kept as polylines, corners where they turn, every vertex on the surface) and, where
           // that lies within the bounds of the surface both ways, simplified within them again
@@ -1323,8 +1320,10 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // this retry 1,140 tetrahedra, 0.998, 6.7°, 12.6 s). The first attempts the hopeless gate
           // above turns away are of this kind, so this comes before it takes effect.
           bool held = first_holds;
-          // A boundary of mostly skinny triangles goes first to its rounder version (above), before
-          // retry 0 (meshing version 26): where its simplification coarsens it (version 14's rod,
+          // A boundary of mostly skinny triangles goes first to its rounder version, before retry 0
+          // (meshing version 26): split to rounder triangles (edges at most `skinny` long) and
+          // simplified within the same bounds, so that the simplification can collapse along the
+          // part (version 14). Where its simplification coarsens it (version 14's rod,
           // 1 m long, 3 mm across, 12 sides and 40 rings, at 150: 204 faces, 152 tetrahedra, volume
           // 1.000), it is the better mesh, and retry 0's remesh of the same rod held only at 1.3 mm
           // (646 tetrahedra, 0.982). Where it does not coarsen (a rod 2 m long, 2 cm across, 16
