@@ -34,10 +34,14 @@ def write_off(fn, V, F):
             f.write("3 %d %d %d\n" % tuple(t))
 
 
-def tube(curve, dcurve, r, n, m):
+def tube(curve, dcurve, r, n, m, T=None):
+    """A tube of radius r and m sides around curve(t): closed (T None: n rings over t in [0, 2 pi),
+    the last joined to the first), or open (n + 1 rings over t in [0, T], each end capped by a fan
+    around its centre)."""
+    rings = n if T is None else n + 1
     V, F = [], []
-    for i in range(n):
-        t = 2 * np.pi * i / n
+    for i in range(rings):
+        t = 2 * np.pi * i / n if T is None else T * i / n
         c, d = curve(t), dcurve(t)
         d = d / np.linalg.norm(d)
         a = np.array([0, 0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0, 0])
@@ -49,9 +53,14 @@ def tube(curve, dcurve, r, n, m):
             V.append(c + r * (np.cos(s) * u + np.sin(s) * w))
     for i in range(n):
         for j in range(m):
-            a, b = i * m + j, ((i + 1) % n) * m + j
-            c, d = ((i + 1) % n) * m + (j + 1) % m, i * m + (j + 1) % m
+            a, b = i * m + j, ((i + 1) % rings) * m + j
+            c, d = ((i + 1) % rings) * m + (j + 1) % m, i * m + (j + 1) % m
             F += [(a, b, c), (a, c, d)]
+    if T is not None:
+        V += [curve(0), curve(T)]
+        c0, c1 = len(V) - 2, len(V) - 1
+        for j in range(m):
+            F += [(c0, (j + 1) % m, j), (c1, n * m + j, n * m + (j + 1) % m)]
     return np.array(V), F
 
 
@@ -284,14 +293,12 @@ def version26(out):
 
     write_off(out("wavy_curtain.off"), *grid_sheet(lambda x, y: (x, 2 * y, 0.1 * np.sin(2 * np.pi * x / 0.5)), 40, 8, 0.01))
 
-    def knot(c, dc, r, n=240, m=12):
-        return tube(c, dc, r, n, m)
     f8 = lambda t: np.array([(2 + np.cos(2 * t)) * np.cos(3 * t), (2 + np.cos(2 * t)) * np.sin(3 * t), np.sin(4 * t)]) * 0.1
     df8 = lambda t, h=1e-5: (f8(t + h) - f8(t - h)) / (2 * h)
-    write_off(out("figure8_knot.off"), *knot(f8, df8, 0.03))
+    write_off(out("figure8_knot.off"), *tube(f8, df8, 0.03, 240, 12))
     tk = lambda t: np.array([(1 + 0.4 * np.cos(5 * t)) * np.cos(2 * t), (1 + 0.4 * np.cos(5 * t)) * np.sin(2 * t), 0.4 * np.sin(5 * t)])
     dtk = lambda t, h=1e-5: (tk(t + h) - tk(t - h)) / (2 * h)
-    write_off(out("torus_knot25.off"), *knot(tk, dtk, 0.05, 400, 10))
+    write_off(out("torus_knot25.off"), *tube(tk, dtk, 0.05, 400, 10))
 
     write_off(out("slot_jaws.off"), *merge(box((0, 0, 0), (0.3, 0.5, 0.1)), box((0.35, 0, 0), (0.65, 0.5, 0.1))))
 
@@ -302,28 +309,9 @@ def version26(out):
             P.append((r * np.cos(t), r * np.sin(t)))
     write_off(out("gear.off"), *extrude(P, 0.01))
 
-    def open_tube(c, dc, r, n, m, T):
-        V, F = [], []
-        for i in range(n + 1):
-            t = T * i / n
-            p, d = c(t), dc(t); d = d / np.linalg.norm(d)
-            a = np.array([0, 0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0, 0])
-            u = np.cross(d, a); u /= np.linalg.norm(u); w = np.cross(d, u)
-            for j in range(m):
-                s = 2 * np.pi * j / m
-                V.append(p + r * (np.cos(s) * u + np.sin(s) * w))
-        for i in range(n):
-            for j in range(m):
-                a, b = i * m + j, (i + 1) * m + j
-                cc, d = (i + 1) * m + (j + 1) % m, i * m + (j + 1) % m
-                F += [(a, b, cc), (a, cc, d)]
-        V.append(c(0)); V.append(c(T)); c0, c1 = len(V) - 2, len(V) - 1
-        for j in range(m):
-            F.append((c0, (j + 1) % m, j)); F.append((c1, n * m + j, n * m + (j + 1) % m))
-        return np.array(V), F
     hel = lambda t: np.array([0.05 * np.cos(t), 0.05 * np.sin(t), 0.2 * t / (12 * np.pi)])
     dhel = lambda t, h=1e-5: (hel(t + h) - hel(t - h)) / (2 * h)
-    write_off(out("spring.off"), *open_tube(hel, dhel, 0.005, 360, 10, 12 * np.pi))
+    write_off(out("spring.off"), *tube(hel, dhel, 0.005, 360, 10, 12 * np.pi))
 
     parts = [box((0, 0, 0.7), (1.2, 0.8, 0.74))]
     for x, y in ((0.05, 0.05), (1.1, 0.05), (0.05, 0.7), (1.1, 0.7)):

@@ -731,8 +731,8 @@ TEST(MeshingV4, RodOfLongThinTrianglesIsSplitAndMeshedWithinTheBounds) {
 // again went over the retry's triangle cap, and the rod kept its first attempt, 7,509
 // tetrahedra down to 2.8 degrees. Turned, its first attempt split less and its boundary of
 // skinny triangles was split, simplified only to 17,762 faces and tetrahedralized three times
-// over (134 s beside a test run, 2.7 degrees). Now such a boundary is not tetrahedralized, and the remesh length
-// shrinks toward 2 % lost (meshing version 26): both hold.
+// over (134 s beside a test run, 2.7 degrees). Now such a boundary is not tetrahedralized, and
+// the remesh length shrinks toward 2 % lost (meshing version 26): both hold.
 TEST(MeshingV4, RodOfOneRingIsRemeshedShortEnoughToKeepItsVolume) {
   const SurfaceMesh s = sqs::ringed_rod(0.01, 2.0, 16, 1);
   SurfaceMesh turned = s;

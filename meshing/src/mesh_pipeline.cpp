@@ -1320,6 +1320,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // this retry 1,140 tetrahedra, 0.998, 6.7°, 12.6 s). The first attempts the hopeless gate
           // above turns away are of this kind, so this comes before it takes effect.
           bool held = first_holds;
+          // The most faces a retry tetrahedralizes that are not the simplification's own choice
+          // (retry 2's own surface, the skinny retry's split boundary).
+          const int max_retry_faces = std::max(4000, 8 * e.target_faces);
           // A boundary of mostly skinny triangles goes first to its rounder version, before retry 0
           // (meshing version 26): split to rounder triangles (edges at most `skinny` long) and
           // simplified within the same bounds, so that the simplification can collapse along the
@@ -1328,13 +1331,12 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // 1.000), it is the better mesh, and retry 0's remesh of the same rod held only at 1.3 mm
           // (646 tetrahedra, 0.982). Where it does not coarsen (a rod 2 m long, 2 cm across, 16
           // sides and one ring, turned off the axes: 23,360 faces split, 17,762 simplified, whose
-          // refinement took 46 s for 2.7°), it is not tetrahedralized: over max(4,000, 8 × the
-          // target's faces), as retry 2's bound.
+          // refinement took 46 s for 2.7°), it is not tetrahedralized: over max_retry_faces.
           if (skinny > 0 && (p.tet_stats.work_exceeded || !held) && !abandoned && !hopeless) {
             const SurfaceMesh split = split_long_edges(p.surface, skinny);
             EnvelopeStats es;
             SurfaceMesh b = simplify_envelope(split, e, &es, nullptr);  // (skinny > 0: no p.target)
-            if (b.F.rows() > std::max(4000, 8 * e.target_faces)) {
+            if (b.F.rows() > max_retry_faces) {
               spdlog::debug("part {}: boundary of mostly skinny triangles: split at {:.4g} to {} faces, simplified to {}: "
                             "too many to tetrahedralize", i, skinny, split.F.rows(), b.F.rows());
             } else if (!(p.check && does_self_intersect(b))) {
@@ -1398,9 +1400,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                 // across, 16 sides, at 150, lost 11.9 % at 10 mm and 3.0 % at 5.1 mm; halving
                 // again went over the triangles' cap. Now 10 mm, then 4.2 mm, which holds; the
                 // remesh at 5.1 mm it skips took 6 s of CGAL's time (12 s with 32 sides).
-                const double lost = std::abs(signed_volume(b) / p.volume - 1.0);
-                spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): {:.3f} of its volume", i, h, signed_volume(b) / p.volume);
-                h *= std::clamp(std::sqrt(0.02 / lost), 0.3, 0.8);
+                const double kept = signed_volume(b) / p.volume;
+                spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): {:.3f} of its volume", i, h, kept);
+                h *= std::clamp(std::sqrt(0.02 / std::abs(kept - 1.0)), 0.3, 0.8);
                 continue;
               }
               if (does_self_intersect(b)) {  // (tested last: the most work)
@@ -1449,7 +1451,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                 continue;
               }
             } else if (retry == 2) {
-              if (p.check || p.surface.F.rows() > std::max(4000, 8 * e.target_faces)) continue;
+              if (p.check || p.surface.F.rows() > max_retry_faces) continue;
               b = p.surface;
             } else {
               EnvelopeOptions e3 = e;
