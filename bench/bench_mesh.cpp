@@ -231,6 +231,23 @@ void BM_RodWithoutSplit(benchmark::State& state) {
 }
 BENCHMARK(BM_RodWithoutSplit)->Arg(150)->Arg(1000)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
+// A long rod of few sides (2 m by 2 cm, 32 sides, one ring; tests/shapes.h) at 1000, meshing
+// version 27: retry 0's first remesh at the length whose chords lose about 2.5 % of its volume
+// (Arg 1: MeshOptions::remesh_volume_loss 0.025), against a quarter of the interior edge length
+// first, which lost 3.6 % and was made again shorter (Arg 0: version 26).
+void BM_LongRodRemesh(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh rod = sqs::ringed_rod(0.01, 2.0, 32, 1);
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 1000;
+  o.remesh_volume_loss = state.range(0) != 0 ? 0.025 : 0.0;
+  squeeze::meshing::MeshResult r;
+  for (auto _ : state) r = squeeze::meshing::mesh_surface(rod, o);
+  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  state.counters["volume_ratio"] = r.volume_ratio.value_or(0);
+  state.counters["min_dihedral"] = r.quality.min_dihedral;
+}
+BENCHMARK(BM_LongRodRemesh)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
 // A closed plate 1 m square and 5 mm thick (12 triangles) at a target of 150, meshing version 15:
 // one layer of prisms across its thickness (MeshOptions::thin_parts_as_prisms), against the same
 // pipeline with it off (version 14's way: its boundary tetrahedralized, Delaunay refinement between
