@@ -942,12 +942,26 @@ TEST(MeshingV4, SegmentsWeldedFaceToFaceAreTheirUnion) {
        {0, 0, 0},
        {0.35, 0.2, 0.1},
        0.2 * 0.12 * 0.1 + 0.15 * 0.12 * 0.1 + 0.2 * 0.08 * 0.1},
+      // A voxel model: nine 0.1 m cubes, 3 by 3, touching face to face, two triangles a face. The
+      // walls cut the middle cube's top and bottom into patches of their own, which an orientation
+      // test cannot turn outward. Until meshing version 28 they were oriented apart from the rest,
+      // no wall was found, and the plate came out 1.6 times its volume, 10 % of the diagonal out.
+      // (With four squares a face, as the other cases, such a flat patch kept the file's
+      // orientation by the rounding of its signed volume, and it passed before.)
+      {"plate of nine cubes",
+       {{{0, 0, 0}, {0.1, 0.1, 0.1}}, {{0.1, 0, 0}, {0.2, 0.1, 0.1}}, {{0.2, 0, 0}, {0.3, 0.1, 0.1}},
+        {{0, 0.1, 0}, {0.1, 0.2, 0.1}}, {{0.1, 0.1, 0}, {0.2, 0.2, 0.1}}, {{0.2, 0.1, 0}, {0.3, 0.2, 0.1}},
+        {{0, 0.2, 0}, {0.1, 0.3, 0.1}}, {{0.1, 0.2, 0}, {0.2, 0.3, 0.1}}, {{0.2, 0.2, 0}, {0.3, 0.3, 0.1}}},
+       {0, 0, 0},
+       {0.3, 0.3, 0.1},
+       0.3 * 0.3 * 0.1},
   };
   const fs::path dir = fs::temp_directory_path() / ("squeeze_welded_faces_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   for (const auto& c : cases) {
     std::vector<SurfaceMesh> parts;
-    for (const auto& [lo, hi] : c.boxes) parts.push_back(box(lo, hi, {2, 2, 2}));
+    for (const auto& [lo, hi] : c.boxes)
+      parts.push_back(box(lo, hi, c.boxes.size() > 3 ? std::array<int, 3>{1, 1, 1} : std::array<int, 3>{2, 2, 2}));
     sqt::write_off(dir / "welded.off", join(parts));
     const SurfaceMesh twins = squeeze::meshing::load_surface(dir / "welded.off");  // welds the shared walls
     // ... and with one copy of each wall: the later face of each twin pair left out.
@@ -967,6 +981,9 @@ TEST(MeshingV4, SegmentsWeldedFaceToFaceAreTheirUnion) {
     const double diag = (c.hi - c.lo).norm();
     for (int target : {150, 1000, 0}) {
       for (const SurfaceMesh* s : {&twins, static_cast<const SurfaceMesh*>(&one)}) {
+        // (The plate with one copy of each wall is not found as walls: each wall's winding-number
+        // mean holds the other eleven's open shares. docs/meshing.md, version 27.)
+        if (s == &one && std::string(c.name) == "plate of nine cubes") continue;
         const std::string what = std::string(c.name) + (s == &one ? ", one copy of each wall," : ", walls in both,") +
                                  " at target " + (target ? std::to_string(target) : "default");
         const MeshResult r = mesh(*s, target);
