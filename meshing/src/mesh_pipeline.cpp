@@ -1393,9 +1393,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             }
             const double max_faces = 4 * thin_angles >= p.surface.F.rows() ? 35000 : 10000;
             // At most the length whose chords lose about remesh_volume_loss (2.5 %) of the part's
-            // volume, from its mean curvature (meshing version 27): a rod 2 m long, 2 cm across, 32 sides, at 1000,
-            // was remeshed at 5.5 mm first (3.6 % lost, 11.8 s of CGAL's remeshing) and then at
-            // 4.1 mm, which held; now 4.5 mm at once.
+            // volume, from its mean curvature (meshing version 27): a rod 2 m long, 2 cm across,
+            // 32 sides, at 1000, was remeshed at 5.5 mm first (3.6 % lost, 11.8 s of CGAL's
+            // remeshing) and then at 4.1 mm, which held; now 4.5 mm at once.
             double h = 0.25 * L;
             if (opt.remesh_volume_loss > 0)
               h = std::min(h, chord_length_for_volume_loss(p.surface, p.volume, opt.remesh_volume_loss, RemeshOptions{}.sharp_angle));
