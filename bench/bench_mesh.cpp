@@ -248,6 +248,22 @@ void BM_LongRodRemesh(benchmark::State& state) {
 }
 BENCHMARK(BM_LongRodRemesh)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
+// The U-shaped curtain of tests/shapes.h at the default target: its mesh (one layer of prisms) is
+// ready in a fraction of the time; the convex decomposition beside it (the report's shells, the
+// tetrahedra's labels) cuts it 22 times. Arg 1: large polygons sampled by area (meshing version
+// 29); 0: by their longest edge, as before (DecompositionOptions::samples_by_area).
+void BM_UCurtainDecomposition(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh m = sqs::u_curtain();
+  squeeze::meshing::MeshOptions o;
+  o.decomposition.samples_by_area = state.range(0) != 0;
+  squeeze::meshing::MeshResult r;
+  for (auto _ : state) r = squeeze::meshing::mesh_surface(m, o);
+  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  state.counters["shells"] = static_cast<double>(r.decomposition.shells.size());
+  state.counters["volume_ratio"] = r.volume_ratio.value_or(0);
+}
+BENCHMARK(BM_UCurtainDecomposition)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
 // A closed plate 1 m square and 5 mm thick (12 triangles) at a target of 150, meshing version 15:
 // one layer of prisms across its thickness (MeshOptions::thin_parts_as_prisms), against the same
 // pipeline with it off (version 14's way: its boundary tetrahedralized, Delaunay refinement between

@@ -284,4 +284,16 @@ inline squeeze::meshing::SurfaceMesh ribbed_plate() {
   return extruded(P, 0.3);
 }
 
+// A curtain 1.5 m tall and 5 mm thick bent into a half circle of 0.4 m inner radius in plan (48
+// vertices along each arc): the prism of that band, whose sides are 94 slivers 1.5 m by 2.6 cm.
+// A thin curved part that the convex decomposition cuts into many shells (its hull's volume).
+inline squeeze::meshing::SurfaceMesh u_curtain() {
+  const double R = 0.4, T = 0.005;
+  const int n = 48;
+  std::vector<Eigen::Vector2d> P;
+  for (int i = 0; i < n; ++i) P.emplace_back((R + T) * std::cos(M_PI * i / (n - 1)), (R + T) * std::sin(M_PI * i / (n - 1)));
+  for (int i = n - 1; i >= 0; --i) P.emplace_back(R * std::cos(M_PI * i / (n - 1)), R * std::sin(M_PI * i / (n - 1)));
+  return extruded(P, 1.5);
+}
+
 }  // namespace sqs
