@@ -1220,6 +1220,18 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           if (skinny > 0) spdlog::debug("part {}: mostly skinny triangles: their split length {:.4g}", i, skinny);
           e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
           p.target_faces = e.target_faces;
+          // The most faces a retry tetrahedralizes that are not the simplification's own choice
+          // (retry 2's own surface, the skinny retry's split boundary).
+          const int max_retry_faces = std::max(4000, 8 * e.target_faces);
+          // A boundary still of mostly skinny triangles and over max_retry_faces (its simplification
+          // could not coarsen it: a tube of 12 rings and 300 sides, triangles 0.04 mm by 0.11 m,
+          // each collapse along a ring leaving one of them thinner, kept all 7,200 faces) is not
+          // tetrahedralized, by any attempt (meshing version 29): conformity recovery split that
+          // tube for 496 s, to 407,308 tetrahedra that did not hold. The skinny split and retry 0
+          // (a remesh into round triangles) below are its routes.
+          auto too_skinny = [&](const SurfaceMesh& b) {
+            return skinny > 0 && b.F.rows() > max_retry_faces && skinny_split_length(b) > 0;
+          };
           p.boundary = simplify(p, e, &p.envelope, progress_here ? progress : nullptr);
           if (spdlog::should_log(spdlog::level::debug))
             spdlog::debug("part {}: simplified boundary of {} faces intersects itself: {}", i, p.boundary.F.rows(),
@@ -1248,6 +1260,12 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // send the part to the retries (a 64-sided cone at 300: 11 tetrahedra at its tip cost
           // two retries, 10 s, for the same mesh).
           auto tetrahedralize_part = [&](const SurfaceMesh& b, TetrahedralizeStats* st, int max_tets, int attempts) {
+            if (too_skinny(b)) {
+              spdlog::debug("part {}: a boundary of {} faces, mostly skinny triangles: not tetrahedralized", i, b.F.rows());
+              *st = TetrahedralizeStats{};
+              st->conforming = false;
+              return TetMesh{};
+            }
             TetrahedralizeOptions tb = t;
             tb.max_tets = std::min(tb.max_tets, max_tets);
             tb.max_attempts = std::min(tb.max_attempts, attempts);
@@ -1337,9 +1355,6 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // this retry 1,140 tetrahedra, 0.998, 6.7°, 12.6 s). The first attempts the hopeless gate
           // above turns away are of this kind, so this comes before it takes effect.
           bool held = first_holds;
-          // The most faces a retry tetrahedralizes that are not the simplification's own choice
-          // (retry 2's own surface, the skinny retry's split boundary).
-          const int max_retry_faces = std::max(4000, 8 * e.target_faces);
           // A boundary of mostly skinny triangles goes first to its rounder version, before retry 0
           // (meshing version 26): split to rounder triangles (edges at most `skinny` long) and
           // simplified within the same bounds, so that the simplification can collapse along the
