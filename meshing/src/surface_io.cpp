@@ -5,9 +5,16 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <fcntl.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -457,6 +464,115 @@ void check_outliers(const std::string& name, const std::vector<std::array<double
   }
 }
 
+// Reads `name` with `importer` (ReadFile with `flags`, then collect) into pts and tris; throws
+// InputError where assimp cannot read it or collect finds it broken. The scene lives as long as
+// the importer.
+void read_with_assimp(const std::string& name, unsigned flags, Assimp::Importer& importer,
+                      std::vector<std::array<double, 3>>& pts, std::vector<std::array<int, 3>>& tris) {
+  const aiScene* scene = importer.ReadFile(name, flags);
+  if (!scene || !scene->mRootNode) {
+    std::string why = importer.GetErrorString();
+    if (why.empty()) why = "unknown or unreadable format";
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    throw InputError(name + ": cannot read: " + why);
+  }
+  collect(name, scene, scene->mRootNode, aiMatrix4x4(), pts, tris);
+}
+
+// All of `size` bytes written to fd (a pipe); false on an error.
+bool write_all(int fd, const void* data, size_t size) {
+  const char* p = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::write(fd, p, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    p += n;
+    size -= static_cast<size_t>(n);
+  }
+  return true;
+}
+
+// read_with_assimp in a child process (fork), which sends back the triangles or the error and
+// ends without destroying assimp's scene (its stderr closed). Debian's assimp 5.2 crashes on files
+// it has read:
+// destroying the scene of some 3MF files frees memory twice ("double free or corruption", assimp
+// issue #5328; trimesh's counterX.3MF, counterXP.3MF and cube_and_sphere_same_name.3mf), and its
+// importers have aborted on corrupt files (see load_surface). Whatever assimp does there, the
+// caller gets the triangles or one InputError naming the file. Message from the child: a status
+// byte ('t': triangles, 'e': an error), then for 't' the point count, the points, the triangle
+// count and the triangles, for 'e' the message's length and the message.
+void read_with_assimp_in_child(const std::string& name, unsigned flags, std::vector<std::array<double, 3>>& pts,
+                               std::vector<std::array<int, 3>>& tris) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw InputError(name + ": cannot read: no pipe for the importer (" + std::strerror(errno) + ")");
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw InputError(name + ": cannot read: cannot start the importer (" + std::strerror(errno) + ")");
+  }
+  if (pid == 0) {  // the child: no return, no destructors (the importer is never deleted), no exit handlers
+    ::close(fds[0]);
+    if (const int null = ::open("/dev/null", O_WRONLY); null >= 0) ::dup2(null, 2);  // (glibc's "double free")
+    bool ok = true;
+    try {
+      std::vector<std::array<double, 3>> p;
+      std::vector<std::array<int, 3>> t;
+      read_with_assimp(name, flags, *new Assimp::Importer, p, t);
+      const uint64_t np = p.size(), nt = t.size();
+      ok = write_all(fds[1], "t", 1) && write_all(fds[1], &np, sizeof np) &&
+           write_all(fds[1], p.data(), p.size() * sizeof p[0]) && write_all(fds[1], &nt, sizeof nt) &&
+           write_all(fds[1], t.data(), t.size() * sizeof t[0]);
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      const uint64_t n = what.size();
+      ok = write_all(fds[1], "e", 1) && write_all(fds[1], &n, sizeof n) && write_all(fds[1], what.data(), what.size());
+    } catch (...) {
+      ok = false;
+    }
+    ::_exit(ok ? 0 : 1);
+  }
+  ::close(fds[1]);
+  std::string msg;
+  {
+    char buf[1 << 16];
+    for (;;) {
+      const ssize_t n = ::read(fds[0], buf, sizeof buf);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      msg.append(buf, static_cast<size_t>(n));
+    }
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  size_t at = 1;
+  auto take = [&](void* out, size_t size) {
+    if (msg.size() - at < size) return false;
+    std::memcpy(out, msg.data() + at, size);
+    at += size;
+    return true;
+  };
+  uint64_t n = 0;
+  if (!msg.empty() && msg[0] == 'e' && take(&n, sizeof n) && n == msg.size() - at)
+    throw InputError(msg.substr(at));
+  if (!msg.empty() && msg[0] == 't' && take(&n, sizeof n) && n <= (msg.size() - at) / sizeof pts[0]) {
+    pts.resize(n);
+    uint64_t m = 0;
+    if (take(pts.data(), n * sizeof pts[0]) && take(&m, sizeof m) && m == (msg.size() - at) / sizeof tris[0] &&
+        (msg.size() - at) % sizeof tris[0] == 0) {
+      tris.resize(m);
+      take(tris.data(), m * sizeof tris[0]);
+      if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+    }
+  }
+  const std::string how = WIFSIGNALED(status) ? std::string("crashed: ") + strsignal(WTERMSIG(status))
+                                              : "ended with status " + std::to_string(WEXITSTATUS(status));
+  throw InputError(name + ": cannot read: assimp's importer " + how + " (a bug of assimp's reader for this format; "
+                   "convert the file to OFF, OBJ, PLY or STL)");
+}
+
 }  // namespace
 
 SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
@@ -477,22 +593,19 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
     own->read(path, pts, tris);
   } else {
     if (lower(path.extension().string()) == ".ply") check_ply(path);
-    Assimp::Importer importer;
     // Only aiProcess_ValidateDataStructure: indices past the vertex list (a truncated or corrupt
     // file) are reported as an error. No assimp triangulation: collect() splits polygons as fans and
     // drops points and lines itself, because Debian's assimp 5.2 aborts the process (ai_assert) in
     // aiProcess_Triangulate on a corrupt ASCII PLY face that passes validation (found by
     // fuzz_surface; tests/fuzz/fuzz_surface/ keeps the input). Welding is ours too (below).
-    const aiScene* scene = importer.ReadFile(
-        name, aiProcess_ValidateDataStructure |
-                  (options.keep_order || options.merge_coincident ? 0u : aiProcess_JoinIdenticalVertices));
-    if (!scene || !scene->mRootNode) {
-      std::string why = importer.GetErrorString();
-      if (why.empty()) why = "unknown or unreadable format";
-      std::replace(why.begin(), why.end(), '\n', ' ');
-      throw InputError(name + ": cannot read: " + why);
+    const unsigned flags = aiProcess_ValidateDataStructure |
+                           (options.keep_order || options.merge_coincident ? 0u : aiProcess_JoinIdenticalVertices);
+    if (options.assimp_in_child) {
+      read_with_assimp_in_child(name, flags, pts, tris);
+    } else {
+      Assimp::Importer importer;
+      read_with_assimp(name, flags, importer, pts, tris);
     }
-    collect(name, scene, scene->mRootNode, aiMatrix4x4(), pts, tris);
   }
   if (pts.empty()) throw InputError(name + ": holds no vertices");
   if (tris.empty()) throw InputError(name + ": holds no triangles");

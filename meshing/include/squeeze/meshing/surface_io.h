@@ -17,6 +17,9 @@ struct LoadOptions {
   bool drop_degenerate = true;   // drop faces with a repeated vertex index after welding
   bool keep_order = false;       // keep the file's vertices (unreferenced ones too) and faces in file
                                  // order: no welding, no dropping, no assimp post-processing (see below)
+  bool assimp_in_child = true;   // formats assimp reads are read in a child process, whose crash (Debian's
+                                 // assimp 5.2 frees some 3MF scenes twice) is an InputError; false: in
+                                 // this process (the fuzz target, whose coverage the child would not report)
 };
 
 /// Loads every triangle (and polygon, split as a fan from its first corner: convex polygons only
@@ -34,7 +37,8 @@ struct LoadOptions {
 /// its "vertices" are the three corners of every facet, in facet order. Several meshes in one file
 /// are concatenated in node order.
 /// Throws InputError ("PATH: problem") if the file is missing or unreadable, the format unknown, it
-/// holds no triangle, a coordinate is NaN or infinite, or every face is degenerate.
+/// holds no triangle, a coordinate is NaN or infinite, every face is degenerate, or assimp's
+/// importer crashes on it (assimp_in_child).
 SurfaceMesh load_surface(const std::filesystem::path& path, const LoadOptions& options = {});
 
 /// Writes `mesh` in the format given by the extension of `path` (.off, .obj, .ply, .stl, .glb,
