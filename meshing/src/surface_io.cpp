@@ -503,8 +503,8 @@ bool write_all(int fd, const void* data, size_t size) {
 // count and the triangles, for 'e' the message's length and the message.
 void read_with_assimp_in_child(const std::string& name, unsigned flags, std::vector<std::array<double, 3>>& pts,
                                std::vector<std::array<int, 3>>& tris) {
-  int fds[2];
-  if (::pipe(fds) != 0) throw InputError(name + ": cannot read: no pipe for the importer (" + std::strerror(errno) + ")");
+  int fds[2];  // (close-on-exec: a program another thread starts meanwhile must not hold the write end open)
+  if (::pipe2(fds, O_CLOEXEC) != 0) throw InputError(name + ": cannot read: no pipe for the importer (" + std::strerror(errno) + ")");
   const pid_t pid = ::fork();
   if (pid < 0) {
     ::close(fds[0]);
