@@ -814,9 +814,11 @@ void ImplicitIntegrator::energy_gradient(const World& w, const RowMatrixX3d& x, 
       gr[3 * row + c] += negate ? -value : value;
     }
   };
+  // (The damping gradients exist once a substep has begun: substeps_for asks without damping
+  // before the first, when edge_g_ and tet_g_ are still empty; the kernels read them only with it.)
   for (; e + 1 < d.edges.size(); e += 2) {
     const simd::Pair3 f = edge_gradient_pair(x.data(), xn_.data(), d.edges[e], d.edges[e + 1], h, damping,
-                                             edge_g_[e].data(), edge_g_[e + 1].data());
+                                             damping ? edge_g_[e].data() : nullptr, damping ? edge_g_[e + 1].data() : nullptr);
     for (int lane = 0; lane < 2; ++lane) {
       add_lane(d.edges[e + lane].j, f, lane, false);
       add_lane(d.edges[e + lane].i, f, lane, true);
@@ -824,8 +826,8 @@ void ImplicitIntegrator::energy_gradient(const World& w, const RowMatrixX3d& x, 
   }
   for (; t + 1 < d.tet_elems.size(); t += 2) {
     simd::Pair3 f[4];
-    tet_gradient_pair(x.data(), xn_.data(), d.tet_elems[t], d.tet_elems[t + 1], h, damping, tet_g_[t][0].data(),
-                      tet_g_[t + 1][0].data(), f);
+    tet_gradient_pair(x.data(), xn_.data(), d.tet_elems[t], d.tet_elems[t + 1], h, damping,
+                      damping ? tet_g_[t][0].data() : nullptr, damping ? tet_g_[t + 1][0].data() : nullptr, f);
     for (int lane = 0; lane < 2; ++lane)
       for (int k = 0; k < 4; ++k) add_lane(d.tet_elems[t + lane].v[k], f[k], lane, false);
   }
