@@ -213,7 +213,6 @@ struct Piece {
   double volume = 0.0;        // exact piece volume for closed input (see piece_volume), else voxel_volume
   std::vector<Eigen::Vector4d> planes;  // the cell: n·x <= d for each (n, d)
   Vec3 deepest = Vec3::Zero();
-  size_t samples = 0;  // points sampled on its large polygons by the last evaluate_piece
 };
 
 // Whether q is within eps of the plane n·x = d (n a unit normal).
@@ -365,8 +364,10 @@ std::vector<Vec3> cell_corners_inside(const std::vector<Eigen::Vector4d>& planes
   return out;
 }
 
-void evaluate_piece(Piece& piece, const FastWindingNumber& wn, double flat_thickness, double sample_spacing,
-                    double plane_eps, bool samples_by_area) {
+// Sets the piece's hull, concavity and deepest point; returns the number of points it sampled on
+// its large polygons (for the decomposition's debug line).
+size_t evaluate_piece(Piece& piece, const FastWindingNumber& wn, double flat_thickness, double sample_spacing,
+                      double plane_eps, bool samples_by_area) {
   // Polygon corners, each once (neighbouring polygons share them). Kinds: 0 inner surface (not
   // ∂S, does not count), 1 outer, 2 on a cap: a polygon lying in one of the cell's cutting planes
   // (a cut through a face, e.g. the floor of a notch) is part of the piece's cap, which is a facet
@@ -374,7 +375,7 @@ void evaluate_piece(Piece& piece, const FastWindingNumber& wn, double flat_thick
   // they would look as deep as the piece is wide). Cap wins over outer, outer over inner.
   struct Corner { double x, y, z; char kind; char sample; };
   std::vector<Corner> corners;
-  piece.samples = 0;
+  size_t samples = 0;
   for (const auto& poly : piece.polys) {
     const bool cap = std::any_of(piece.planes.begin(), piece.planes.end(), [&](const Eigen::Vector4d& c) {
       return lies_in_plane(poly, c.head<3>(), c(3), plane_eps);
@@ -389,7 +390,7 @@ void evaluate_piece(Piece& piece, const FastWindingNumber& wn, double flat_thick
         continue;
       auto add = [&](const Vec3& q) {
         corners.push_back({q(0), q(1), q(2), kind, 1});
-        ++piece.samples;
+        ++samples;
       };
       if (samples_by_area)
         sample_triangle_rows(a, b, c, sample_spacing, add);
@@ -464,6 +465,7 @@ void evaluate_piece(Piece& piece, const FastWindingNumber& wn, double flat_thick
     if (b.depth > all.depth) all = b;
   piece.concavity = std::max(0.0, all.depth);
   if (all.depth >= 0) piece.deepest = pts.row(static_cast<Eigen::Index>(all.at)).transpose();
+  return samples;
 }
 
 // The corners of the convex hull of points lying (up to a jitter) on the plane with unit normal
@@ -582,8 +584,9 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
   };
   size_t evaluations = 0, samples = 0;  // (for the debug line at the end)
   for (auto& piece : pieces) {
-    evaluate_piece(piece, wn, thickness, g.h, plane_eps, opt.samples_by_area), measure_voxels(piece);
-    ++evaluations, samples += piece.samples;
+    samples += evaluate_piece(piece, wn, thickness, g.h, plane_eps, opt.samples_by_area);
+    measure_voxels(piece);
+    ++evaluations;
   }
 
   std::vector<char> alive(pieces.size(), 1);
@@ -803,9 +806,9 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
     }
     for (int s = 0; s < 2; ++s) {
       if (children[s].polys.empty()) continue;
-      evaluate_piece(children[s], wn, thickness, g.h, plane_eps, opt.samples_by_area);
+      samples += evaluate_piece(children[s], wn, thickness, g.h, plane_eps, opt.samples_by_area);
       measure_voxels(children[s]);
-      ++evaluations, samples += children[s].samples;
+      ++evaluations;
       pieces.push_back(std::move(children[s]));
       alive.push_back(1);
       splittable.push_back(1);

@@ -35,6 +35,7 @@
 #include "squeeze/meshing/tet_geometry.h"
 #include "squeeze/meshing/shell_tetrahedralize.h"
 #include "squeeze/meshing/split_long_edges.h"
+#include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/tet_cleanup.h"
 #include "squeeze/meshing/tet_faces.h"
@@ -201,22 +202,13 @@ struct DisjointSets {
 std::vector<char> walls_between_welded_segments(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& G) {
   const Eigen::Index n = G.rows();
   std::vector<char> wall(static_cast<size_t>(n), 0);
-  // (edge's smaller vertex, larger vertex, face), sorted: each edge's faces together.
-  std::vector<std::array<int, 3>> edges;
-  edges.reserve(static_cast<size_t>(3 * n));
-  for (Eigen::Index f = 0; f < n; ++f)
-    for (int e = 0; e < 3; ++e) {
-      const int u = G(f, e), v = G(f, (e + 1) % 3);
-      edges.push_back({std::min(u, v), std::max(u, v), static_cast<int>(f)});
-    }
-  std::sort(edges.begin(), edges.end());
+  const std::vector<EdgeIncidence> edges = edge_incidences(G);  // each edge's faces together
   std::vector<std::pair<size_t, size_t>> runs;  // [begin, end) of each edge's entries
   bool branching = false;
-  for (size_t i = 0, j; i < edges.size(); i = j) {
-    for (j = i + 1; j < edges.size() && edges[j][0] == edges[i][0] && edges[j][1] == edges[i][1];) ++j;
+  for_each_edge(edges, [&](size_t i, size_t j) {
     runs.emplace_back(i, j);
     branching |= j - i > 2;
-  }
+  });
   if (!branching) return wall;
   // twin: faces of a twin pair (the same three vertices, in either order).
   std::vector<char> twin(static_cast<size_t>(n), 0);
@@ -250,13 +242,13 @@ std::vector<char> walls_between_welded_segments(const Eigen::MatrixX3d& V, const
   DisjointSets patch(n), component(n);
   for (const auto& [i, j] : runs)
     for (size_t k = i + 1; k < j; ++k) {
-      if (j - i == 2) patch.join(edges[k][2], edges[i][2]);
-      component.join(edges[k][2], edges[i][2]);
+      if (j - i == 2) patch.join(edges[k].face, edges[i].face);
+      component.join(edges[k].face, edges[i].face);
     }
   std::vector<char> candidate(static_cast<size_t>(n), 0);  // per patch root
   for (const auto& [i, j] : runs)
     if (j - i > 2)
-      for (size_t k = i; k < j; ++k) candidate[static_cast<size_t>(patch.find(edges[k][2]))] = 1;
+      for (size_t k = i; k < j; ++k) candidate[static_cast<size_t>(patch.find(edges[k].face))] = 1;
   // The winding numbers are those of the faces not yet found in walls, less both faces of each
   // twin pair (which cancel: their orientations, as single faces, orient_outward cannot tell), so
   // that one wall's share does not move another's mean where they meet (an L of three blocks).
@@ -294,16 +286,16 @@ std::vector<char> walls_between_welded_segments(const Eigen::MatrixX3d& V, const
     int left = 0, direction = 0;
     bool walled = false;
     for (size_t k = i; k < j; ++k) {
-      const int f = edges[k][2];
+      const int f = edges[k].face;
       if (candidate[static_cast<size_t>(patch.find(f))]) {
         walled = true;
         continue;
       }
       ++left;
-      for (int e = 0; e < 3; ++e) direction += (O(f, e) == edges[k][0] && O(f, (e + 1) % 3) == edges[k][1]) -
-                                               (O(f, e) == edges[k][1] && O(f, (e + 1) % 3) == edges[k][0]);
+      for (int e = 0; e < 3; ++e) direction += (O(f, e) == edges[k].a && O(f, (e + 1) % 3) == edges[k].b) -
+                                               (O(f, e) == edges[k].b && O(f, (e + 1) % 3) == edges[k].a);
     }
-    if (walled && !(left == 0 || (left == 2 && direction == 0))) refused[static_cast<size_t>(component.find(edges[i][2]))] = 1;
+    if (walled && !(left == 0 || (left == 2 && direction == 0))) refused[static_cast<size_t>(component.find(edges[i].face))] = 1;
   }
   for (Eigen::Index f = 0; f < n; ++f)
     wall[static_cast<size_t>(f)] = candidate[static_cast<size_t>(patch.find(static_cast<int>(f)))] &&

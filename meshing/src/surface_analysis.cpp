@@ -9,40 +9,20 @@
 #include <vector>
 
 namespace squeeze::meshing {
-namespace {
 
-struct HalfEdge {
-  int a, b;   // sorted vertex pair
-  int face;
-  bool forward;  // the face traverses a->b
-};
-
-// Incident faces per undirected edge, sorted by edge for run-length grouping.
-std::vector<HalfEdge> edge_incidences(const Eigen::MatrixX3i& F) {
-  std::vector<HalfEdge> e;
+std::vector<EdgeIncidence> edge_incidences(const Eigen::MatrixX3i& F) {
+  std::vector<EdgeIncidence> e;
   e.reserve(static_cast<size_t>(F.rows()) * 3);
   for (int f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
       const int u = F(f, k), v = F(f, (k + 1) % 3);
       e.push_back({std::min(u, v), std::max(u, v), f, u < v});
     }
-  std::sort(e.begin(), e.end(), [](const HalfEdge& x, const HalfEdge& y) {
+  std::sort(e.begin(), e.end(), [](const EdgeIncidence& x, const EdgeIncidence& y) {
     return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.face < y.face;
   });
   return e;
 }
-
-template <class Fn>
-void for_each_edge(const std::vector<HalfEdge>& e, Fn fn) {
-  for (size_t i = 0; i < e.size();) {
-    size_t j = i + 1;
-    while (j < e.size() && e[j].a == e[i].a && e[j].b == e[i].b) ++j;
-    fn(i, j);
-    i = j;
-  }
-}
-
-}  // namespace
 
 int face_components(const Eigen::MatrixX3i& F, Eigen::VectorXi& C) {
   const auto e = edge_incidences(F);

@@ -1,6 +1,7 @@
 // squeeze::meshing — topology of a triangle soup: components, closedness, consistent orientation,
 // enclosed volume, self-intersection.
 #pragma once
+#include <cstddef>
 #include <vector>
 #include <Eigen/Core>
 
@@ -47,6 +48,30 @@ bool is_oriented_two_manifold(const Eigen::MatrixX3i& F, int vertices);
 ///   vertices  #V (a vertex without faces gets an empty list)
 /// Throws nothing; indices are not checked (asserted in debug).
 std::vector<std::vector<int>> vertex_faces(const Eigen::MatrixX3i& F, Eigen::Index vertices);
+
+/// One face's use of an undirected edge.
+struct EdgeIncidence {
+  int a, b;      // the edge's vertices, a < b
+  int face;      // the face (row of F)
+  bool forward;  // the face traverses a → b (else b → a)
+};
+
+/// Every face's three edges, sorted by (a, b, face): each undirected edge's faces are one run,
+/// in increasing face order (for_each_edge visits the runs). Throws nothing.
+///   F  #F by 3 vertex indices
+/// Returns 3 #F incidences.
+std::vector<EdgeIncidence> edge_incidences(const Eigen::MatrixX3i& F);
+
+/// Calls fn(begin, end) for each undirected edge's run [begin, end) of `e` (edge_incidences').
+template <class Fn>
+void for_each_edge(const std::vector<EdgeIncidence>& e, Fn fn) {
+  for (size_t i = 0; i < e.size();) {
+    size_t j = i + 1;
+    while (j < e.size() && e[j].a == e[i].a && e[j].b == e[i].b) ++j;
+    fn(i, j);
+    i = j;
+  }
+}
 
 /// Edge counts, components, closedness and (for closed meshes) volume of `mesh`. The
 /// self_intersecting flag is left false here; see does_self_intersect().
