@@ -296,4 +296,35 @@ inline squeeze::meshing::SurfaceMesh u_curtain() {
   return extruded(P, 1.5);
 }
 
+// A closed tube of radius r (`sides` vertices per ring, `rings` rings) along the lemniscate of
+// Bernoulli of half-width a in the xy plane, (a cos t, a sin t cos t) / (1 + sin² t): a figure
+// eight, whose tube passes through itself where the curve crosses at the origin (a pretzel, a
+// knot drawn flat). One component that intersects itself, thin next to its bounding box.
+inline squeeze::meshing::SurfaceMesh figure_eight_tube(double a, double r, int sides, int rings) {
+  auto centre = [a](double t) {
+    const double q = 1 + std::sin(t) * std::sin(t);
+    return Eigen::RowVector3d(a * std::cos(t) / q, a * std::sin(t) * std::cos(t) / q, 0);
+  };
+  squeeze::meshing::SurfaceMesh m;
+  m.V.resize(sides * rings, 3);
+  for (int j = 0; j < rings; ++j) {
+    const double t = 2 * M_PI * j / rings, h = 1e-6;
+    const Eigen::RowVector3d d = (centre(t + h) - centre(t - h)).normalized();
+    const Eigen::RowVector3d u(0, 0, 1), w = d.cross(u);  // (u, w, d) right-handed
+    for (int i = 0; i < sides; ++i) {
+      const double s = 2 * M_PI * i / sides;
+      m.V.row(j * sides + i) = centre(t) + r * (std::cos(s) * u + std::sin(s) * w);
+    }
+  }
+  m.F.resize(2 * sides * rings, 3);
+  for (int j = 0; j < rings; ++j)
+    for (int i = 0; i < sides; ++i) {
+      const int a0 = j * sides + i, b0 = j * sides + (i + 1) % sides;
+      const int c0 = ((j + 1) % rings) * sides + i, d0 = ((j + 1) % rings) * sides + (i + 1) % sides;
+      m.F.row(2 * (j * sides + i)) << a0, b0, d0;
+      m.F.row(2 * (j * sides + i) + 1) << a0, d0, c0;
+    }
+  return m;
+}
+
 }  // namespace sqs
