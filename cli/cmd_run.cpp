@@ -169,6 +169,9 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     sum["nodes"] = s.nodes;
     sum["iterations_per_second"] = s.seconds > 0 ? s.iterations / s.seconds : 0.0;
     sum["final_distance"] = rep.final_distance;
+    // The planner's status is its tree's; the settling after the path (the plan's `settle`) can
+    // still take the robot into the goal's tolerance from an approximate path's end.
+    sum["goal_reached"] = rep.final_distance <= scene.goal->tolerance;
     sum["frames"] = rep.frames;
     sum["path_seconds"] = rep.duration;
     for (const auto& [k, v] : seconds) sum["seconds"][k] = v;
@@ -191,9 +194,10 @@ Runner add_run_command(CLI::App& app, const Global& global) {
     staged.commit();
     if (!global.quiet) {
       std::fprintf(stderr, "\nsqueeze run %s: %s after %d iterations (%d nodes, %.1f it/s); robot %.3g m from the goal "
-                   "(tolerance %.3g m) after the path and %.1f s of settling\n",
+                   "(tolerance %.3g m: %s) after the path and %.1f s of settling\n",
                    a.scene.c_str(), plan::to_string(r.status), s.iterations, s.nodes,
-                   s.seconds > 0 ? s.iterations / s.seconds : 0.0, rep.final_distance, scene.goal->tolerance, options.settle);
+                   s.seconds > 0 ? s.iterations / s.seconds : 0.0, rep.final_distance, scene.goal->tolerance,
+                   rep.final_distance <= scene.goal->tolerance ? "reached" : "not reached", options.settle);
       std::fprintf(stderr, "  seconds:");
       for (const auto& [k, v] : seconds) std::fprintf(stderr, " %s %.1f,", k.c_str(), v);
       std::fprintf(stderr, " total %.1f\n  max volume change:", since(t_all));

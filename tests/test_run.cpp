@@ -107,8 +107,12 @@ TEST(RunCli, WholePipelineOnBarriers1) {
   for (const auto& e : fs::directory_iterator(out / "frames")) pngs += e.path().extension() == ".png";
   EXPECT_EQ(pngs, idx["frames"].get<int>());
   EXPECT_EQ(s["frames"], idx["frames"]);
-  for (const char* k : {"status", "iterations", "seconds", "max_volume_change", "outputs", "final_distance"})
+  for (const char* k : {"status", "iterations", "seconds", "max_volume_change", "outputs", "final_distance", "goal_reached"})
     EXPECT_TRUE(s.contains(k)) << k;
+  // goal_reached is the robot's final distance against the goal's tolerance (barriers1.json: 0.1 m).
+  const nlohmann::json scene = read_json(kScenes + "barriers1.json");
+  const double tolerance = scene["goal"].value("tolerance", 0.05);
+  EXPECT_EQ(s["goal_reached"].get<bool>(), s["final_distance"].get<double>() <= tolerance);
   if (rc == 0) {
     EXPECT_EQ(s["status"], "solved");
     EXPECT_LT(s["final_distance"].get<double>(), 0.1);
