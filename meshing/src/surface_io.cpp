@@ -503,13 +503,21 @@ bool write_all(int fd, const void* data, size_t size) {
 // count and the triangles, for 'e' the message's length and the message.
 void read_with_assimp_in_child(const std::string& name, unsigned flags, std::vector<std::array<double, 3>>& pts,
                                std::vector<std::array<int, 3>>& tris) {
+  // Where no child can be started (out of processes or memory, a sandbox without fork), the file
+  // is read in this process, as LoadOptions::assimp_in_child = false does, with a warning.
+  auto in_process = [&](const char* what, int err) {
+    spdlog::warn("{}: reading it in this process ({}: {})", name, what, std::strerror(err));
+    Assimp::Importer importer;
+    read_with_assimp(name, flags, importer, pts, tris);
+  };
   int fds[2];  // (close-on-exec: a program another thread starts meanwhile must not hold the write end open)
-  if (::pipe2(fds, O_CLOEXEC) != 0) throw InputError(name + ": cannot read: no pipe for the importer (" + std::strerror(errno) + ")");
+  if (::pipe2(fds, O_CLOEXEC) != 0) return in_process("no pipe for the importer's child process", errno);
   const pid_t pid = ::fork();
   if (pid < 0) {
+    const int err = errno;
     ::close(fds[0]);
     ::close(fds[1]);
-    throw InputError(name + ": cannot read: cannot start the importer (" + std::strerror(errno) + ")");
+    return in_process("cannot start the importer's child process", err);
   }
   if (pid == 0) {  // the child: no return, no destructors (the importer is never deleted), no exit handlers
     ::close(fds[0]);

@@ -19,7 +19,8 @@ struct LoadOptions {
                                  // order: no welding, no dropping, no assimp post-processing (see below)
   bool assimp_in_child = true;   // formats assimp reads are read in a child process, whose crash (Debian's
                                  // assimp 5.2 frees some 3MF scenes twice) is an InputError; false: in
-                                 // this process (the fuzz target, whose coverage the child would not report)
+                                 // this process (the fuzz target, whose coverage the child would not report;
+                                 // also, with a warning, where no child process can be started)
 };
 
 /// Loads every triangle (and polygon, split as a fan from its first corner: convex polygons only
