@@ -1347,6 +1347,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // this retry 1,140 tetrahedra, 0.998, 6.7°, 12.6 s). The first attempts the hopeless gate
           // above turns away are of this kind, so this comes before it takes effect.
           bool held = first_holds;
+          bool split_stopped = false;  // the skinny split stopped at its face budget, far over (below)
           // A boundary of mostly skinny triangles goes first to its rounder version, before retry 0
           // (meshing version 26): split to rounder triangles (edges at most `skinny` long) and
           // simplified within the same bounds, so that the simplification can collapse along the
@@ -1371,6 +1372,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                                  (split.V.row(split.F(f, k)) - split.V.row(split.F(f, (k + 1) % 3))).norm() > 1.000001 * skinny;
             EnvelopeStats es;
             SurfaceMesh b = still_skinny ? SurfaceMesh{} : simplify_envelope(split, e, &es, nullptr);  // (no p.target)
+            split_stopped = still_skinny;
             if (still_skinny) {
               spdlog::debug("part {}: boundary of mostly skinny triangles: split at {:.4g} stopped at {} faces, edges "
                             "still longer: not simplified", i, skinny, split.F.rows());
@@ -1389,7 +1391,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               held = held || holds(p.tets, p.tet_stats);
             }
           }
-          if (!held && !abandoned && p.offset == 0 && !p.target && opt.remesh_retry) {
+          if (!held && !abandoned && p.offset == 0 && !p.target && opt.remesh_retry && !split_stopped) {
             const TriangleBvh own(p.surface.V, p.surface.F);
             const double part_area = area(p.surface);
             const double spacing = deviation_spacing(bounding_box_diagonal(p.surface.V), {part_area});
