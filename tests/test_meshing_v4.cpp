@@ -2043,13 +2043,8 @@ TEST(MeshingV4, SelfIntersectingThinTubeKeepsItsVolumeOnTheWindingNumberRoute) {
   const double diag = bounding_box_diagonal(m.V);
   const MeshResult r = mesh(m, 1000);
   EXPECT_EQ(r.method, "winding_number_boundary") << r.fallback_because;
-  ASSERT_TRUE(r.volume_ratio.has_value());
-  EXPECT_GE(*r.volume_ratio, 0.95);
-  EXPECT_LE(*r.volume_ratio, 1.1);
-  EXPECT_LE(r.deviation_out, 0.015 * diag);
-  EXPECT_LE(r.deviation_in, 0.005 * diag);
-  EXPECT_GE(r.quality.min_dihedral, 5.0);
-  EXPECT_EQ(r.quality.components, 1);
+  expect_within(r, diag, 0.1, 0.015, 0.005, 1);  // volume ratio in [0.9, 1.1], and:
+  EXPECT_GE(*r.volume_ratio, 0.95);              // (the bound at 1,000: [0.95, 1.1])
 }
 
 TEST(MeshingV4, ExuderStopsAtItsPumpBoundTheSameWayEachRun) {
