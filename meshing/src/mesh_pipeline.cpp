@@ -1391,6 +1391,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               held = held || holds(p.tets, p.tet_stats);
             }
           }
+          // (Not where the skinny split stopped far over its budget: CGAL's remesh of the same
+          // skinny triangles ran over 5 min on the knot of 12 rings; meshing version 30.)
           if (!held && !abandoned && p.offset == 0 && !p.target && opt.remesh_retry && !split_stopped) {
             const TriangleBvh own(p.surface.V, p.surface.F);
             const double part_area = area(p.surface);
@@ -1906,9 +1908,11 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         wo.dilation *= shrink;
         spdlog::debug("winding-number surface: {:.1f} % over the input's volume; again with the dilation and facet "
                       "distance × {:.2f}", 100.0 * growth, shrink);
-        SurfaceMesh finer = winding_number_surface(r.input.V, r.input.F, wo, &r.winding_stats);
-        if (finer.F.rows() == 0) break;  // (the last solid found kept)
+        WindingTetrahedralizeStats finer_stats;
+        SurfaceMesh finer = winding_number_surface(r.input.V, r.input.F, wo, &finer_stats);
+        if (finer.F.rows() == 0) break;  // (the last solid found kept, and its figures in the report)
         solid = std::move(finer);
+        r.winding_stats = finer_stats;
       }
     }
     auto mesh3 = [&](const std::string& because) {
