@@ -16,18 +16,21 @@ namespace sqs {
 // The faces of a capped tube whose vertices are `rings` + 1 rings of `sides` each (ring j's vertex
 // i at j · sides + i, turning counter-clockwise about the direction from ring j to ring j + 1),
 // then the first end's centre and the last end's: two triangles per side quad, a fan per end,
-// all facing outward. Shared by ringed_rod and coil_spring.
-inline Eigen::MatrixX3i tube_faces(int sides, int rings) {
+// all facing outward. `closed`: a tube closed on itself instead, `rings` rings, the last joined to
+// the first, no caps. Shared by ringed_rod, coil_spring and figure_eight_tube.
+inline Eigen::MatrixX3i tube_faces(int sides, int rings, bool closed = false) {
   const int c0 = sides * (rings + 1), c1 = c0 + 1;
-  Eigen::MatrixX3i F(2 * sides * rings + 2 * sides, 3);
+  Eigen::MatrixX3i F(2 * sides * rings + (closed ? 0 : 2 * sides), 3);
   Eigen::Index f = 0;
   for (int j = 0; j < rings; ++j)
     for (int i = 0; i < sides; ++i) {
-      const int a = j * sides + i, b = j * sides + (i + 1) % sides, c = a + sides, d = b + sides;
+      const int next = closed ? (j + 1) % rings : j + 1;
+      const int a = j * sides + i, b = j * sides + (i + 1) % sides;
+      const int c = next * sides + i, d = next * sides + (i + 1) % sides;
       F.row(f++) << a, b, d;
       F.row(f++) << a, d, c;
     }
-  for (int i = 0; i < sides; ++i) {
+  for (int i = 0; i < sides && !closed; ++i) {
     F.row(f++) << c0, (i + 1) % sides, i;
     F.row(f++) << c1, rings * sides + i, rings * sides + (i + 1) % sides;
   }
@@ -316,14 +319,7 @@ inline squeeze::meshing::SurfaceMesh figure_eight_tube(double a, double r, int s
       m.V.row(j * sides + i) = centre(t) + r * (std::cos(s) * u + std::sin(s) * w);
     }
   }
-  m.F.resize(2 * sides * rings, 3);
-  for (int j = 0; j < rings; ++j)
-    for (int i = 0; i < sides; ++i) {
-      const int a0 = j * sides + i, b0 = j * sides + (i + 1) % sides;
-      const int c0 = ((j + 1) % rings) * sides + i, d0 = ((j + 1) % rings) * sides + (i + 1) % sides;
-      m.F.row(2 * (j * sides + i)) << a0, b0, d0;
-      m.F.row(2 * (j * sides + i) + 1) << a0, d0, c0;
-    }
+  m.F = tube_faces(sides, rings, true);
   return m;
 }
 

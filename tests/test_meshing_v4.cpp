@@ -647,13 +647,15 @@ double signed_volume(const SurfaceMesh& s) {
 
 // split_long_edges keeps the surface: the same vertices first, the same signed volume (so the same
 // orientation) and area, every edge shared by exactly two faces (closed and conforming), and no
-// edge longer than asked; on a sphere, the cylinder and a curtain box.
+// edge longer than asked (and it says so); on a sphere, the cylinder and a curtain box.
 TEST(MeshingV4, SplitLongEdgesKeepsTheSurfaceAndBoundsItsEdges) {
   const SurfaceMesh inputs[] = {cylinder(Vec3(0, 0, 0.05), Vec3(0.08, -0.12, 0.25), 0.012, 10),
                                 box(Vec3(0, 0, 0), Vec3(1, 0.6, 0.02)), sphere(Vec3(0.1, 0.2, 0.3), 0.2, 2)};
   for (const SurfaceMesh& s : inputs) {
     const double bound = 3 * squeeze::meshing::median_edge_length(s);
-    const SurfaceMesh t = squeeze::meshing::split_long_edges(s, bound);
+    bool complete = false;
+    const SurfaceMesh t = squeeze::meshing::split_long_edges(s, bound, &complete);
+    EXPECT_TRUE(complete);
     ASSERT_GE(t.V.rows(), s.V.rows());
     EXPECT_TRUE(t.V.topRows(s.V.rows()).isApprox(s.V));
     EXPECT_NEAR(signed_volume(t), signed_volume(s), 1e-12 * std::abs(signed_volume(s)));
@@ -675,7 +677,9 @@ TEST(MeshingV4, SplitLongEdgesKeepsTheSurfaceAndBoundsItsEdges) {
   // A bound far below the input's edges stops at the face budget (8 #F + 10,000 before a round;
   // a round at most quadruples), not at a million faces.
   const SurfaceMesh cube = box(Vec3(0, 0, 0), Vec3(1, 1, 1));
-  const SurfaceMesh fine = squeeze::meshing::split_long_edges(cube, 1e-4);
+  bool complete = true;
+  const SurfaceMesh fine = squeeze::meshing::split_long_edges(cube, 1e-4, &complete);
+  EXPECT_FALSE(complete);  // it says that edges longer than asked remain
   EXPECT_GT(fine.F.rows(), 8 * cube.F.rows());
   EXPECT_LE(fine.F.rows(), 4 * (8 * cube.F.rows() + 10000));
   EXPECT_NEAR(signed_volume(fine), 1.0, 1e-12);

@@ -1358,18 +1358,14 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // sides and one ring, turned off the axes: 23,360 faces split, 17,762 simplified, whose
           // refinement took 46 s for 2.7°), it is not tetrahedralized: over max_retry_faces.
           if (skinny > 0 && (p.tet_stats.work_exceeded || !held) && !abandoned && !hopeless) {
-            const SurfaceMesh split = split_long_edges(p.surface, skinny);
+            bool split_complete = true;
+            const SurfaceMesh split = split_long_edges(p.surface, skinny, &split_complete);
             // Where the split stopped at its face budget with edges still over `skinny` and over 8
             // times max_retry_faces (a tube of 12 rings and 300 sides: 194,400 faces), its
             // simplification does not coarsen it below max_retry_faces either (64 s for 139,064
             // faces, refused below): not simplified (meshing version 30). Smaller splits that stopped
             // early do simplify (trimesh's boolean.glb: a part split to 15,936 faces, simplified to 28).
-            bool still_skinny = false;
-            if (split.F.rows() > 8 * static_cast<Eigen::Index>(max_retry_faces))
-              for (Eigen::Index f = 0; f < split.F.rows() && !still_skinny; ++f)
-                for (int k = 0; k < 3; ++k)
-                  still_skinny = still_skinny ||
-                                 (split.V.row(split.F(f, k)) - split.V.row(split.F(f, (k + 1) % 3))).norm() > 1.000001 * skinny;
+            const bool still_skinny = !split_complete && split.F.rows() > 8 * static_cast<Eigen::Index>(max_retry_faces);
             EnvelopeStats es;
             SurfaceMesh b = still_skinny ? SurfaceMesh{} : simplify_envelope(split, e, &es, nullptr);  // (no p.target)
             split_stopped = still_skinny;

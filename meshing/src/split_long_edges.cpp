@@ -91,7 +91,7 @@ std::vector<std::array<int, 3>> red_green_split(const std::vector<std::array<int
   return G;
 }
 
-SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length) {
+SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length, bool* complete) {
   if (!(max_length > 0)) throw InputError("split_long_edges: max_length must be positive");
   std::vector<Eigen::RowVector3d> V;
   V.reserve(static_cast<size_t>(surface.V.rows()));
@@ -104,16 +104,19 @@ SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length) {
     return (static_cast<uint64_t>(std::min(a, b)) << 32) | static_cast<uint32_t>(std::max(a, b));
   };
   // Each round halves every long edge; 64 rounds bound any finite ratio of lengths, and the face
-  // budget bounds the output (a round starts only while the faces are within it).
+  // budget bounds the output (a round starts only while the faces are within it). The long edges
+  // are found before the budget is tested, so that `complete` is known without a further scan.
   const size_t budget = 8 * F.size() + 10000;
-  for (int round = 0; round < 64 && F.size() <= budget; ++round) {
+  bool done = false;
+  for (int round = 0;; ++round) {
     std::unordered_map<uint64_t, int> mid;  // a long edge → its midpoint (created on first use)
     for (const auto& t : F)
       for (int k = 0; k < 3; ++k) {
         const int a = t[static_cast<size_t>(k)], b = t[static_cast<size_t>((k + 1) % 3)];
         if ((V[static_cast<size_t>(a)] - V[static_cast<size_t>(b)]).squaredNorm() > max2) mid.emplace(key(a, b), -1);
       }
-    if (mid.empty()) break;
+    done = mid.empty();
+    if (done || round == 64 || F.size() > budget) break;
     // Midpoints numbered in key order: the result does not depend on the hash map's order.
     std::vector<uint64_t> keys;
     keys.reserve(mid.size());
@@ -133,6 +136,7 @@ SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length) {
         [&](int a, int b) { return (V[static_cast<size_t>(a)] - V[static_cast<size_t>(b)]).squaredNorm(); });
     F.swap(G);
   }
+  if (complete) *complete = done;
   SurfaceMesh out;
   out.V.resize(static_cast<Eigen::Index>(V.size()), 3);
   for (size_t i = 0; i < V.size(); ++i) out.V.row(static_cast<Eigen::Index>(i)) = V[i];

@@ -22,8 +22,10 @@ namespace squeeze::meshing {
 /// regular local mesh refinement", Scientific Computing (IMACS), 1983, on surface triangles.
 ///   surface     #V by 3, #F by 3
 ///   max_length  model units, > 0 (else InputError)
+///   complete    optional output: true when every edge of the result is at most max_length, false
+///               when the face budget (or 64 rounds) stopped the refinement first
 /// Returns the refined surface: the input's vertices first, in order, then the midpoints.
-SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length);
+SurfaceMesh split_long_edges(const SurfaceMesh& surface, double max_length, bool* complete = nullptr);
 
 /// One round of that red–green refinement on the faces F, given the new vertex on each split edge:
 /// midpoint(a, b) is its index (the same for (b, a)), or -1 where the edge is not split;
