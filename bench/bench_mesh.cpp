@@ -316,6 +316,25 @@ void BM_ScanWithHolesSolidFirst(benchmark::State& state) { scan_with_holes(state
 BENCHMARK(BM_ScanWithHolesSlabFirst)->Arg(300)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_ScanWithHolesSolidFirst)->Arg(300)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
+// A figure-eight tube 6 mm across on a curve 12 cm wide, which passes through itself (the
+// winding-number boundary route), at a target of 1,000: its solid's growth estimated before the
+// first Mesh_3 run (arg 1, meshing version 31) against made at the full dilation and made again
+// while it grew too much (arg 0, version 30: three runs).
+void BM_SelfIntersectingTube(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh m = sqs::figure_eight_tube(0.06, 0.003, 10, 64);
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 1000;
+  o.estimate_winding_growth = state.range(0) != 0;
+  squeeze::meshing::MeshResult r;
+  for (auto _ : state) r = squeeze::meshing::mesh_surface(m, o);
+  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  state.counters["volume_ratio"] = r.volume_ratio.value_or(0.0);
+  state.counters["solids"] = r.winding_solids;
+  for (const auto& [stage, seconds] : r.seconds)
+    if (stage == "winding-number surface") state.counters["surface_s"] = seconds;
+}
+BENCHMARK(BM_SelfIntersectingTube)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
 // The heart's convex shells meshed by Mesh_3 (`squeeze mesh heart.off --shells-fallback`, the
 // paper's coarse mesh): their slivers relocated and flipped after the exuder (version 17) against
 // Mesh_3's sliver perturber before it (ShellTetrahedralizeOptions::perturb, version 16).
