@@ -1870,7 +1870,6 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     wo.seed = opt.tetrahedralize.seed;
     wo.facet_distance = opt.winding_facet_distance * opt.max_deviation;
     wo.dilation = dilation * opt.max_deviation;
-    // The input's volume (its winding number's, a parallel loop) beside Mesh_3 (one thread).
     // The dilation adds about its width times the solid's surface area: where that is over twice
     // the growth allowed below (thin walls: a mug 4 mm thick, 0.18 m across, at 0.3 of the bound:
     // 25.7 % estimated, 24.8 % measured), the first solid is made at the dilation and facet
@@ -1910,6 +1909,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                       "the dilation and facet distance × {:.2f}", 100.0 * predicted, shrink);
       }
     }
+    // The input's volume (its winding number's, a parallel loop) beside Mesh_3 (one thread).
     tbb::task_group volume_task;
     volume_task.run([&] { r.input_volume = input_winding_volume(); });
     SurfaceMesh solid;
