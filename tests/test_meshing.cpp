@@ -1035,6 +1035,40 @@ TEST(MeshingWindingNumber, HalfOnTheRimOfAnOpenHemisphere) {
   EXPECT_EQ(sign, 1.0);
 }
 
+// face_offset_winding_numbers: on the corpus sphere (closed, outward) about 0 just outside every
+// face and 1 just inside, each face's own area; on a single square (an open sheet)
+// about ½ on both sides; a face of no area gets area 0 and NaN; a side not asked for is not filled.
+TEST(MeshingWindingNumber, FaceOffsetWindingNumbersTellBoundaryInteriorAndSheetFaces) {
+  const SurfaceMesh s = read_off(data("sphere.off"));
+  const squeeze::meshing::FastWindingNumber w(s.V, s.F);
+  const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
+  Eigen::VectorXd out, in;
+  const Eigen::VectorXd area = squeeze::meshing::face_offset_winding_numbers(w, s.V, s.F, 1e-4 * diag, &out, &in);
+  ASSERT_EQ(area.size(), s.F.rows());
+  ASSERT_EQ(out.size(), s.F.rows());
+  ASSERT_EQ(in.size(), s.F.rows());
+  for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
+    const Eigen::RowVector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
+    EXPECT_NEAR(area(f), 0.5 * (b - a).cross(c - a).norm(), 1e-15 * diag * diag) << f;
+    EXPECT_NEAR(out(f), 0.0, 0.05) << f;
+    EXPECT_NEAR(in(f), 1.0, 0.05) << f;
+  }
+  // A unit square in z = 0 as two triangles, and a third triangle of no area on its diagonal.
+  Eigen::MatrixX3d V(4, 3);
+  V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0;
+  Eigen::MatrixX3i F(3, 3);
+  F << 0, 1, 2, 0, 2, 3, 0, 2, 2;
+  const squeeze::meshing::FastWindingNumber sheet(V, F);
+  Eigen::VectorXd up;
+  const Eigen::VectorXd sa = squeeze::meshing::face_offset_winding_numbers(sheet, V, F, 1e-4, &up, nullptr);
+  EXPECT_NEAR(sa(0), 0.5, 1e-15);
+  EXPECT_NEAR(sa(1), 0.5, 1e-15);
+  EXPECT_EQ(sa(2), 0.0);
+  EXPECT_NEAR(std::abs(up(0)), 0.5, 0.01);
+  EXPECT_NEAR(std::abs(up(1)), 0.5, 0.01);
+  EXPECT_TRUE(std::isnan(up(2)));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Orientation and analysis.
 

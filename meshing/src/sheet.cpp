@@ -74,19 +74,14 @@ SheetEvidence sheet_evidence(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   const FastWindingNumber w(V, F);
   const double diag = (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
   const double eps = 1e-4 * diag;
-  std::vector<double> sheet_area(static_cast<size_t>(F.rows()), 0.0), face_area(static_cast<size_t>(F.rows()), 0.0);
-  tbb::parallel_for(Eigen::Index(0), F.rows(), [&](Eigen::Index f) {
-    const Eigen::RowVector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
-    const Eigen::RowVector3d n = (b - a).cross(c - a);
-    const double len = n.norm();
-    if (!(len > 0)) return;
-    face_area[static_cast<size_t>(f)] = 0.5 * len;
-    const Eigen::RowVector3d m = (a + b + c) / 3.0, u = n / len * eps;
-    const double p = std::abs(w(m + u)), q = std::abs(w(m - u));
-    if (p > 0.25 && p < 0.75 && q > 0.25 && q < 0.75) sheet_area[static_cast<size_t>(f)] = 0.5 * len;
-  });
+  Eigen::VectorXd outside, inside;
+  const Eigen::VectorXd face_area = face_offset_winding_numbers(w, V, F, eps, &outside, &inside);
   double total = 0, sheet = 0;
-  for (size_t f = 0; f < face_area.size(); ++f) total += face_area[f], sheet += sheet_area[f];
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    total += face_area(f);
+    const double p = std::abs(outside(f)), q = std::abs(inside(f));
+    if (p > 0.25 && p < 0.75 && q > 0.25 && q < 0.75) sheet += face_area(f);
+  }
   e.sheet_area_fraction = total > 0 ? sheet / total : 0.0;
   return e;
 }

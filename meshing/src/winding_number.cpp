@@ -1,9 +1,12 @@
 #include "squeeze/meshing/winding_number.h"
 
 #include <Eigen/Geometry>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <numeric>
 
 namespace squeeze::meshing {
@@ -226,6 +229,25 @@ FastWindingNumber::FastWindingNumber(FastWindingNumber&&) noexcept = default;
 double FastWindingNumber::operator()(const Eigen::RowVector3d& p) const {
   if (impl_->hot.empty()) return 0.0;
   return impl_->eval(p.transpose());
+}
+
+Eigen::VectorXd face_offset_winding_numbers(const FastWindingNumber& w, const Eigen::MatrixX3d& V,
+                                            const Eigen::MatrixX3i& F, double offset, Eigen::VectorXd* outside,
+                                            Eigen::VectorXd* inside) {
+  Eigen::VectorXd area = Eigen::VectorXd::Zero(F.rows());
+  if (outside) outside->setConstant(F.rows(), std::numeric_limits<double>::quiet_NaN());
+  if (inside) inside->setConstant(F.rows(), std::numeric_limits<double>::quiet_NaN());
+  tbb::parallel_for(Eigen::Index(0), F.rows(), [&](Eigen::Index f) {
+    const Eigen::RowVector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    const Eigen::RowVector3d n = (b - a).cross(c - a);
+    const double len = n.norm();
+    if (!(len > 0)) return;
+    area(f) = 0.5 * len;
+    const Eigen::RowVector3d m = (a + b + c) / 3.0, u = n / len * offset;
+    if (outside) (*outside)(f) = w(m + u);
+    if (inside) (*inside)(f) = w(m - u);
+  });
+  return area;
 }
 
 }  // namespace squeeze::meshing

@@ -56,4 +56,19 @@ class FastWindingNumber {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The winding numbers by `w` just off each face of (V, F): at the face's centroid moved `offset`
+/// along its unit normal, (b − a) × (c − a) normalized (`outside`), and against it (`inside`).
+/// Where w is (V, F)'s own, a face of a closed part's boundary reads about 0 outside and 1
+/// inside, a face inside another part about 1 on both sides, a face of an open sheet about ½ on
+/// both (Jacobson et al. 2013, above). Parallel over the faces.
+///   w        the winding numbers of a surface (usually (V, F) itself)
+///   V        #V by 3 positions (units); F  #F by 3 vertex indices
+///   offset   units, > 0: a small fraction of the surface's size
+///   outside  optional output (nullptr: not evaluated): #F winding numbers, NaN for faces of no area
+///   inside   the same on the other side
+/// Returns the #F face areas (units², 0 where a face has none). Throws nothing.
+Eigen::VectorXd face_offset_winding_numbers(const FastWindingNumber& w, const Eigen::MatrixX3d& V,
+                                            const Eigen::MatrixX3i& F, double offset, Eigen::VectorXd* outside,
+                                            Eigen::VectorXd* inside);
+
 }  // namespace squeeze::meshing
