@@ -22,49 +22,23 @@
 #include "squeeze/meshing/winding_number.h"
 
 namespace squeeze::meshing {
-namespace {
-
-// One directed edge of a face: (from, to), with the face.
-struct Half {
-  int lo, hi;   // the undirected edge (lo < hi)
-  bool forward; // from == lo
-  int face, k;  // face and the corner the edge leaves from
-  bool operator<(const Half& o) const { return lo != o.lo ? lo < o.lo : hi != o.hi ? hi < o.hi : face < o.face; }
-};
-
-std::vector<Half> halves(const Eigen::MatrixX3i& F) {
-  std::vector<Half> h;
-  h.reserve(static_cast<size_t>(3 * F.rows()));
-  for (int f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int a = F(f, k), b = F(f, (k + 1) % 3);
-      h.push_back({std::min(a, b), std::max(a, b), a < b, f, k});
-    }
-  std::sort(h.begin(), h.end());
-  return h;
-}
-
-}  // namespace
 
 SheetEvidence sheet_evidence(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
   SheetEvidence e;
   if (F.rows() == 0) return e;
-  const std::vector<Half> h = halves(F);
+  const std::vector<EdgeIncidence> h = edge_incidences(F);
   bool manifold = true;
   int boundary = 0;
   std::vector<int> rim_edges(static_cast<size_t>(V.rows()), 0);  // boundary edges at each vertex
-  for (size_t i = 0; i < h.size();) {
-    size_t j = i;
-    while (j < h.size() && h[j].lo == h[i].lo && h[j].hi == h[i].hi) ++j;
+  for_each_edge(h, [&](size_t i, size_t j) {
     if (j - i == 1) {
       ++boundary;
-      ++rim_edges[static_cast<size_t>(h[i].lo)];
-      ++rim_edges[static_cast<size_t>(h[i].hi)];
+      ++rim_edges[static_cast<size_t>(h[i].a)];
+      ++rim_edges[static_cast<size_t>(h[i].b)];
     } else if (j - i > 2 || h[i].forward == h[i + 1].forward) {
       manifold = false;
     }
-    i = j;
-  }
+  });
   // A vertex on the boundary has two boundary edges; four or more: two fans meeting at a point (a
   // bow tie), which no offset or remeshing takes.
   for (int n : rim_edges) manifold = manifold && (n == 0 || n == 2);
@@ -267,13 +241,10 @@ SurfaceMesh slab_of(const SurfaceMesh& sheet, const Offsets& off, const std::vec
   }
   // The boundary edges, in their face's direction.
   std::vector<std::pair<int, int>> rim;
-  const std::vector<Half> h = halves(sheet.F);
-  for (size_t i = 0; i < h.size();) {
-    size_t j = i;
-    while (j < h.size() && h[j].lo == h[i].lo && h[j].hi == h[i].hi) ++j;
-    if (j - i == 1) rim.emplace_back(sheet.F(h[i].face, h[i].k), sheet.F(h[i].face, (h[i].k + 1) % 3));
-    i = j;
-  }
+  const std::vector<EdgeIncidence> h = edge_incidences(sheet.F);
+  for_each_edge(h, [&](size_t i, size_t j) {
+    if (j - i == 1) rim.push_back(h[i].forward ? std::make_pair(h[i].a, h[i].b) : std::make_pair(h[i].b, h[i].a));
+  });
   s.F.resize(2 * nf + 2 * static_cast<Eigen::Index>(rim.size()), 3);
   for (Eigen::Index f = 0; f < nf; ++f) {
     s.F.row(f) = sheet.F.row(f);
@@ -314,13 +285,10 @@ int smooth_sheet_faces(SurfaceMesh& sheet, const std::vector<int>& faces, double
         for (int j = 0; j < 3; ++j) moves[static_cast<size_t>(sheet.F(g, j))] = 1;
   }
   // The outline stays (the remeshing kept it on the input's).
-  const std::vector<Half> h = halves(sheet.F);
-  for (size_t i = 0; i < h.size();) {
-    size_t j = i;
-    while (j < h.size() && h[j].lo == h[i].lo && h[j].hi == h[i].hi) ++j;
-    if (j - i == 1) moves[static_cast<size_t>(h[i].lo)] = moves[static_cast<size_t>(h[i].hi)] = 0;
-    i = j;
-  }
+  const std::vector<EdgeIncidence> h = edge_incidences(sheet.F);
+  for_each_edge(h, [&](size_t i, size_t j) {
+    if (j - i == 1) moves[static_cast<size_t>(h[i].a)] = moves[static_cast<size_t>(h[i].b)] = 0;
+  });
   Eigen::MatrixX3d W = sheet.V;
   int moved = 0;
   for (Eigen::Index v = 0; v < nv; ++v) {
