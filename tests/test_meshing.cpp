@@ -14,6 +14,7 @@
 #include "squeeze/meshing/convex_hull.h"
 #include "squeeze/meshing/decompose.h"
 #include "squeeze/meshing/mesh_pipeline.h"
+#include "squeeze/meshing/sheet.h"
 #include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/surface_normals.h"
@@ -400,6 +401,46 @@ TEST(MeshingQuality, PeelBoundarySliversRespectsTheHeightLimit) {
     ASSERT_EQ(any.T.rows(), 1);
     EXPECT_EQ(any.T.row(0).maxCoeff(), 3) << "the good tet stays";
   }
+}
+
+// drop_slivers removes every tetrahedron under the floor, interior ones too, and nothing else: one
+// layer of prisms over a grid whose middle vertex's two sides are pressed together (its prisms
+// flatten into slivers, some of them with no face on the boundary).
+TEST(MeshingQuality, DropSliversRemovesInteriorSliversAndKeepsTheRest) {
+  SurfaceMesh grid;
+  const int n = 4;  // (n + 1)² vertices, 2 n² faces on [0, 1]²
+  grid.V.resize((n + 1) * (n + 1), 3);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) grid.V.row(j * (n + 1) + i) << double(i) / n, double(j) / n, 0.0;
+  grid.F.resize(2 * n * n, 3);
+  for (int j = 0, f = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      grid.F.row(f++) << a, b, d;
+      grid.F.row(f++) << a, d, c;
+    }
+  TetMesh m;
+  ASSERT_TRUE(squeeze::meshing::sheet_tets(grid, 0.05, m));
+  const int nv = static_cast<int>(grid.V.rows()), mid = (n / 2) * (n + 1) + n / 2;
+  m.V(mid, 2) = m.V(nv + mid, 2) + 1e-4;  // its +side copy onto its −side copy
+  const TetQuality before = squeeze::meshing::tet_quality(m);
+  ASSERT_LT(before.min_dihedral, 5.0);
+  const Eigen::MatrixX4i boundary_face = squeeze::meshing::tet_faces(m.T).boundary_face;
+  int slivers = 0, interior = 0;
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
+    const auto a = squeeze::meshing::dihedral_angles(m.V.row(m.T(t, 0)), m.V.row(m.T(t, 1)), m.V.row(m.T(t, 2)), m.V.row(m.T(t, 3)));
+    if (*std::min_element(a.begin(), a.end()) >= 5.0) continue;
+    ++slivers;
+    interior += boundary_face.row(t).maxCoeff() < 0;
+  }
+  ASSERT_GT(interior, 0) << "the case needs a sliver with no boundary face";
+  TetMesh dropped = m;
+  EXPECT_EQ(squeeze::meshing::drop_slivers(dropped, 5.0), slivers);
+  EXPECT_EQ(dropped.T.rows(), m.T.rows() - slivers);
+  EXPECT_GE(squeeze::meshing::tet_quality(dropped).min_dihedral, 5.0);
+  TetMesh none = dropped;
+  EXPECT_EQ(squeeze::meshing::drop_slivers(none, 5.0), 0);
+  EXPECT_EQ(none.T, dropped.T);
 }
 
 TEST(MeshingQuality, FlipSliversRemovesSliversAcrossAFaceAndAroundAnEdgeAndKeepsTheBoundary) {

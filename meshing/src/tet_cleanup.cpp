@@ -78,6 +78,16 @@ int drop_debris_components(TetMesh& m, double max_fraction) {
   return removed;
 }
 
+int drop_slivers(TetMesh& m, double min_degrees) {
+  std::vector<int> keep;
+  keep.reserve(static_cast<size_t>(m.T.rows()));
+  for (int t = 0; t < m.T.rows(); ++t)
+    if (!(min_dihedral_of(m, t) < min_degrees)) keep.push_back(t);
+  const int removed = static_cast<int>(m.T.rows() - static_cast<Eigen::Index>(keep.size()));
+  if (removed > 0) keep_tets(m, keep);
+  return removed;
+}
+
 int peel_boundary_slivers(TetMesh& m, double min_degrees, double max_height) {
   // How far peeling t moves the boundary: the largest height of t over one of its boundary faces
   // (the distance of the opposite vertex from that face's plane, 3·volume / area).

@@ -35,6 +35,16 @@ int drop_debris_components(TetMesh& mesh, double max_fraction);
 /// Returns how many tetrahedra were removed.
 int peel_boundary_slivers(TetMesh& mesh, double min_degrees, double max_height = INFINITY);
 
+/// Removes every tetrahedron with a dihedral angle below `min_degrees`, interior ones too (unlike
+/// peel_boundary_slivers): for one layer of prisms over a sheet, where a few prisms at a fold or a
+/// spike are flattened to slivers that no move or flip mends (meshing version 32). The mesh stays
+/// conforming; it may open small holes and split off pieces (the caller checks both).
+///   mesh         V #V by 3, T #T by 4 positively oriented, label #T or empty (T and label
+///                modified in place; vertices kept: remove_unused_vertices drops the orphans)
+///   min_degrees  dihedral-angle threshold (degrees)
+/// Throws nothing; returns how many tetrahedra were removed.
+int drop_slivers(TetMesh& mesh, double min_degrees);
+
 /// Moves vertices of tetrahedra with a dihedral angle below `min_degrees` (the interior slivers
 /// Mesh_3's exuder leaves, whose four vertices all lie on the boundary) to the best of a few nearby
 /// positions (±axes and ± the sliver's height at the vertex, 5–20 % of its shortest edge; in the
