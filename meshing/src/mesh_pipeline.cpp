@@ -968,7 +968,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         if (own) Ls = own_edge;
         // (An open scan's slab is not worth more than 200,000 remeshed triangles: its solid is kept.)
         if (p.scan && area(p.sheet) / (0.433 * Ls * Ls) > 2e5) break;
-        SurfaceMesh s = own ? p.sheet : remesh_sheet(p.sheet, Ls);
+        // (Its own triangles wider than a prism may be, a few large polygons creased between them,
+        // are split to that width: the sheet stays the input, creases and all; meshing version 32.)
+        SurfaceMesh s = own ? split_long_edges(p.sheet, longest) : remesh_sheet(p.sheet, Ls);
         if (s.F.rows() == 0) {
           apart = 0.8 * h / 0.49;
           continue;
@@ -997,7 +999,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           throw InputError("the open scan's slab holds the bounds only with " + std::to_string(s.F.rows()) +
                            " equal triangles, and graded it leaves slivers");
         // Equal triangles: kept with what slivers are left (the report's dihedral says so).
-        const Layer got = prisms_without_slivers(s, make, nullptr, relax, nullptr, 8, 0.01, opt.sheet_sliver_drop, what, layer);
+        const Layer got = prisms_without_slivers(s, make, nullptr, relax, nullptr, mends, opt.sheet_sliver_drop > 0 ? 0.1 : 0.01, opt.sheet_sliver_drop, what, layer);
         if (got == Layer::kFolded) {
           if (own) break;  // (no finer try)
           apart = 0.8 * h / 0.49;  // folded: the next attempt 0.63 times as long
