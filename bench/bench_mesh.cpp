@@ -71,6 +71,16 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // library's defaults.
 squeeze::meshing::MeshOptions boundary_first_options() { return {}; }
 
+// mesh_surface(m, o) once per iteration (the A/B benches below differ by one option); the last
+// result, its tetrahedra counted as "tets".
+squeeze::meshing::MeshResult mesh_each_iteration(benchmark::State& state, const squeeze::meshing::SurfaceMesh& m,
+                                                 const squeeze::meshing::MeshOptions& o) {
+  squeeze::meshing::MeshResult r;
+  for (auto _ : state) r = squeeze::meshing::mesh_surface(m, o);
+  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  return r;
+}
+
 // The whole pipeline, as `squeeze mesh MODEL -o out.mesh` runs it (without writing the file).
 void BM_Mesh(benchmark::State& state, const std::string& model) {
   const squeeze::meshing::MeshOptions options = boundary_first_options();  // the command line's defaults
@@ -240,9 +250,7 @@ void BM_LongRodRemesh(benchmark::State& state) {
   squeeze::meshing::MeshOptions o;
   o.tetrahedralize.target_tets = 1000;
   o.remesh_volume_loss = state.range(0) != 0 ? 0.025 : 0.0;
-  squeeze::meshing::MeshResult r;
-  for (auto _ : state) r = squeeze::meshing::mesh_surface(rod, o);
-  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, rod, o);
   state.counters["volume_ratio"] = r.volume_ratio.value_or(0);
   state.counters["min_dihedral"] = r.quality.min_dihedral;
 }
@@ -256,9 +264,7 @@ void BM_UCurtainDecomposition(benchmark::State& state) {
   const squeeze::meshing::SurfaceMesh m = sqs::u_curtain();
   squeeze::meshing::MeshOptions o;
   o.decomposition.samples_by_area = state.range(0) != 0;
-  squeeze::meshing::MeshResult r;
-  for (auto _ : state) r = squeeze::meshing::mesh_surface(m, o);
-  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
   state.counters["shells"] = static_cast<double>(r.decomposition.shells.size());
   state.counters["volume_ratio"] = r.volume_ratio.value_or(0);
 }
@@ -282,9 +288,7 @@ void plate(benchmark::State& state, bool prisms) {
   squeeze::meshing::MeshOptions o;
   o.tetrahedralize.target_tets = static_cast<int>(state.range(0));
   o.thin_parts_as_prisms = prisms;
-  squeeze::meshing::MeshResult r;
-  for (auto _ : state) r = squeeze::meshing::mesh_surface(m, o);
-  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
   state.counters["volume_ratio"] = r.volume_ratio.value_or(0.0);
   state.counters["min_dihedral"] = r.quality.min_dihedral;
   state.counters["conforming"] = r.tet_stats.conforming ? 1 : 0;
@@ -302,10 +306,8 @@ void scan_with_holes(benchmark::State& state, bool slab_first) {
   squeeze::meshing::MeshOptions o;
   o.tetrahedralize.target_tets = static_cast<int>(state.range(0));
   o.slab_first_for_wide_holes = slab_first;
-  squeeze::meshing::MeshResult r;
-  for (auto _ : state) r = squeeze::meshing::mesh_surface(m, o);
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
   const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
-  state.counters["tets"] = static_cast<double>(r.quality.tets);
   state.counters["sheets"] = r.sheets;
   state.counters["deviation_out"] = r.deviation_out / diag;
   state.counters["deviation_in"] = r.deviation_in / diag;
@@ -325,9 +327,7 @@ void BM_SelfIntersectingTube(benchmark::State& state) {
   squeeze::meshing::MeshOptions o;
   o.tetrahedralize.target_tets = 1000;
   o.estimate_winding_growth = state.range(0) != 0;
-  squeeze::meshing::MeshResult r;
-  for (auto _ : state) r = squeeze::meshing::mesh_surface(m, o);
-  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
   state.counters["volume_ratio"] = r.volume_ratio.value_or(0.0);
   state.counters["solids"] = r.winding_solids;
   for (const auto& [stage, seconds] : r.seconds)
@@ -344,10 +344,8 @@ void heart_shells(benchmark::State& state, bool perturb) {
   o.tetrahedralize.target_tets = static_cast<int>(state.range(0));
   o.shells_fallback = true;
   o.shells.perturb = perturb;
-  squeeze::meshing::MeshResult r;
-  for (auto _ : state) r = squeeze::meshing::mesh_surface(m, o);
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
   const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
-  state.counters["tets"] = static_cast<double>(r.quality.tets);
   state.counters["attempts"] = r.shell_stats.attempts;
   state.counters["covered"] = r.shell_stats.covered;
   state.counters["deviation_out"] = r.deviation_out / diag;
@@ -416,9 +414,7 @@ void BM_ThinBottle(benchmark::State& state) {
   squeeze::meshing::MeshOptions o;
   o.tetrahedralize.target_tets = 300;
   o.thin_parts_as_prisms = state.range(0) != 0;
-  squeeze::meshing::MeshResult r;
-  for (auto _ : state) r = squeeze::meshing::mesh_surface(bottle, o);
-  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, bottle, o);
   state.counters["thin_parts"] = r.thin_parts;
   state.counters["deviation_in"] = r.deviation_in;
 }

@@ -973,7 +973,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         // (An open scan's slab is not worth more than 200,000 remeshed triangles: its solid is kept.)
         if (p.scan && area(p.sheet) / (0.433 * Ls * Ls) > 2e5) break;
         // (Its own triangles wider than a prism may be, a few large polygons creased between them,
-        // are split to that width: the sheet stays the input, creases and all; meshing version 32.)
+        // are split to that width: the sheet stays the input, creases and all; meshing version 33.)
         SurfaceMesh s = own ? split_long_edges(p.sheet, longest) : remesh_sheet(p.sheet, Ls);
         if (s.F.rows() == 0) {
           apart = 0.8 * h / 0.49;
@@ -992,8 +992,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         // dropped: the dragon with holes went from 1,111 of 19,021 faces to 168, then 73, dropped.
         // Eight rounds and a hundredth without, as version 31.)
         const int mends = opt.sheet_sliver_drop > 0 ? 16 : 8;
+        const double mend_bad = opt.sheet_sliver_drop > 0 ? 0.1 : 0.01;
         if (Ls < 0.99 * longest && graded(s, c) &&
-            prisms_without_slivers(c, make, nullptr, relax, nullptr, mends, opt.sheet_sliver_drop > 0 ? 0.1 : 0.01, opt.sheet_sliver_drop, what + ", graded", layer) == Layer::kClean) {
+            prisms_without_slivers(c, make, nullptr, relax, nullptr, mends, mend_bad, opt.sheet_sliver_drop, what + ", graded", layer) == Layer::kClean) {
           adopt(layer, Ls, attempt);
           return true;
         }
@@ -1003,7 +1004,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           throw InputError("the open scan's slab holds the bounds only with " + std::to_string(s.F.rows()) +
                            " equal triangles, and graded it leaves slivers");
         // Equal triangles: kept with what slivers are left (the report's dihedral says so).
-        const Layer got = prisms_without_slivers(s, make, nullptr, relax, nullptr, mends, opt.sheet_sliver_drop > 0 ? 0.1 : 0.01, opt.sheet_sliver_drop, what, layer);
+        const Layer got = prisms_without_slivers(s, make, nullptr, relax, nullptr, mends, mend_bad, opt.sheet_sliver_drop, what, layer);
         if (got == Layer::kFolded) {
           if (own) break;  // (no finer try)
           apart = 0.8 * h / 0.49;  // folded: the next attempt 0.63 times as long

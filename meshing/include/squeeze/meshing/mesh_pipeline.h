@@ -123,10 +123,13 @@ struct MeshOptions {
                                         // false: made at the full dilation, then again while over
                                         // (meshing version 30's order)
   double sheet_sliver_drop = 0.005;     // open sheets and scans' slabs: where the prisms over at most
-                                        // this fraction of the sheet's faces still hold tetrahedra
-                                        // under the dihedral floor (a spike's tip, a fold), those
-                                        // tetrahedra are dropped (tet_cleanup.h: drop_slivers) if
-                                        // every sheet vertex keeps one; 0: never (version 31)
+                                        // this fraction of the sheet's faces, or four (version 34),
+                                        // still hold tetrahedra under the dihedral floor (a spike's
+                                        // tip, a fold), those tetrahedra are dropped (tet_cleanup.h:
+                                        // drop_slivers), kept where every sheet vertex left on none
+                                        // lies within the inner bound of the rest; its mends also
+                                        // run 16 rounds while under a tenth of the faces hold
+                                        // slivers; 0: never, 8 rounds and a hundredth (version 31)
 };
 
 /// The alpha wrap the pipeline made (inputs that are not closed parts).
