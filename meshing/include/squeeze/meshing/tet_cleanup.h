@@ -42,7 +42,8 @@ int peel_boundary_slivers(TetMesh& mesh, double min_degrees, double max_height =
 ///   mesh         V #V by 3, T #T by 4 positively oriented, label #T or empty (T and label
 ///                modified in place; vertices kept: remove_unused_vertices drops the orphans)
 ///   min_degrees  dihedral-angle threshold (degrees)
-/// Throws nothing; returns how many tetrahedra were removed.
+/// Throws nothing; returns how many tetrahedra were removed. Source: squeeze's own clean-up (the
+/// dihedral angles of tet_geometry.h).
 int drop_slivers(TetMesh& mesh, double min_degrees);
 
 /// Moves vertices of tetrahedra with a dihedral angle below `min_degrees` (the interior slivers
