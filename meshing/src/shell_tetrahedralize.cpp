@@ -21,6 +21,7 @@
 #include <Eigen/Geometry>
 #include <chrono>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdlib>
 #include <functional>
@@ -428,14 +429,19 @@ namespace {
 class SpacedPoints {
  public:
   SpacedPoints(const Eigen::Vector3d& origin, double apart) : origin_(origin), apart_(apart) {}
-  bool near(const Eigen::Vector3d& p) const {
+  bool near(const Eigen::Vector3d& p) const { return near_all(p, p, p); }
+  // Whether one point lies within `apart` of each of p, q and r (of the whole triangle pqr, by
+  // convexity), where p is within `apart` of q and r.
+  bool near_all(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) const {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
           auto it = grid_.find(key(p, dx, dy, dz));
           if (it == grid_.end()) continue;
-          for (int s : it->second)
-            if ((points[static_cast<size_t>(s)] - p).norm() < apart_) return true;
+          for (int s : it->second) {
+            const Eigen::Vector3d& x = points[static_cast<size_t>(s)];
+            if ((x - p).norm() < apart_ && (x - q).norm() < apart_ && (x - r).norm() < apart_) return true;
+          }
         }
     return false;
   }
@@ -535,12 +541,19 @@ class WindingSolid {
                                            double apart) const {
     SpacedPoints out(lo_, apart);
     const double probe = dil_ + 2e-3 * diag_;
+    // The surface point taken for x lies on the segment from x to x + probe n or to x - probe n:
+    // where a point already taken lies within `apart` of both ends of each (or of the one taken),
+    // x gives none, and neither the cover test nor the 40 bisections are needed (the same points:
+    // trimesh's chair, 0.9 M lattice points, half of them outside the surface in the second pass,
+    // took 77 s and 53 s).
     auto take = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& normal) {
-      if (covered(x) || !(normal.norm() > 0) || !inside(x)) return;
+      if (!(normal.norm() > 0)) return;
       const Eigen::Vector3d n = normal.normalized();
+      if (out.near_all(x, x + probe * n, x - probe * n)) return;
+      if (covered(x) || !inside(x)) return;
       Eigen::Vector3d b = x + probe * n;
       if (inside(b)) b = x - probe * n;  // a face the file orients inward
-      if (inside(b)) return;
+      if (inside(b) || out.near_all(x, b, x)) return;
       const Eigen::Vector3d a = bisect(x, b);
       if (!out.near(a)) out.add(a);
     };
