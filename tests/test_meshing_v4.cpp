@@ -1514,6 +1514,44 @@ TEST(MeshingV4, RoughSheetIsNotRemeshedFinerThanItsOwnTriangles) {
 // rounds the crease off (18.4 m from the input, bound 6 m), so its own triangles are the next try,
 // and prisms 15 m thick over triangles 1 km wide left 0.29° (version 31). Since version 32 its own
 // triangles are split to the width a prism may have: the crease stays, no sliver.
+// Version 35: closed parts beside a stray component that is none. Four boards 1 m × 0.02 m ×
+// 0.4 m crossing at their middles (closed parts that overlap, each meshed on its own) and a fin of
+// three triangles on one edge above them (non-manifold: no closed part, no sheet) took the whole
+// input to its winding-number solid, whose dilation and chords swell the thin boards (1.3-1.6
+// times their volume). Now the boards stay exact and only the fin is a solid of its own.
+TEST(MeshingV4, StrayFinBesideClosedBoardsLeavesTheBoardsExact) {
+  std::vector<SurfaceMesh> pieces;
+  double boards = 0;
+  for (int k = 0; k < 4; ++k) {
+    SurfaceMesh b = box(Vec3(-0.5, -0.01, -0.2), Vec3(0.5, 0.01, 0.2));
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI * k / 4, Vec3::UnitZ()).toRotationMatrix();
+    b.V = (b.V * R.transpose()).eval();
+    boards += 1.0 * 0.02 * 0.4;
+    pieces.push_back(b);
+  }
+  SurfaceMesh fin;
+  fin.V.resize(5, 3);
+  fin.V << 0, 0, 0.2, 0, 0, 0.6, 0.3, 0, 0.4, -0.3, 0, 0.4, 0, 0.3, 0.4;
+  fin.F.resize(3, 3);
+  fin.F << 0, 1, 2, 0, 1, 3, 0, 1, 4;
+  pieces.push_back(fin);
+  const SurfaceMesh s = join(pieces);
+  const double diag = bounding_box_diagonal(s.V);
+  MeshOptions o;
+  o.tetrahedralize.target_tets = 300;
+  const MeshResult r = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_EQ(r.method, "winding_number_boundary");
+  EXPECT_EQ(r.quality.components, 5) << "four boards and the fin's solid";
+  EXPECT_LE(r.deviation_out, 0.015 * diag);
+  EXPECT_LE(r.deviation_in, 0.005 * diag);
+  EXPECT_GE(r.quality.min_dihedral, 5.0);
+  EXPECT_GT(r.quality.volume, 0.999 * boards);
+  EXPECT_LT(r.quality.volume, 1.1 * boards) << "the boards exact, the fin's solid thin";
+  o.closed_parts_beside_solid = false;  // the whole input's solid, as before
+  const MeshResult whole = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_GT(whole.quality.volume, 1.2 * boards);
+}
+
 TEST(MeshingV4, SheetOfAFewCreasedPolygonsIsSplitNotRemeshed) {
   const fs::path dir = fs::temp_directory_path() / ("squeeze_polygons_" + std::to_string(::getpid()));
   fs::create_directories(dir);

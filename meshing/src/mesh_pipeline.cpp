@@ -390,6 +390,8 @@ struct Part {
   const SurfaceMesh* target = nullptr;  // the input, when `surface` is not its own boundary but
                               // its winding-number solid's (the bounds are the input's; version 11)
   bool scan = false;          // the sheet is an open scan of a solid (holes wider than the bound)
+  bool beside_solid = false;  // a closed part meshed beside the winding-number solid of the input's
+                              // other components (MeshOptions::closed_parts_beside_solid)
   double offset = 0;          // how far `surface` lies outside the input (units): a sheet's slab, half
                               // its thickness (sheet.h); taken off the outer bound, and the inner
                               // bound kept below half of it so that the sheet stays inside
@@ -423,6 +425,9 @@ std::vector<int> sliver_faces(const SurfaceMesh& sheet, const TetMesh& tets, dou
 
 // The words fallback_because gives open scans of solids (mesh_surface looks for them).
 const std::string kOpenScans = "open scans of solids";
+// The method of a try, on the winding-number solid of some components only, that the caller
+// replaces with the whole input's solid (MeshOptions::closed_parts_beside_solid).
+const std::string kWholeSolid = "(whole input's solid)";
 
 std::string percent(double x) {
   char buf[32];
@@ -1291,7 +1296,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // boundary by at most the inner bound (the lumbar spine at 150 had a 4.1° sliver 2 % of
           // the diagonal thick); the alpha wrap lies outside the input by its offset, and peeling
           // its slivers (up to 5 % thick on the welded boxes) moved it toward the input, so no limit.
-          if (!wrapped || p.target) t.peel_max_height = std::min(t.peel_max_height, e.max_inside);
+          if (!wrapped || p.target || p.beside_solid) t.peel_max_height = std::min(t.peel_max_height, e.max_inside);
           if (p.offset > 0) t.exude = false;  // a sheet's slab (TetrahedralizeOptions::exude)
           if (skinny > 0) t.max_refine_work = opt.skinny_refine_work;
           Progress* pr = progress_here ? progress : nullptr;
@@ -1911,13 +1916,23 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   // hold (conforming, the dihedral floor), Mesh_3's tetrahedra of the solid (winding_route).
   // `dilation`: as a multiple of max_deviation (open scans: winding_dilation, as Mesh_3's own
   // tetrahedra; welded segments: winding_surface_dilation).
-  auto winding_boundary_route = [&](const std::string& why, double dilation) -> MeshResult {
-    spdlog::info("meshing the boundary of the input's winding-number solid instead of its own: {}", why);
+  // `only`: the solid of these components of the input only (not closed parts: open, non-manifold
+  // or welded), beside the closed parts `beside`, meshed as parts of their own (meshing version
+  // 35); null: the whole input's.
+  auto winding_boundary_route = [&](const std::string& why, double dilation, const SurfaceMesh* only = nullptr,
+                                    std::vector<Part>* beside = nullptr) -> MeshResult {
+    const SurfaceMesh& source = only ? *only : r.input;
+    if (only)
+      spdlog::info("meshing the boundary of the winding-number solid of the input's components that are not closed "
+                   "parts, beside its {} closed part{}: {}", beside->size(), beside->size() == 1 ? "" : "s", why);
+    else
+      spdlog::info("meshing the boundary of the input's winding-number solid instead of its own: {}", why);
     leave_boundary_route("winding_number_boundary", why, 0);
     timer.start("winding-number surface");
     r.input_volume_from_winding_number = true;
     WindingTetrahedralizeOptions wo = opt.winding_mesh;
     wo.seed = opt.tetrahedralize.seed;
+    if (only) wo.seed_faces_if_no_facet = true;  // (a few small components: their faces are few)
     wo.facet_distance = opt.winding_facet_distance * opt.max_deviation;
     wo.dilation = dilation * opt.max_deviation;
     // The dilation adds about its width times the solid's surface area: where that is over twice
@@ -1934,7 +1949,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // here (computed beside Mesh_3 below).
     const bool fine_target = opt.tetrahedralize.target_tets >= 1000;
     const double allowed_growth = fine_target ? 0.08 : 0.15;
-    if (r.info.closed && opt.estimate_winding_growth) {
+    if (r.info.closed && !only && opt.estimate_winding_growth) {
       const double v = signed_volume(r.input), width = wo.dilation * diag;
       // (By all of the faces first: that bounds it, and the winding numbers are needed only above.)
       double predicted = v > 0 ? area(r.input) * width / v : 0.0;
@@ -1960,7 +1975,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     volume_task.run([&] { r.input_volume = input_winding_volume(); });
     SurfaceMesh solid;
     try {
-      solid = winding_number_surface(r.input.V, r.input.F, wo, &r.winding_stats);
+      solid = winding_number_surface(source.V, source.F, wo, &r.winding_stats);
       r.winding_solids = 1;
     } catch (...) {
       volume_task.wait();
@@ -1979,10 +1994,11 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // tubes 16 mm across in a chain 0.41 m long, at 1,000: 19.2 %, then 12.1 % at 0.42 and 8.9 %
     // at 0.28 of the dilation, so 1.089 after simplification, not 1.121), and rounds below that
     // line only add faces (the liver at 1,000: 9.7 %, 8.4 %, then 8.1 % and 8.0 % in 6 s more).
-    if (r.info.closed && r.input_volume > 0 && solid.F.rows() > 0) {
+    const double source_volume = only ? winding_volume(*only) : r.input_volume;
+    if (r.info.closed && source_volume > 0 && solid.F.rows() > 0) {
       const double again = fine_target ? 0.09 : 0.175;
       for (int round = 0; round < 3; ++round) {
-        const double growth = signed_volume(solid) / r.input_volume - 1.0;
+        const double growth = signed_volume(solid) / source_volume - 1.0;
         if (!(growth > (round == 0 ? allowed_growth : again))) break;
         const double shrink = std::max(0.4, allowed_growth / growth);
         wo.facet_distance *= shrink;
@@ -1990,7 +2006,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         spdlog::debug("winding-number surface: {:.1f} % over the input's volume; again with the dilation and facet "
                       "distance × {:.2f}", 100.0 * growth, shrink);
         WindingTetrahedralizeStats finer_stats;
-        SurfaceMesh finer = winding_number_surface(r.input.V, r.input.F, wo, &finer_stats);
+        SurfaceMesh finer = winding_number_surface(source.V, source.F, wo, &finer_stats);
         ++r.winding_solids;
         if (finer.F.rows() == 0) break;  // (the last solid found kept, and its figures in the report)
         solid = std::move(finer);
@@ -1998,6 +2014,12 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       }
     }
     auto mesh3 = [&](const std::string& because) {
+      if (only) {  // (the caller meshes the whole input's solid instead)
+        MeshResult whole;
+        whole.method = kWholeSolid;
+        whole.fallback_because = because;
+        return whole;
+      }
       auto tetrahedra = [&](const std::string& w) {
         spdlog::info("meshing the winding-number solid by Mesh_3 as it is: {}", w);
         return winding_route(why + "; its boundary " + w);
@@ -2020,7 +2042,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       return mesh3("(component " + std::to_string(bad + 1) + " of " + std::to_string(n) +
                    ") is not a closed oriented 2-manifold enclosing volume");
     for (Part& p : pieces) {
-      p.target = &r.input;
+      p.target = &source;
       spdlog::debug("winding-number surface component {}: {} faces, volume {:.4g}", p.component, p.surface.F.rows(), p.volume);
     }
     // A component facing inward (negative volume) bounds a void of the solid (winding number
@@ -2055,8 +2077,21 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     if (filled > 0) spdlog::debug("winding-number surface: {} voids under 1 % of their part's volume filled", filled);
     spdlog::debug("winding-number surface: {} faces, {} components", solid.F.rows(), n);
     timer.stop();
+    if (beside) {  // the closed parts first, in the input's order, then the solid's
+      for (Part& p : parts) beside->push_back(std::move(p));
+      parts = std::move(*beside);
+    }
     MeshResult b = boundary_route(parts, eopt, true, [&](const std::string& w) { return mesh3("could not be meshed: " + w); });
     if (b.method != "winding_number_boundary") return b;
+    if (only) {  // the input's volume as its parts': the closed ones' own (overlaps counted, as the
+                 // boundary route counts them) and the others' winding-number solid's
+      b.input_volume = source_volume;
+      for (const Part& p : parts)
+        if (p.beside_solid) b.input_volume += p.volume;
+      b.info.volume = b.input_volume;
+      b.volume_ratio.reset();
+      if (b.info.closed && b.input_volume > 0) b.volume_ratio = b.quality.volume / b.input_volume;
+    }
     std::string worse;
     if (!b.tet_stats.conforming) worse = "was not tetrahedralized conforming";
     else if (b.quality.min_dihedral < opt.tetrahedralize.min_dihedral) worse = "keeps a dihedral angle below the floor";
@@ -2111,6 +2146,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   std::vector<Part> parts;
   std::vector<int> candidates;  // components that are not parts (sheets, open scans, or the fallback)
   const std::vector<std::vector<int>> faces = faces_by_component(component_of, components);
+  std::vector<int> cavity_of(static_cast<size_t>(components), -1);  // the part a component is a cavity of
   {
     std::vector<Part> component(static_cast<size_t>(components));
     std::vector<char> usable(static_cast<size_t>(components), 0);
@@ -2137,7 +2173,6 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // nested components as the boundary of the space between). Before, the inner shell became a
     // solid of its own, overlapping the other (a hollow ball meshed as a full ball and a second one
     // inside it). Components the file orients outward, or inconsistently, stay parts of their own.
-    std::vector<int> cavity_of(static_cast<size_t>(components), -1);
     {
       std::vector<int> inward;
       for (int c = 0; c < components; ++c) {
@@ -2287,6 +2322,45 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
                     : std::function<MeshResult(const std::string&)>([&](const std::string& why) {
                         return winding_boundary_route(why, opt.winding_surface_dilation);
                       });
+  // Closed parts beside the components that are not (meshing version 35): a many-part model with
+  // a stray non-manifold fin or a sheet welded to itself took the whole model to its winding-number
+  // solid (twelve crossing boards, each a closed part, beside a fin of three triangles on one edge:
+  // 1.59 times their volume, 0.77 % of the diagonal in, Mesh_3 finding no surface from their
+  // corners). Only the others' solid now, beside the closed parts meshed as they are; where that
+  // solid cannot be meshed, the whole input's, as before.
+  if (unusable > 0 && !parts.empty() && opt.closed_parts_beside_solid && !opt.wrap && !opt.winding &&
+      !opt.shells_fallback) {
+    std::vector<int> rest_faces;
+    for (int c : candidates)
+      rest_faces.insert(rest_faces.end(), faces[static_cast<size_t>(c)].begin(), faces[static_cast<size_t>(c)].end());
+    std::vector<Part> beside = parts;
+    bool self_intersecting = false;
+    for (Part& p : beside) {
+      p.beside_solid = true;
+      self_intersecting = self_intersecting || p.check;
+    }
+    std::sort(rest_faces.begin(), rest_faces.end());
+    const SurfaceMesh rest = sub_mesh(r.input, rest_faces);
+    // Only stray components, under a tenth of the input's area, beside closed parts that do not
+    // intersect themselves: where the others are much of it (an organ of welded segments: the
+    // left lung's 11 of 16, 3,140 tetrahedra, 0.49 % of the diagonal in, 2,698 and 0.44 % as one
+    // solid) or a closed part may fail on its own (trimesh's chair, its self-intersecting
+    // frame with the two stray components' solid: 7,687 tetrahedra and 16 s, 4,002 and 9 s as
+    // one solid), one solid holds the bounds better.
+    if (!self_intersecting && area(rest) < 0.1 * area(r.input)) {
+      decomposition();  // (waited for: `r` is copied, to be restored where this try is not kept)
+      const MeshResult before = r;
+      MeshResult m = winding_boundary_route(
+          std::to_string(unusable) + " of the input's " + std::to_string(components) +
+              " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, or welded to other "
+              "components)",
+          opt.winding_surface_dilation, &rest, &beside);
+      if (m.method != kWholeSolid) return m;
+      spdlog::info("the solid of the components that are not closed parts {}: meshing the whole input's solid instead",
+                   m.fallback_because);
+      r = before;
+    }
+  }
   if (unusable > 0)
     return fallback(std::to_string(unusable) + " of the input's " + std::to_string(components) +
                     " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, "

@@ -538,22 +538,22 @@ class WindingSolid {
   // corners and edges, which the dilation rounds and a facet within the facet distance can cut
   // off (three welded boxes: corners and edges 0.55 % of the diagonal outside without them).
   std::vector<Eigen::Vector3d> cover_seeds(const std::function<bool(const Eigen::Vector3d&)>& covered, double spacing,
-                                           double apart) const {
+                                           double apart, bool skip) const {
     SpacedPoints out(lo_, apart);
     const double probe = dil_ + 2e-3 * diag_;
     // The surface point taken for x lies on the segment from x to x + probe n or to x - probe n:
     // where a point already taken lies within `apart` of both ends of each (or of the one taken),
     // x gives none, and neither the cover test nor the 40 bisections are needed (the same points:
     // trimesh's chair, 0.9 M lattice points, half of them outside the surface in the second pass,
-    // took 77 s and 53 s).
+    // took 77 s and 53 s). `skip` false: each point tested (bench_mesh's A/B).
     auto take = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& normal) {
       if (!(normal.norm() > 0)) return;
       const Eigen::Vector3d n = normal.normalized();
-      if (out.near_all(x, x + probe * n, x - probe * n)) return;
+      if (skip && out.near_all(x, x + probe * n, x - probe * n)) return;
       if (covered(x) || !inside(x)) return;
       Eigen::Vector3d b = x + probe * n;
       if (inside(b)) b = x - probe * n;  // a face the file orients inward
-      if (inside(b) || out.near_all(x, b, x)) return;
+      if (inside(b) || (skip && out.near_all(x, b, x))) return;
       const Eigen::Vector3d a = bisect(x, b);
       if (!out.near(a)) out.add(a);
     };
@@ -673,6 +673,16 @@ SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::Matri
   refine_from_seeds(c3t3, domain, seeds, size, fd, opt.seed, opt.max_tets, true);
   spdlog::debug("Mesh_3 (winding number, surface): {} seeds refined in {:.2f} s", seeds.size(),
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  // No facet from the vertices' seeds (a part smaller than their spacing has one or two, a fin's
+  // seeds give no restricted facet): seeds along the faces, a facet distance apart, where asked.
+  if (opt.seed_faces_if_no_facet && c3t3.number_of_facets_in_complex() == 0) {
+    const std::vector<Eigen::Vector3d> more =
+        solid.cover_seeds([](const Eigen::Vector3d&) { return false; }, fd, 4.0 * fd, opt.cover_skip);
+    spdlog::debug("Mesh_3 (winding number, surface): no facet; {} more seeds along the input's faces", more.size());
+    st.seeds += static_cast<int>(more.size());
+    ++st.attempts;
+    refine_from_seeds(c3t3, domain, more, size, fd, opt.seed, opt.max_tets, true);
+  }
   // The input's points left outside the surface (sharp corners and edges cut off): their surface
   // points as more seeds, and the refinement resumed; twice at most.
   const Tr& tr = c3t3.triangulation();
@@ -686,7 +696,7 @@ SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::Matri
       hint = tr.locate(Tr::Point(Point(x(0), x(1), x(2))), hint);
       return c3t3.is_in_complex(hint) || boundary.nearest(x, nullptr, nullptr, tolerance) <= tolerance;
     };
-    const std::vector<Eigen::Vector3d> more = solid.cover_seeds(covered, fd, (pass == 0 ? 4.0 : 2.0) * fd);
+    const std::vector<Eigen::Vector3d> more = solid.cover_seeds(covered, fd, (pass == 0 ? 4.0 : 2.0) * fd, opt.cover_skip);
     spdlog::debug("Mesh_3 (winding number, surface): {} more seeds where the input lies outside by more than {:.3g} "
                   "({:.2f} s)", more.size(), tolerance, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     if (more.empty()) break;

@@ -31,6 +31,13 @@ struct WindingTetrahedralizeOptions {
   double cover_tolerance = 0.003; // fraction of the diagonal: winding_number_surface seeds the
                                  // input's points left outside its surface by more than this (sharp
                                  // corners and edges the facets cut off) and refines again (0: not)
+  bool seed_faces_if_no_facet = false;  // winding_number_surface: where the vertices' seeds give
+                                 // Mesh_3 no facet (a part smaller than their spacing, a fin), seeds
+                                 // along the input's faces too (a knot's tube 2 mm across with faces
+                                 // 0.11 m long: minutes; so only where asked)
+  bool cover_skip = true;        // that pass skips input points whose surface point could only land
+                                 // near a point already taken (false: tests each; the same points,
+                                 // slower: bench_mesh's A/B)
 
   unsigned seed = 1;             // CGAL's random generator: same input, same mesh
 };
