@@ -2358,7 +2358,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       if (m.method != kWholeSolid) return m;
       spdlog::info("the solid of the components that are not closed parts {}: meshing the whole input's solid instead",
                    m.fallback_because);
+      std::vector<std::pair<std::string, double>> seconds = std::move(r.seconds);  // (the try's stages kept)
       r = before;
+      r.seconds = std::move(seconds);
     }
   }
   if (unusable > 0)
