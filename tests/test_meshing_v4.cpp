@@ -1939,6 +1939,27 @@ TEST(MeshingV4, InwardInnerShellIsACavity) {
 
 }  // namespace
 
+// Version 35: a fin (three triangles on one edge) encloses no volume, so its winding-number solid
+// is its dilation alone, and the seeds at its five vertices give Mesh_3 no facet to start from;
+// seeded along its faces as well (seed_faces_if_no_facet), that solid is found: closed, outward.
+TEST(Envelope, FinSolidIsFoundWhenSeededAlongItsFaces) {
+  SurfaceMesh fin;
+  fin.V.resize(5, 3);
+  fin.V << 0, 0, 0, 0, 0, 0.4, 0.3, 0, 0.2, -0.3, 0, 0.2, 0, 0.3, 0.2;
+  fin.F.resize(3, 3);
+  fin.F << 0, 1, 2, 0, 1, 3, 0, 1, 4;
+  squeeze::meshing::WindingTetrahedralizeOptions wo;
+  wo.facet_distance = 0.004;
+  wo.dilation = 0.003;
+  EXPECT_EQ(squeeze::meshing::winding_number_surface(fin.V, fin.F, wo).F.rows(), 0);
+  wo.seed_faces_if_no_facet = true;
+  const SurfaceMesh solid = squeeze::meshing::winding_number_surface(fin.V, fin.F, wo);
+  ASSERT_GT(solid.F.rows(), 0);
+  EXPECT_TRUE(squeeze::meshing::is_closed(solid.F));
+  EXPECT_TRUE(squeeze::meshing::is_oriented_two_manifold(solid.F, static_cast<int>(solid.V.rows())));
+  EXPECT_GT(squeeze::meshing::analyse_surface(solid).volume, 0.0);
+}
+
 // Meshing version 11: the boundary of a soup's winding-number solid (winding_number_surface) is a
 // closed, outward, 2-manifold surface without self-intersections around the soup (three welded
 // boxes: the corners and edges its facets cut off seeded and refined again), and
@@ -1956,8 +1977,19 @@ TEST(Envelope, TargetSoupBoundsHoldAgainstTheSoup) {
   squeeze::meshing::WindingTetrahedralizeOptions wo;
   wo.facet_distance = 0.004;
   wo.dilation = 0.0045;
-  const SurfaceMesh solid = squeeze::meshing::winding_number_surface(soup.V, soup.F, wo);
+  squeeze::meshing::WindingTetrahedralizeStats stats;
+  const SurfaceMesh solid = squeeze::meshing::winding_number_surface(soup.V, soup.F, wo, &stats);
   ASSERT_GT(solid.F.rows(), 0);
+  {  // Version 35's skip in the cover pass takes the same seeds, so the same surface.
+    squeeze::meshing::WindingTetrahedralizeOptions each = wo;
+    each.cover_skip = false;
+    squeeze::meshing::WindingTetrahedralizeStats each_stats;
+    const SurfaceMesh same = squeeze::meshing::winding_number_surface(soup.V, soup.F, each, &each_stats);
+    EXPECT_GT(stats.attempts, 1) << "a cover pass seeded more";
+    EXPECT_EQ(each_stats.seeds, stats.seeds);
+    ASSERT_EQ(same.F.rows(), solid.F.rows());
+    EXPECT_TRUE(same.F == solid.F && same.V == solid.V);
+  }
   EXPECT_TRUE(squeeze::meshing::is_closed(solid.F));
   EXPECT_TRUE(squeeze::meshing::is_oriented_two_manifold(solid.F, static_cast<int>(solid.V.rows())));
   EXPECT_FALSE(squeeze::meshing::does_self_intersect(solid));
