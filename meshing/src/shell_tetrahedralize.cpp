@@ -21,7 +21,6 @@
 #include <Eigen/Geometry>
 #include <chrono>
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <cstdlib>
 #include <functional>
