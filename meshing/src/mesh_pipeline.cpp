@@ -2328,19 +2328,17 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   // 1.59 times their volume, 0.77 % of the diagonal in, Mesh_3 finding no surface from their
   // corners). Only the others' solid now, beside the closed parts meshed as they are; where that
   // solid cannot be meshed, the whole input's, as before.
+  const std::string not_parts = std::to_string(unusable) + " of the input's " + std::to_string(components) +
+                                " components are not closed, oriented 2-manifolds enclosing volume (open, "
+                                "non-manifold, or welded to other components)";
   if (unusable > 0 && !parts.empty() && opt.closed_parts_beside_solid && !opt.wrap && !opt.winding &&
       !opt.shells_fallback) {
     std::vector<int> rest_faces;
     for (int c : candidates)
       rest_faces.insert(rest_faces.end(), faces[static_cast<size_t>(c)].begin(), faces[static_cast<size_t>(c)].end());
-    std::vector<Part> beside = parts;
-    bool self_intersecting = false;
-    for (Part& p : beside) {
-      p.beside_solid = true;
-      self_intersecting = self_intersecting || p.check;
-    }
     std::sort(rest_faces.begin(), rest_faces.end());
     const SurfaceMesh rest = sub_mesh(r.input, rest_faces);
+    const bool self_intersecting = std::any_of(parts.begin(), parts.end(), [](const Part& p) { return p.check; });
     // Only stray components, under a tenth of the input's area, beside closed parts that do not
     // intersect themselves: where the others are much of it (an organ of welded segments: the
     // left lung's 11 of 16, 3,140 tetrahedra, 0.49 % of the diagonal in, 2,698 and 0.44 % as one
@@ -2350,11 +2348,10 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     if (!self_intersecting && area(rest) < 0.1 * area(r.input)) {
       decomposition();  // (waited for: `r` is copied, to be restored where this try is not kept)
       const MeshResult before = r;
-      MeshResult m = winding_boundary_route(
-          std::to_string(unusable) + " of the input's " + std::to_string(components) +
-              " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, or welded to other "
-              "components)",
-          opt.winding_surface_dilation, &rest, &beside);
+      // (`parts` is not used again: the whole input's solid below, where this try is not kept.)
+      std::vector<Part> beside = std::move(parts);
+      for (Part& p : beside) p.beside_solid = true;
+      MeshResult m = winding_boundary_route(not_parts, opt.winding_surface_dilation, &rest, &beside);
       if (m.method != kWholeSolid) return m;
       spdlog::info("the solid of the components that are not closed parts {}: meshing the whole input's solid instead",
                    m.fallback_because);
@@ -2363,10 +2360,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       r.seconds = std::move(seconds);
     }
   }
-  if (unusable > 0)
-    return fallback(std::to_string(unusable) + " of the input's " + std::to_string(components) +
-                    " components are not closed, oriented 2-manifolds enclosing volume (open, non-manifold, "
-                    "or welded to other components)");
+  if (unusable > 0) return fallback(not_parts);
   if (parts.empty()) throw InputError("the surface encloses no volume (winding number above 1/2 nowhere)");
   return boundary_route(parts, eopt, false, fallback);
 
