@@ -1645,9 +1645,11 @@ TEST(MeshingV4, ScanWithHolesWiderThanTheBoundIsAGradedSlabWithinTheBounds) {
 
 // A scan with a hole wider than the bound and no slab (a fin on one edge: not a 2-manifold, as a
 // zipper scan's flaps or an organ's welded segments are): its winding-number solid's cap lies far
-// off, and the report says why and names --wrap, whose shell goes into the hole (twenty-fifth
-// session; the wrap itself, 55 s on this sphere, is not run here).
-TEST(MeshingV4, SolidsCappingWideHolesSayWhyAndNameTheWrap) {
+// off (14 % of the diagonal), and the report says why and names --wrap, whose shell goes into the
+// hole (twenty-fifth session; the wrap itself, 55 s on this sphere, is not run here). Since
+// meshing version 36 the solid is made again hollowed where the outside reaches in through the
+// hole: a shell around the hole's rim, within the bounds (0.76 % of the diagonal out).
+TEST(MeshingV4, SolidsOfScansWithWideHolesAndNoSlabAreHollowedNotCapped) {
   const SurfaceMesh sphere = sqt::read_off(sqt::data("sphere.off"));
   const Eigen::RowVector3d centre = sphere.V.colwise().mean();
   const double R = (sphere.V.rowwise() - centre).rowwise().norm().mean();
@@ -1674,11 +1676,32 @@ TEST(MeshingV4, SolidsCappingWideHolesSayWhyAndNameTheWrap) {
   scan.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
   for (size_t f = 0; f < kept.size(); ++f) scan.F.row(static_cast<Eigen::Index>(f)) = kept[f];
   const double diag = bounding_box_diagonal(scan.V);
-  const MeshResult r = mesh(scan, 1000);
-  EXPECT_TRUE(r.method == "winding_number_boundary" || r.method == "winding_number") << r.method;
-  EXPECT_GT(r.deviation_out, 0.05 * diag) << "the cap over the hole";
-  EXPECT_NE(r.deviation_exceeded_because.find("closes its holes"), std::string::npos) << r.deviation_exceeded_because;
-  EXPECT_NE(r.deviation_exceeded_because.find("--wrap"), std::string::npos) << r.deviation_exceeded_because;
+  MeshOptions capped;
+  capped.tetrahedralize.target_tets = 300;
+  capped.hollow_where_caps_lie_far = false;  // (version 35)
+  const MeshResult c = squeeze::meshing::mesh_surface(scan, capped);
+  EXPECT_EQ(c.method, "winding_number_boundary");
+  EXPECT_EQ(c.winding_stats.hollow_depth, 0.0);
+  EXPECT_GT(c.deviation_out, 0.05 * diag) << "the cap over the hole";
+  EXPECT_NE(c.deviation_exceeded_because.find("closes its holes"), std::string::npos) << c.deviation_exceeded_because;
+  EXPECT_NE(c.deviation_exceeded_because.find("--wrap"), std::string::npos) << c.deviation_exceeded_because;
+
+  const MeshResult r = mesh(scan, 300);
+  EXPECT_EQ(r.method, "winding_number_boundary");
+  EXPECT_GT(r.winding_stats.hollow_depth, 0.0);
+  EXPECT_NE(r.fallback_because.find("hollowed where the outside reaches in"), std::string::npos) << r.fallback_because;
+  EXPECT_LE(r.deviation_out, 0.01 * diag) << "a shell around the hole's rim, no cap";
+  EXPECT_LE(r.deviation_in, 0.0045 * diag);
+  EXPECT_GE(r.quality.min_dihedral, 5.0);
+  EXPECT_TRUE(r.tet_stats.conforming);
+  EXPECT_EQ(r.quality.components, 1);
+  EXPECT_EQ(r.deviation_exceeded_because, "");
+  // Hollow: well under the sphere's volume (the shell is about 1 % of the diagonal thick).
+  EXPECT_LT(tet_volume(r.tets), 0.5 * tet_volume(c.tets));
+  // Both tries' stages in the report's seconds: the capped solid's surface, then the hollowed one's.
+  int surfaces = 0;
+  for (const auto& [stage, seconds] : r.seconds) surfaces += stage == "winding-number surface";
+  EXPECT_EQ(surfaces, 2);
 }
 
 // The elephant of tests/data with four holes of 3 % of the diagonal: as a solid, its caps lie 2.3 %

@@ -1933,6 +1933,10 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     WindingTetrahedralizeOptions wo = opt.winding_mesh;
     wo.seed = opt.tetrahedralize.seed;
     if (only) wo.seed_faces_if_no_facet = true;  // (a few small components: their faces are few)
+    if (opt.hollow_open_components && !only) {
+      wo.hollow_cell = opt.hollow_cell;
+      wo.hollow_depth = opt.hollow_depth * opt.max_deviation;
+    }
     wo.facet_distance = opt.winding_facet_distance * opt.max_deviation;
     wo.dilation = dilation * opt.max_deviation;
     // The dilation adds about its width times the solid's surface area: where that is over twice
@@ -2405,6 +2409,42 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   };
   MeshOptions o = opt;
   o.open_scans_as_sheets = true;
+  // A winding-number solid whose caps over holes lie over 1.5 times the bound off the input (welded
+  // segments, whose slab is never made; an open scan whose slab does not hold): made again hollowed
+  // where the outside reaches in through the holes (WindingTetrahedralizeOptions::hollow_cell), a
+  // shell around the holes' rims instead of caps over them; kept where it lies nearer the input,
+  // no farther inside than the capped solid or within the inner bound, with the same components,
+  // conforming and above the dihedral floor (meshing version 36).
+  auto hollowed_if_nearer = [&](MeshResult r) -> MeshResult {
+    if (!routes_free || !opt.hollow_where_caps_lie_far || opt.hollow_open_components || r.method != "winding_number_boundary" ||
+        !winding_solid_of_open_input(r) || !(r.deviation_out > trigger))
+      return r;
+    MeshOptions h = opt;
+    h.hollow_open_components = true;
+    MeshResult s;
+    try {
+      s = mesh_surface_once(surface, h, nullptr, r.decomposition.shells.empty() ? nullptr : &r.decomposition);
+    } catch (const InputError& e) {
+      spdlog::debug("the hollowed solid: {}", e.what());
+      return r;
+    }
+    const bool ok = s.method == "winding_number_boundary" && s.deviation_out < r.deviation_out &&
+                    s.deviation_in <= std::max(r.deviation_in, opt.inner_deviation * opt.max_deviation * diag) &&
+                    s.quality.min_dihedral >= opt.tetrahedralize.min_dihedral && s.tet_stats.conforming &&
+                    s.quality.components == r.quality.components;
+    spdlog::info("the input's solid hollowed where the outside reaches in through its holes: {} of the diagonal out and {} "
+                 "in (capped: {} and {}), {} tetrahedra, {} components (capped: {}): {}",
+                 percent(s.deviation_out / diag), percent(s.deviation_in / diag), percent(r.deviation_out / diag),
+                 percent(r.deviation_in / diag), s.quality.tets, s.quality.components, r.quality.components,
+                 ok ? "kept" : "not kept");
+    if (!ok) return r;
+    const std::string why = "its holes are wider than the deviation bound: as a solid, the caps over them lay " +
+                            percent(r.deviation_out / diag) +
+                            " of the diagonal off the input; hollowed where the outside reaches in through them";
+    s.fallback_because = s.fallback_because.empty() ? why : why + "; " + s.fallback_because;
+    after_earlier_try(s, r);
+    return s;
+  };
   // Open scans whose widest hole's cap (hole_caps.h: the largest circle inside a hole's outline)
   // would lie beyond that: the slab first, and the solid only where the slab does not hold (the
   // bunny with holes 2 % of its diagonal wide: 15.5 s, the solid and then the slab; the slab
@@ -2438,7 +2478,7 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
       // (No second try of the slab after the solid.)
       MeshResult r = mesh_surface_once(surface, opt, progress, s.decomposition.shells.empty() ? nullptr : &s.decomposition);
       after_earlier_try(r, s);  // (the decomposition: the slab's try made it)
-      return r;
+      return hollowed_if_nearer(std::move(r));
     }
   }
   MeshResult r = mesh_surface_once(surface, opt, progress);
@@ -2452,17 +2492,17 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   // within the bounds. Meshing version 34.)
   const bool capped = winding_solid_of_open_input(r) && r.fallback_because.find(kOpenScans) != std::string::npos &&
                       (r.deviation_out > trigger || r.deviation_in > opt.inner_deviation * opt.max_deviation * diag);
-  if (!capped || !routes_free) return r;
+  if (!capped || !routes_free) return hollowed_if_nearer(std::move(r));
   MeshResult s;
   try {
     s = mesh_surface_once(surface, o, nullptr, r.decomposition.shells.empty() ? nullptr : &r.decomposition);
   } catch (const InputError& e) {
     spdlog::debug("the open scan as a sheet: {}", e.what());
-    return r;
+    return hollowed_if_nearer(std::move(r));
   }
   // (One mesh per part meshed: per component of the input, each a slab. Not the solid's count of
   // components: a stray triangle beside a scan is one more slab, where the solid had swallowed it.)
-  if (!holds(s, s.parts)) return r;
+  if (!holds(s, s.parts)) return hollowed_if_nearer(std::move(r));
   as_sheet(s, r.deviation_out, false);
   after_earlier_try(s, r);
   return s;
@@ -2478,6 +2518,11 @@ std::string deviation_exceeded_because(const MeshResult& r, const MeshOptions& o
   if (r.method == "convex_shells")
     return "the convex shells' mesh lies " + off + ": shells are as loose as the input is concave (the paper's method; " +
            "the default route keeps within the bound)";
+  if (winding_solid_of_open_input(r) && r.winding_stats.hollow_depth > 0)
+    return "the input's winding-number solid, hollowed where the outside reaches in through its holes, lies " + off +
+           " (its shell, " + percent((r.winding_stats.dilation + r.winding_stats.hollow_depth) / diag) +
+           " of the diagonal thick, is thinner than Mesh_3's facets follow everywhere); --wrap meshes its alpha wrap "
+           "instead, a thin closed shell around both sides of the input, at many times the tetrahedra and seconds";
   if (winding_solid_of_open_input(r))
     return "the input's winding-number solid closes its holes, and its caps over holes wider than the bound lie " + off +
            " (a closed solid can do no better); no slab of the input within the bounds could be made (welded or "
@@ -2653,6 +2698,7 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
                   {"cell_size", r.winding_stats.cell_size},
                   {"facet_distance", frac(r.winding_stats.facet_distance)},
                   {"dilation", frac(r.winding_stats.dilation)},
+                  {"hollow_depth", r.winding_stats.hollow_depth > 0 ? json(frac(r.winding_stats.hollow_depth)) : json(nullptr)},
                   {"seeds", r.winding_stats.seeds},
                   {"relocated", r.winding_stats.relocated},
                   {"flips", r.winding_stats.flips},

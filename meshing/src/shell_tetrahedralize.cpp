@@ -29,6 +29,7 @@
 #include <numeric>
 #include <cstdint>
 #include <unordered_map>
+#include <optional>
 #include <vector>
 
 #include "squeeze/common/error.h"
@@ -479,9 +480,19 @@ class WindingSolid {
     dil_ = opt.dilation * diag_;
     fd_ = opt.facet_distance * diag_;
     area_weighted_normals(V, F, FN_, N_);  // outward where the faces are oriented so
+    if (opt.hollow_cell > 0) {
+      if (!(opt.hollow_depth >= 0 && opt.hollow_depth < 1)) throw InputError("winding-number hollow depth must be in [0, 1)");
+      if (!(opt.hollow_cell < 1)) throw InputError("winding-number hollow cell must be in [0, 1)");
+      depth_ = std::max(opt.hollow_depth * diag_, dil_);
+      const auto t0 = std::chrono::steady_clock::now();
+      flood_outside(opt.hollow_cell * diag_);
+      spdlog::debug("winding-number solid: hollowed where the outside reaches, flooded over {} x {} x {} cells {:.3g} wide "
+                    "in {:.2f} s", n_(0), n_(1), n_(2), cell_, sec(t0, std::chrono::steady_clock::now()));
+    }
   }
   double diag() const { return diag_; }
   double dilation() const { return dil_; }       // units
+  double hollow_depth() const { return air_.empty() ? 0.0 : depth_; }  // units; 0: not hollowed
   double facet_distance() const { return fd_; }  // units
 
   // Inside: near the input surface (the dilation: a cheap, pruned BVH query), else by winding number.
@@ -489,6 +500,9 @@ class WindingSolid {
   bool inside(const Eigen::Vector3d& p) const {
     return memo_(p, [this](const Eigen::Vector3d& q) {
       if (dil_ > 0 && bvh_.any_within(q, dil_)) return true;
+      // (Hollowed: where the outside reaches, out whatever the winding number, which is the
+      // costlier test.)
+      if (!air_.empty() && reached_by_outside(q)) return false;
       return winding_(q.transpose()) >= 0.5;
     });
   }
@@ -524,6 +538,13 @@ class WindingSolid {
       const Eigen::Vector3d p = V_.row(i).transpose(), n = N_.row(i).transpose() / len;
       if (seeds.near(p)) continue;
       const Eigen::Vector3d a = p - probe * n, b = p + probe * n;
+      if (!air_.empty() && inside(p)) {  // (hollowed: the shell's inner side too)
+        for (const double side : {-1.0, 1.0}) {
+          const Eigen::Vector3d s = p + side * (std::max(dil_, depth_) + 2e-3 * diag_) * n;
+          if (!inside(s)) seeds.add(bisect(p, s));
+        }
+        continue;
+      }
       if (!inside(a) || inside(b)) continue;
       seeds.add(bisect(a, b));
     }
@@ -569,11 +590,99 @@ class WindingSolid {
   const Eigen::MatrixX3d& V_;
   const Eigen::MatrixX3i& F_;
   FastWindingNumber winding_;
+  // Hollowing (options.hollow_cell): cells of a grid `cell_` wide from `grid_lo_` (its first
+  // cell's centre), n_ per axis, that the outside reaches (1) through no point within the
+  // dilation of the input.
+  std::vector<char> air_;
+  Eigen::Vector3d grid_lo_;
+  Eigen::Vector3i n_;
+  double cell_ = 0;
+  size_t index(int i, int j, int k) const {
+    return (static_cast<size_t>(k) * static_cast<size_t>(n_(1)) + static_cast<size_t>(j)) * static_cast<size_t>(n_(0)) +
+           static_cast<size_t>(i);
+  }
+  Eigen::Vector3d centre(int i, int j, int k) const { return grid_lo_ + cell_ * Eigen::Vector3d(i, j, k); }
+
+  // The flood: from the grid's border cells (outside the input's bounding box), to each of the six
+  // neighbours, where the segment between their centres crosses no triangle and no point of it
+  // lies within the dilation of the input (points about a dilation apart along it; cells over a
+  // cell width from the input pass at once). A hole wider than a few cells lets it in; a crack
+  // narrower than twice the dilation does not.
+  void flood_outside(double cell) {
+    const Eigen::Vector3d hi = V_.colwise().maxCoeff().transpose();
+    // (At most about 4 M cells: coarser where the bounding box asks for more.)
+    const Eigen::Vector3d ext = hi - lo_;
+    cell = std::max(cell, std::cbrt(ext.prod() / 4e6));
+    cell_ = cell;
+    grid_lo_ = lo_ - 1.5 * cell * Eigen::Vector3d::Ones();
+    for (int a = 0; a < 3; ++a) n_(a) = static_cast<int>(std::ceil(ext(a) / cell)) + 4;
+    const size_t total = static_cast<size_t>(n_(0)) * static_cast<size_t>(n_(1)) * static_cast<size_t>(n_(2));
+    const double reach = std::max(dil_, 1e-9 * diag_);
+    // Per cell: 2 where a triangle lies within a cell width of its centre (its segments are
+    // sampled), 1 where one lies within the dilation (blocked), else 0.
+    std::vector<char> near(total, 0);
+    tbb::parallel_for(0, n_(2), [&](int k) {
+      for (int j = 0; j < n_(1); ++j)
+        for (int i = 0; i < n_(0); ++i) {
+          const Eigen::Vector3d c = centre(i, j, k);
+          char& m = near[index(i, j, k)];
+          if (bvh_.any_within(c, cell)) m = bvh_.any_within(c, reach) ? 1 : 2;
+        }
+    });
+    // (Samples at most 16 a segment, where the dilation is tiny; a wall is never crossed.)
+    const int samples = static_cast<int>(std::min(16.0, std::ceil(cell / reach)));
+    auto passable = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, char ma, char mb) {
+      if (ma == 1 || mb == 1) return false;
+      if (ma == 0 || mb == 0) return true;
+      for (int s = 1; s < samples; ++s)
+        if (bvh_.any_within(a + (b - a) * (static_cast<double>(s) / samples), reach)) return false;
+      double t;
+      return !bvh_.first_crossing(a, b, 0.0, &t);
+    };
+    air_.assign(total, 0);
+    std::vector<Eigen::Vector3i> queue;
+    for (int k = 0; k < n_(2); ++k)
+      for (int j = 0; j < n_(1); ++j)
+        for (int i = 0; i < n_(0); ++i)
+          if (i == 0 || j == 0 || k == 0 || i == n_(0) - 1 || j == n_(1) - 1 || k == n_(2) - 1) {
+            air_[index(i, j, k)] = 1;
+            queue.emplace_back(i, j, k);
+          }
+    static const int step[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (size_t q = 0; q < queue.size(); ++q) {
+      const Eigen::Vector3i c = queue[q];
+      for (const auto& d : step) {
+        const Eigen::Vector3i e = c + Eigen::Vector3i(d[0], d[1], d[2]);
+        if ((e.array() < 0).any() || (e.array() >= n_.array()).any()) continue;
+        const size_t ie = index(e(0), e(1), e(2)), ic = index(c(0), c(1), c(2));
+        if (air_[ie]) continue;
+        if (!passable(centre(c(0), c(1), c(2)), centre(e(0), e(1), e(2)), near[ic], near[ie])) continue;
+        air_[ie] = 1;
+        queue.push_back(e);
+      }
+    }
+  }
+  // Whether p (off the dilation) is where the outside reaches and farther than the hollow depth
+  // from the input: one of the 64 cell centres around it (4 × 4 × 4) that the flood reached, with
+  // no triangle between it and p.
+  bool reached_by_outside(const Eigen::Vector3d& p) const {
+    if (bvh_.any_within(p, depth_)) return false;
+    const Eigen::Vector3d g = (p - grid_lo_) / cell_;
+    const Eigen::Vector3i base = (g.array().floor() - 1.0).cast<int>().matrix();
+    for (int c = 0; c < 64; ++c) {
+      const Eigen::Vector3i e = base + Eigen::Vector3i(c & 3, (c >> 2) & 3, (c >> 4) & 3);
+      if ((e.array() < 0).any() || (e.array() >= n_.array()).any()) continue;
+      if (!air_[index(e(0), e(1), e(2))]) continue;
+      double t;
+      if (!bvh_.first_crossing(p, centre(e(0), e(1), e(2)), 0.0, &t)) return true;
+    }
+    return false;
+  }
   TriangleBvh bvh_;
   mutable detail::LabelMemo memo_;  // inside()'s answers; one thread (Mesh_3 is Sequential_tag here)
   Eigen::MatrixX3d FN_, N_;
   Eigen::Vector3d lo_, centre_;
-  double diag_ = 0, dil_ = 0, fd_ = 0;
+  double diag_ = 0, dil_ = 0, fd_ = 0, depth_ = 0;
 };
 
 }  // namespace
@@ -662,6 +771,7 @@ SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::Matri
   WindingTetrahedralizeStats st;
   st.facet_distance = fd;
   st.dilation = solid.dilation();
+  st.hollow_depth = solid.hollow_depth();
   st.attempts = 1;
   const std::vector<Eigen::Vector3d> seeds = solid.seeds(8.0 * fd);
   st.seeds = static_cast<int>(seeds.size());

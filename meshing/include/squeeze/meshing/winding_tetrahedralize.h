@@ -3,6 +3,7 @@
 // welded, non-manifold or self-intersecting segments; meshing version 6, issue 16).
 #pragma once
 #include <Eigen/Core>
+#include <vector>
 
 #include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/tet_mesh.h"
@@ -38,6 +39,14 @@ struct WindingTetrahedralizeOptions {
   bool cover_skip = true;        // that pass skips input points whose surface point could only land
                                  // near a point already taken (false: tests each; the same points,
                                  // slower: bench_mesh's A/B)
+  double hollow_cell = 0;        // fraction of the diagonal, > 0: the solid is hollowed where the
+                                 // outside reaches into it through holes (a flood of a grid this
+                                 // fine from its border, through no point within the dilation of
+                                 // the input): its points there farther than hollow_depth from the
+                                 // input are left out, so that a holed segment is a shell around its
+                                 // holes' rims, not capped (0: none hollowed)
+  double hollow_depth = 0;       // fraction of the diagonal: how far inside the input that shell
+                                 // reaches (less than the dilation: the dilation)
 
   unsigned seed = 1;             // CGAL's random generator: same input, same mesh
 };
@@ -48,6 +57,8 @@ struct WindingTetrahedralizeStats {
   double cell_size = 0;          // model units, of the mesh returned
   double facet_distance = 0;     // model units
   double dilation = 0;           // model units
+  double hollow_depth = 0;       // model units: how far inside the input the hollowed shell reaches
+                                 // (0: not hollowed, WindingTetrahedralizeOptions::hollow_cell)
   int seeds = 0;                 // surface points Mesh_3 started from
   int peeled_slivers = 0;        // boundary tetrahedra removed for a dihedral angle < min_dihedral
   int relocated = 0;             // vertex moves that raised the angles of an interior sliver
