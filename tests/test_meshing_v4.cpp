@@ -1983,6 +1983,19 @@ TEST(Envelope, FinSolidIsFoundWhenSeededAlongItsFaces) {
   EXPECT_GT(squeeze::meshing::analyse_surface(solid).volume, 0.0);
 }
 
+// Version 36's hollowing options out of range are refused with InputError, before any meshing.
+TEST(Envelope, HollowOptionsOutOfRangeAreRefused) {
+  const SurfaceMesh cube = box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  squeeze::meshing::WindingTetrahedralizeOptions wo;
+  wo.hollow_cell = 1.5;
+  EXPECT_THROW(squeeze::meshing::winding_number_surface(cube.V, cube.F, wo), squeeze::InputError);
+  wo.hollow_cell = 0.01;
+  wo.hollow_depth = -0.1;
+  EXPECT_THROW(squeeze::meshing::winding_number_surface(cube.V, cube.F, wo), squeeze::InputError);
+  wo.hollow_depth = std::nan("");
+  EXPECT_THROW(squeeze::meshing::winding_number_surface(cube.V, cube.F, wo), squeeze::InputError);
+}
+
 // Meshing version 11: the boundary of a soup's winding-number solid (winding_number_surface) is a
 // closed, outward, 2-manifold surface without self-intersections around the soup (three welded
 // boxes: the corners and edges its facets cut off seeded and refined again), and

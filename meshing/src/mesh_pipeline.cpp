@@ -1933,7 +1933,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     WindingTetrahedralizeOptions wo = opt.winding_mesh;
     wo.seed = opt.tetrahedralize.seed;
     if (only) wo.seed_faces_if_no_facet = true;  // (a few small components: their faces are few)
-    if (opt.hollow_open_components && !only) {
+    if (opt.hollow_winding_solid && !only) {
       wo.hollow_cell = opt.hollow_cell;
       wo.hollow_depth = opt.hollow_depth * opt.max_deviation;
     }
@@ -2416,11 +2416,11 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   // no farther inside than the capped solid or within the inner bound, with the same components,
   // conforming and above the dihedral floor (meshing version 36).
   auto hollowed_if_nearer = [&](MeshResult r) -> MeshResult {
-    if (!routes_free || !opt.hollow_where_caps_lie_far || opt.hollow_open_components || r.method != "winding_number_boundary" ||
+    if (!routes_free || !opt.hollow_where_caps_lie_far || opt.hollow_winding_solid || r.method != "winding_number_boundary" ||
         !winding_solid_of_open_input(r) || !(r.deviation_out > trigger))
       return r;
     MeshOptions h = opt;
-    h.hollow_open_components = true;
+    h.hollow_winding_solid = true;
     MeshResult s;
     try {
       s = mesh_surface_once(surface, h, nullptr, r.decomposition.shells.empty() ? nullptr : &r.decomposition);

@@ -29,7 +29,6 @@
 #include <numeric>
 #include <cstdint>
 #include <unordered_map>
-#include <optional>
 #include <vector>
 
 #include "squeeze/common/error.h"
@@ -540,7 +539,7 @@ class WindingSolid {
       const Eigen::Vector3d a = p - probe * n, b = p + probe * n;
       if (!air_.empty() && inside(p)) {  // (hollowed: the shell's inner side too)
         for (const double side : {-1.0, 1.0}) {
-          const Eigen::Vector3d s = p + side * (std::max(dil_, depth_) + 2e-3 * diag_) * n;
+          const Eigen::Vector3d s = p + side * (depth_ + 2e-3 * diag_) * n;  // (depth_: at least dil_)
           if (!inside(s)) seeds.add(bisect(p, s));
         }
         continue;

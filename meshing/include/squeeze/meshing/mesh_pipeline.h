@@ -90,12 +90,12 @@ struct MeshOptions {
                                         // meshed as open sheets (slabs) too; mesh_surface tries it by
                                         // itself where the solid's caps over wide holes lie over 1.5
                                         // times the outer bound (max_deviation) off (version 15)
-  bool hollow_open_components = false;  // the winding-number solid of welded or overlapping
-                                        // segments with its open components (holes cut through
-                                        // them) hollowed: a shell around their holes' rims instead
-                                        // of caps over them (WindingTetrahedralizeOptions::
-                                        // hollow_faces); mesh_surface tries it by itself where the
-                                        // caps lie over 1.5 times the outer bound off (version 36)
+  bool hollow_winding_solid = false;    // the whole input's winding-number solid hollowed where
+                                        // the outside reaches in through holes: a shell around
+                                        // their rims instead of caps over them
+                                        // (WindingTetrahedralizeOptions::hollow_cell); mesh_surface
+                                        // tries it by itself where the caps lie over 1.5 times the
+                                        // outer bound off (version 36)
   bool hollow_where_caps_lie_far = true;  // that try (false: the capped solid kept, version 35)
   double hollow_depth = 0.6;            // how deep the hollowed shell reaches inside the input, as a
                                         // multiple of max_deviation

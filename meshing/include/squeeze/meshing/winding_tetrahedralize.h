@@ -3,7 +3,6 @@
 // welded, non-manifold or self-intersecting segments; meshing version 6, issue 16).
 #pragma once
 #include <Eigen/Core>
-#include <vector>
 
 #include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/tet_mesh.h"
@@ -41,8 +40,8 @@ struct WindingTetrahedralizeOptions {
                                  // slower: bench_mesh's A/B)
   double hollow_cell = 0;        // fraction of the diagonal, > 0: the solid is hollowed where the
                                  // outside reaches into it through holes (a flood of a grid this
-                                 // fine from its border, through no point within the dilation of
-                                 // the input): its points there farther than hollow_depth from the
+                                 // fine from its border, across no triangle and through no point
+                                 // within the dilation of the input): its points there farther than hollow_depth from the
                                  // input are left out, so that a holed segment is a shell around its
                                  // holes' rims, not capped (0: none hollowed)
   double hollow_depth = 0;       // fraction of the diagonal: how far inside the input that shell
@@ -93,7 +92,9 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
 /// route for inputs that are not closed parts, simplified against the input afterwards
 /// (simplify_envelope with a target). Uses target_tets, min_dihedral, sliver_bound and
 /// optimize_seconds not at all. Empty when Mesh_3 found no surface; the caller checks that it is a
-/// closed 2-manifold (a refinement stopped by the max_tets net may leave it not).
+/// closed 2-manifold (a refinement stopped by the max_tets net may leave it not). With
+/// hollow_cell > 0 the solid is hollowed where the outside reaches in through holes (meshing
+/// version 36): a shell (dilation + hollow_depth) thick around the holes' rims, not caps over them.
 ///   V  #V by 3 input positions (units), F  #F by 3 triangles; the result is in the same units,
 ///   the options' lengths are fractions of V's bounding-box diagonal
 /// Throws InputError on an empty input or options out of range.
