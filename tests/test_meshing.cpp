@@ -1143,6 +1143,66 @@ TEST(MeshingOrientation, EachComponentOnItsOwn) {
   EXPECT_NEAR(squeeze::meshing::winding_number(fixed.V, fixed.F, Eigen::RowVector3d(5.5, 2.5, 0.5)), 1.0, 1e-9);
 }
 
+// A box of 8 x 4 x 4 cells with a partition at x = 4 (its faces oriented +x, as the left block's
+// outward side), whose rim edges are non-manifold, and a hole cut at the partition's foot: the two
+// rim edges there keep two faces each, the partition's and the right block's floor, which the file
+// traverses the same way. Before meshing version 37 the partition was turned to agree across them.
+TEST(MeshingOrientation, SeamsLeftManifoldByAHoleKeepTheFilesOrientation) {
+  std::vector<std::array<int, 3>> cells;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 4; ++j)
+      for (int k = 0; k < 4; ++k) cells.push_back({i, j, k});
+  const SurfaceMesh outer = cubes_surface(cells);
+  std::vector<Eigen::RowVector3d> pts;
+  for (Eigen::Index v = 0; v < outer.V.rows(); ++v) pts.push_back(outer.V.row(v));
+  auto at = [&](double x, double y, double z) {  // the grid vertex there, added if the surface has none
+    const Eigen::RowVector3d q(x, y, z);
+    for (size_t v = 0; v < pts.size(); ++v)
+      if ((pts[v] - q).norm() < 1e-12) return static_cast<int>(v);
+    pts.push_back(q);
+    return static_cast<int>(pts.size() - 1);
+  };
+  std::vector<std::array<int, 3>> tris;
+  for (Eigen::Index f = 0; f < outer.F.rows(); ++f) {
+    const Eigen::RowVector3d c = (outer.V.row(outer.F(f, 0)) + outer.V.row(outer.F(f, 1)) + outer.V.row(outer.F(f, 2))) / 3;
+    const bool hole = c(1) == 0 && c(0) > 3 && c(0) < 4 && c(2) > 1 && c(2) < 3;  // floor of cell x = 3, z in [1, 3)
+    if (!hole) tris.push_back({outer.F(f, 0), outer.F(f, 1), outer.F(f, 2)});
+  }
+  const size_t partition_begin = tris.size();
+  for (int j = 0; j < 4; ++j)
+    for (int k = 0; k < 4; ++k) {  // normal +x: (y, z) counter-clockwise seen from +x
+      const int a = at(4, j, k), b = at(4, j + 1, k), c = at(4, j + 1, k + 1), d = at(4, j, k + 1);
+      tris.push_back({a, b, c});
+      tris.push_back({a, c, d});
+    }
+  // Put the partition first, so the breadth-first orientation starts from it.
+  std::rotate(tris.begin(), tris.begin() + static_cast<long>(partition_begin), tris.end());
+  const SurfaceMesh file = to_mesh(pts, tris);
+  ASSERT_GT(inconsistent_edges(file.F), 0);
+  const Eigen::MatrixX3i oriented = squeeze::meshing::orient_outward(file.V, file.F);
+  EXPECT_EQ(oriented, file.F);
+  for (const Eigen::RowVector3d p : {Eigen::RowVector3d(2, 2, 2), Eigen::RowVector3d(6, 2, 2), Eigen::RowVector3d(3.9, 1, 1.5)})
+    EXPECT_NEAR(squeeze::meshing::winding_number(file.V, oriented, p), squeeze::meshing::winding_number(file.V, file.F, p), 1e-12) << p;
+  // With the option's floor above the partition's 32 faces, it is turned to agree (the old rule).
+  squeeze::meshing::OrientOptions strict;
+  strict.min_seamed_part = 33;
+  EXPECT_NE(squeeze::meshing::orient_outward(file.V, file.F, strict), file.F);
+
+  // An open box (its top removed) with one face flipped: a small part, made consistent.
+  SurfaceMesh open = box({0, 0, 0}, {1, 1, 1});
+  std::vector<std::array<int, 3>> kept;
+  for (Eigen::Index f = 0; f < open.F.rows(); ++f) {
+    const double z = (open.V(open.F(f, 0), 2) + open.V(open.F(f, 1), 2) + open.V(open.F(f, 2), 2)) / 3;
+    if (z < 1 - 1e-9) kept.push_back({open.F(f, 0), open.F(f, 1), open.F(f, 2)});
+  }
+  std::vector<Eigen::RowVector3d> box_pts;
+  for (Eigen::Index v = 0; v < open.V.rows(); ++v) box_pts.push_back(open.V.row(v));
+  const SurfaceMesh cup = to_mesh(box_pts, kept);
+  Eigen::MatrixX3i stray = cup.F;
+  std::swap(stray(3, 1), stray(3, 2));
+  EXPECT_EQ(squeeze::meshing::orient_outward(cup.V, stray), cup.F);
+}
+
 TEST(MeshingAnalysis, ClosedOpenComponents) {
   SurfaceMesh l = l_shape();
   l.V.col(2).array() += 3;

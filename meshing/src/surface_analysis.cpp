@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <queue>
 #include <vector>
 
@@ -54,38 +55,78 @@ int face_components(const Eigen::MatrixX3i& F, Eigen::VectorXi& C) {
   return n;
 }
 
-Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const OrientOptions& opt) {
   Eigen::MatrixX3i out = F;
   const auto e = edge_incidences(F);
   // adjacency with "same direction" flag: two faces on a manifold edge are consistent when they
-  // traverse it in opposite directions.
+  // traverse it in opposite directions. A face with an edge of one face or of more than two is on
+  // a seam (open, or where segments meet), so its component is not closed by itself.
   struct Link { int face; bool same; };
   std::vector<std::vector<Link>> adj(static_cast<size_t>(F.rows()));
+  std::vector<char> seam(static_cast<size_t>(F.rows()), 0);
   for_each_edge(e, [&](size_t i, size_t j) {
-    if (j - i != 2) return;
+    if (j - i != 2) {
+      for (size_t k = i; k < j; ++k) seam[static_cast<size_t>(e[k].face)] = 1;
+      return;
+    }
     const bool same = e[i].forward == e[i + 1].forward;
     adj[e[i].face].push_back({e[i + 1].face, same});
     adj[e[i + 1].face].push_back({e[i].face, same});
   });
   std::vector<signed char> flip(static_cast<size_t>(F.rows()), -1);
-  std::vector<int> comp_faces;
+  std::vector<int> part(static_cast<size_t>(F.rows()), -1);  // the file-consistent part of a face
+  std::vector<int> comp_faces, stack;
   std::queue<int> q;
   for (int seed = 0; seed < F.rows(); ++seed) {
     if (flip[seed] >= 0) continue;
     comp_faces.clear();
     flip[seed] = 0;
     q.push(seed);
+    bool closed = true, file_consistent = true;
     while (!q.empty()) {
       const int f = q.front();
       q.pop();
       comp_faces.push_back(f);
-      for (const Link& l : adj[f])
+      closed = closed && !seam[static_cast<size_t>(f)];
+      for (const Link& l : adj[f]) {
+        file_consistent = file_consistent && !l.same;
         if (flip[l.face] < 0) {
           flip[l.face] = static_cast<signed char>(l.same ? !flip[f] : flip[f]);
           q.push(l.face);
         }
+      }
     }
-    // Signed volume of the component about its centroid, with the propagated orientation.
+    // A component that is not closed by itself, in which the file turns a few edges between large
+    // parts that it orients consistently, is segments joined where a seam lost its third face (a
+    // hole cut at a junction): the file's orientation is kept there, face by face, since turning a
+    // part to agree across such an edge turns a segment inside out. A closed component, or one
+    // with a small part against the rest (a stray flipped face), is made consistent.
+    bool keep_file = !closed && !file_consistent;
+    if (keep_file) {
+      int parts = 0;
+      for (int f : comp_faces) {
+        if (part[static_cast<size_t>(f)] >= 0) continue;
+        long size = 0;
+        part[static_cast<size_t>(f)] = parts;
+        stack.assign(1, f);
+        while (!stack.empty()) {
+          const int g = stack.back();
+          stack.pop_back();
+          ++size;
+          for (const Link& l : adj[g])
+            if (!l.same && part[static_cast<size_t>(l.face)] < 0) {
+              part[static_cast<size_t>(l.face)] = parts;
+              stack.push_back(l.face);
+            }
+        }
+        ++parts;
+        keep_file = keep_file && size >= opt.min_seamed_part;
+      }
+      if (keep_file)
+        for (int f : comp_faces) flip[static_cast<size_t>(f)] = 0;
+    }
+    // Signed volume of the component about its centroid, with the propagated (or the file's)
+    // orientation.
     Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
     for (int f : comp_faces) c += (V.row(F(f, 0)) + V.row(F(f, 1)) + V.row(F(f, 2))) / 3.0;
     c /= static_cast<double>(comp_faces.size());
