@@ -1181,12 +1181,24 @@ TEST(MeshingOrientation, SeamsLeftManifoldByAHoleKeepTheFilesOrientation) {
   ASSERT_GT(inconsistent_edges(file.F), 0);
   const Eigen::MatrixX3i oriented = squeeze::meshing::orient_outward(file.V, file.F);
   EXPECT_EQ(oriented, file.F);
-  for (const Eigen::RowVector3d p : {Eigen::RowVector3d(2, 2, 2), Eigen::RowVector3d(6, 2, 2), Eigen::RowVector3d(3.9, 1, 1.5)})
+  for (const Eigen::RowVector3d& p : {Eigen::RowVector3d(2, 2, 2), Eigen::RowVector3d(6, 2, 2), Eigen::RowVector3d(3.9, 1, 1.5)})
     EXPECT_NEAR(squeeze::meshing::winding_number(file.V, oriented, p), squeeze::meshing::winding_number(file.V, file.F, p), 1e-12) << p;
   // With the option's floor above the partition's 32 faces, it is turned to agree (the old rule).
   squeeze::meshing::OrientOptions strict;
   strict.min_seamed_part = 33;
   EXPECT_NE(squeeze::meshing::orient_outward(file.V, file.F, strict), file.F);
+
+  // The same box with its hole and no partition (welded to nothing), the file turning its left
+  // half (x < 4) against the right: made consistent, as before.
+  std::vector<std::array<int, 3>> halves(tris.begin() + 32, tris.end());
+  for (auto& t : halves)
+    if (pts[static_cast<size_t>(t[0])](0) + pts[static_cast<size_t>(t[1])](0) + pts[static_cast<size_t>(t[2])](0) < 12)
+      std::swap(t[1], t[2]);
+  const SurfaceMesh turned = to_mesh(pts, halves);
+  ASSERT_GT(inconsistent_edges(turned.F), 0);
+  const Eigen::MatrixX3i mended = squeeze::meshing::orient_outward(turned.V, turned.F);
+  EXPECT_EQ(inconsistent_edges(mended), 0);
+  EXPECT_GT(squeeze::meshing::winding_number(turned.V, mended, Eigen::RowVector3d(4, 2, 2)), 0.9);
 
   // An open box (its top removed) with one face flipped: a small part, made consistent.
   SurfaceMesh open = box({0, 0, 0}, {1, 1, 1});

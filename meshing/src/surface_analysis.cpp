@@ -59,14 +59,15 @@ Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
   Eigen::MatrixX3i out = F;
   const auto e = edge_incidences(F);
   // adjacency with "same direction" flag: two faces on a manifold edge are consistent when they
-  // traverse it in opposite directions. A face with an edge of one face or of more than two is on
-  // a seam (open, or where segments meet), so its component is not closed by itself.
+  // traverse it in opposite directions. A face with an edge of more than two faces is on a seam
+  // where segments are welded.
   struct Link { int face; bool same; };
   std::vector<std::vector<Link>> adj(static_cast<size_t>(F.rows()));
-  std::vector<char> seam(static_cast<size_t>(F.rows()), 0);
+  std::vector<char> on_seam(static_cast<size_t>(F.rows()), 0);
   for_each_edge(e, [&](size_t i, size_t j) {
     if (j - i != 2) {
-      for (size_t k = i; k < j; ++k) seam[static_cast<size_t>(e[k].face)] = 1;
+      if (j - i > 2)
+        for (size_t k = i; k < j; ++k) on_seam[static_cast<size_t>(e[k].face)] = 1;
       return;
     }
     const bool same = e[i].forward == e[i + 1].forward;
@@ -82,12 +83,12 @@ Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
     comp_faces.clear();
     flip[seed] = 0;
     q.push(seed);
-    bool closed = true, file_consistent = true;
+    bool welded = false, file_consistent = true;
     while (!q.empty()) {
       const int f = q.front();
       q.pop();
       comp_faces.push_back(f);
-      closed = closed && !seam[static_cast<size_t>(f)];
+      welded = welded || on_seam[static_cast<size_t>(f)];
       for (const Link& l : adj[f]) {
         file_consistent = file_consistent && !l.same;
         if (flip[l.face] < 0) {
@@ -96,12 +97,14 @@ Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
         }
       }
     }
-    // A component that is not closed by itself, in which the file turns a few edges between large
-    // parts that it orients consistently, is segments joined where a seam lost its third face (a
-    // hole cut at a junction): the file's orientation is kept there, face by face, since turning a
-    // part to agree across such an edge turns a segment inside out. A closed component, or one
-    // with a small part against the rest (a stray flipped face), is made consistent.
-    bool keep_file = !closed && !file_consistent;
+    // A component welded to others (it has non-manifold edges) in which the file turns some edges
+    // between large parts that it orients consistently is segments joined where a seam lost its
+    // third face (a hole cut at a junction): the file's orientation is kept there, face by face,
+    // since turning a part to agree across such an edge turns a segment inside out. Any other
+    // component (closed; open but welded to nothing, a scan whose halves the file turns against
+    // each other; one with a small part against the rest, a stray flipped face) is made
+    // consistent.
+    bool keep_file = welded && !file_consistent;
     if (keep_file) {
       int parts = 0;
       for (int f : comp_faces) {

@@ -29,18 +29,19 @@ int face_components(const Eigen::MatrixX3i& F, Eigen::VectorXi& C);
 
 /// When orient_outward keeps the file's own orientation of a component.
 struct OrientOptions {
-  long min_seamed_part = 16;  // faces: a component that is not closed by itself keeps the file's
-                              // orientation where every part the file orients consistently (split
-                              // at the edges it turns) has at least this many faces
+  long min_seamed_part = 16;  // faces: a component welded to others (non-manifold edges) keeps
+                              // the file's orientation where every part the file orients
+                              // consistently (split at the edges it turns) has at least this many
 };
 
 /// Orients the faces of every component consistently (breadth-first over manifold edges), then
 /// flips each component whose signed volume (about its centroid) is negative, so closed
-/// components face outward. A component that is not closed by itself (it has boundary or
-/// non-manifold edges) and in which the file turns a few edges between large parts (see
-/// OrientOptions) keeps the file's orientation, face by face, before that sign is taken: such an
-/// edge is a seam between segments of a welded surface that lost its third face (a hole cut at a
-/// junction), and making the faces agree across it turns one segment inside out.
+/// components face outward. A component welded to others (it has non-manifold edges) in which the
+/// file turns some edges between large parts (see OrientOptions) keeps the file's orientation,
+/// face by face, before that sign is taken: such an edge is a seam between segments of a welded
+/// surface that lost its third face (a hole cut at a junction), and making the faces agree across
+/// it turns one segment inside out. Other components are made consistent (an open scan whose
+/// halves the file turns against each other; a stray flipped face).
 ///   V  #V by 3 positions;  F  #F by 3 faces
 /// Returns the re-oriented F. Throws nothing. Source of the idea: Jacobson et al. 2013 (winding
 /// numbers need consistent orientation); the propagation is the standard BFS.
