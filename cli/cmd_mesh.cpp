@@ -47,7 +47,8 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       "the paper's method; --wrap: their alpha wrap, a closed surface just outside them, meshed like a\n"
       "boundary); the report's method and fallback_because say which and why, target_exceeded_because\n"
       "why the count is off the target, and deviation_exceeded_because (also warned) why the boundary\n"
-      "lies over 1.5 times --max-deviation off the input (the convex shells; caps over wide holes).\n"
+      "lies over 1.5 times --max-deviation off the input (the convex shells; caps over wide holes), or\n"
+      "the input over 1.5 times the inner bound (0.45 of it) outside the mesh.\n"
       "INPUT: any surface assimp reads (OFF, OBJ, PLY, STL, glTF, ...); open, self-intersecting and\n"
       "non-manifold scans are fine. OUT: " + meshing::tet_format_list(true) + ".\n"
       "Example: squeeze mesh bunny.off -o bunny.mesh --shells shells.off --report report.json");
