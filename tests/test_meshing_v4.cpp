@@ -595,7 +595,7 @@ TEST(MeshingV4, ThickBoundarySliversAreMovedNotPeeled) {
 // The lumbar spine with three holes cut (faces within 3 % of the diagonal of three points; two
 // vertebrae opened): its slab, the two opened vertebrae as slabs beside the three closed ones,
 // lies 0.4515 % of the diagonal in at 300, the closed ones' own 0.45 %. Kept since meshing
-// version 37 (slab_first_inner_deviation): before, the whole input's solid was made instead,
+// version 37 (first_try_inner_deviation): before, the whole input's solid was made instead,
 // hollowed, within the bounds but one mesh of the five vertebrae (they lie 0.06-0.17 % of the
 // diagonal apart, closer than its dilation) and in about 14 s.
 TEST(MeshingV4, VertebraeWithHolesStayFiveSlabsAndClosedParts) {
@@ -1732,10 +1732,24 @@ TEST(MeshingV4, SolidsOfScansWithWideHolesAndNoSlabAreHollowedNotCapped) {
   EXPECT_EQ(r.deviation_exceeded_because, "");
   // Hollow: well under the sphere's volume (the shell is about 1 % of the diagonal thick).
   EXPECT_LT(tet_volume(r.tets), 0.5 * tet_volume(c.tets));
-  // Both tries' stages in the report's seconds: the capped solid's surface, then the hollowed one's.
-  int surfaces = 0;
-  for (const auto& [stage, seconds] : r.seconds) surfaces += stage == "winding-number surface";
-  EXPECT_EQ(surfaces, 2);
+  // Since version 38 (hollow_first) the hollowed solid is made first, by the hole's outline, and
+  // kept: one winding-number surface in the report's seconds. With hollow_first off, the capped
+  // solid first and then the same hollowed mesh: both stages.
+  auto surfaces = [](const MeshResult& m) {
+    int n = 0;
+    for (const auto& [stage, seconds] : m.seconds) n += stage == "winding-number surface";
+    return n;
+  };
+  EXPECT_EQ(surfaces(r), 1);
+  EXPECT_NE(r.fallback_because.find("would lie about"), std::string::npos) << r.fallback_because;
+  MeshOptions capped_first;
+  capped_first.tetrahedralize.target_tets = 300;
+  capped_first.hollow_first = false;
+  const MeshResult f = squeeze::meshing::mesh_surface(scan, capped_first);
+  EXPECT_EQ(surfaces(f), 2);
+  EXPECT_NE(f.fallback_because.find("the caps over them lay"), std::string::npos) << f.fallback_because;
+  EXPECT_EQ(f.tets.T, r.tets.T);
+  EXPECT_EQ(f.tets.V, r.tets.V);
 }
 
 // The elephant of tests/data with four holes of 3 % of the diagonal: as a solid, its caps lie 2.3 %
