@@ -320,6 +320,29 @@ TEST(Planner, UnreachableGoalEndsApproximate) {
   EXPECT_FALSE(f.path.empty());
 }
 
+// A robot with nothing under it (no floor) falls out of the bounds while the start settles: every
+// expansion would start invalid. Planning refuses it with one line naming the key; with the floor
+// of the same scene it plans.
+TEST(Planner, RobotLeavingTheBoundsWhileTheStartSettlesIsRefused) {
+  const sqt::TempDir tmp("plan-fall");
+  const fs::path& d = tmp.path();
+  nlohmann::json j = mini_scene({{"planner", {{"iterations", 20}}}});
+  j["floor"] = nullptr;
+  const fem::Scene scene = fem::load_scene(write_scene(d, j));
+  try {
+    squeeze::plan::plan(fem::build_scene(scene), options_of(scene));
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("planner.settle_start: the robot leaves the bounds while the start settles"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(run(d, {"-q", "plan", (d / "scene.json").string(), "-o", (d / "plan.json").string()}), 1);
+  EXPECT_FALSE(fs::exists(d / "plan.json"));
+  const fem::Scene held = fem::load_scene(write_scene(d, mini_scene({{"planner", {{"iterations", 20}}}}), "held.json"));
+  EXPECT_NO_THROW(squeeze::plan::plan(fem::build_scene(held), options_of(held)));
+}
+
 TEST(Planner, BadPlannerParametersNameTheKey) {
   const sqt::TempDir tmp("plan-bad");
   const fs::path& d = tmp.path();

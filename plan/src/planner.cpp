@@ -222,6 +222,18 @@ PlanningProblem planning_problem(const fem::SceneWorld& w, const PlannerOptions&
   if (!p.start.x.allFinite())
     throw InputError(w.scene.file.string() + ": planner.settle_start: the scene diverged while settling before planning "
                      "(see squeeze check)");
+  // A robot whose centre leaves the bounds while the start settles (nothing holds it: no floor
+  // under it, no pins) starts every expansion invalid, and the search cannot move: one clear error,
+  // not a tree of one node and a final settle that drags the robot to the goal through everything.
+  // (Its centre, not any vertex: a robot resting on a floor at the bounds' edge may dip a vertex
+  // below it, as it may during the search.)
+  if (!w.bounds.contains(p.robot.com(p.start))) {
+    const Eigen::Vector3d moved = p.robot.com(p.start) - p.robot.rest_com;
+    throw InputError(w.scene.file.string() + ": planner.settle_start: the robot leaves the bounds while the start settles " +
+                     "without control (its centre moves " + format_number(moved.norm()) + " m in " +
+                     std::to_string(p.start_settle_steps) + " steps: nothing holds it, e.g. no floor under it and no pins); " +
+                     "add a floor or pins, or set planner.settle_start to 0");
+  }
   p.start_volume.resize(static_cast<size_t>(w.world.bodies()));
   for (int b = 0; b < w.world.bodies(); ++b) p.start_volume[b] = w.world.body_volume(p.start, b);
   if (make_propagator) {
