@@ -444,13 +444,18 @@ void after_earlier_try(MeshResult& later, const MeshResult& earlier) {
   later.beside.insert(later.beside.begin(), earlier.beside.begin(), earlier.beside.end());
 }
 
-// Whether (V, F) is mostly segments welded to each other: some edge has more than two faces, and
-// the face-connected components (through edges of two faces) that are not closed by themselves
-// cover at least a tenth of its area (an organ given as patches that meet at seams, valves among
-// them; not closed parts beside a stray fin, which the route meshes as parts: the same tenth).
-bool mostly_welded_segments(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
-  const auto e = edge_incidences(F);
-  std::vector<char> on_edge(static_cast<size_t>(F.rows()), 0);  // a face on an edge of other than two faces
+// The share of an input's area under which its components that are not closed parts are strays
+// beside the closed ones (meshing version 35: meshed as their own solid beside the parts), and at
+// or over which the input is mostly welded segments (version 38: its solid hollowed first).
+constexpr double kStrayAreaShare = 0.1;
+
+// Whether `s` is mostly segments welded to each other: some edge has more than two faces, and the
+// face-connected components (through edges of two faces) that are not closed by themselves cover
+// at least kStrayAreaShare of its area (an organ given as patches that meet at seams, valves among
+// them; not closed parts beside a stray fin, which the route meshes as parts).
+bool mostly_welded_segments(const SurfaceMesh& s) {
+  const auto e = edge_incidences(s.F);
+  std::vector<char> on_edge(static_cast<size_t>(s.F.rows()), 0);  // a face on an edge of other than two faces
   bool welded = false;
   for_each_edge(e, [&](size_t i, size_t j) {
     if (j - i == 2) return;
@@ -459,17 +464,14 @@ bool mostly_welded_segments(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F
   });
   if (!welded) return false;
   Eigen::VectorXi C;
-  const int n = face_components(F, C);
+  const int n = face_components(s.F, C);
   std::vector<char> open(static_cast<size_t>(n), 0);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
+  for (Eigen::Index f = 0; f < s.F.rows(); ++f)
     if (on_edge[static_cast<size_t>(f)]) open[static_cast<size_t>(C(f))] = 1;
-  double total = 0, segments = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const double a = 0.5 * (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).norm();
-    total += a;
-    if (open[static_cast<size_t>(C(f))]) segments += a;
-  }
-  return segments >= 0.1 * total;
+  std::vector<int> segments;  // (in increasing order, as sub_mesh takes them)
+  for (Eigen::Index f = 0; f < s.F.rows(); ++f)
+    if (open[static_cast<size_t>(C(f))]) segments.push_back(static_cast<int>(f));
+  return area(sub_mesh(s, segments)) >= kStrayAreaShare * area(s);
 }
 
 // Whether r is the winding-number solid of an input that is not closed (its holes capped).
@@ -2379,7 +2381,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // solid) or a closed part may fail on its own (trimesh's chair, its self-intersecting
     // frame with the two stray components' solid: 7,687 tetrahedra and 16 s, 4,002 and 9 s as
     // one solid), one solid holds the bounds better.
-    if (!self_intersecting && area(rest) < 0.1 * area(r.input)) {
+    if (!self_intersecting && area(rest) < kStrayAreaShare * area(r.input)) {
       decomposition();  // (waited for: `r` is copied, to be restored where this try is not kept)
       const MeshResult before = r;
       // (`parts` is not used again: the whole input's solid below, where this try is not kept.)
@@ -2519,10 +2521,15 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   // would lie beyond that: the slab first, and the solid only where the slab does not hold (the
   // bunny with holes 2 % of its diagonal wide: 15.5 s, the solid and then the slab; the slab
   // alone, 10 s; meshing version 16).
+  // (The input's faces without duplicates and flat ones, as mesh_surface_once cleans them: where
+  // the slab or the hollowed solid may be tried first, the holes' outlines are judged on them.)
+  const SurfaceMesh cleaned = routes_free && (opt.slab_first_for_wide_holes || (hollowing && opt.hollow_first))
+                                  ? SurfaceMesh{surface.V, without_duplicate_and_flat_faces(surface.V, surface.F)}
+                                  : SurfaceMesh{};
   if (routes_free && opt.slab_first_for_wide_holes) {
     // (Bow ties split first, as the components are judged: holes cut into a scan touch at a vertex
     // where they meet; meshing version 31.)
-    SurfaceMesh c{surface.V, without_duplicate_and_flat_faces(surface.V, surface.F)};
+    SurfaceMesh c = cleaned;
     split_bow_ties(c);
     double cap = 0;
     if (is_open_two_manifold(c.F))
@@ -2563,13 +2570,10 @@ MeshResult mesh_surface_near_origin(const SurfaceMesh& surface, const MeshOption
   // Segments welded to each other with holes (mostly_welded_segments): no slab is made of them,
   // and their solid caps the holes.
   std::optional<MeshResult> made;
-  if (hollowing && opt.hollow_first) {
-    const Eigen::MatrixX3i F = without_duplicate_and_flat_faces(surface.V, surface.F);
-    if (mostly_welded_segments(surface.V, F)) {
-      double cap = 0;
-      for (const std::vector<int>& loop : boundary_loops(F)) cap = std::max(cap, hole_cap_distance(surface.V, loop));
-      if (hollow_first(cap, nullptr, made)) return std::move(*made);
-    }
+  if (hollowing && opt.hollow_first && mostly_welded_segments(cleaned)) {
+    double cap = 0;
+    for (const std::vector<int>& loop : boundary_loops(cleaned.F)) cap = std::max(cap, hole_cap_distance(cleaned.V, loop));
+    if (hollow_first(cap, nullptr, made)) return std::move(*made);
   }
   MeshResult r = mesh_surface_once(surface, opt, progress, made && !made->decomposition.shells.empty() ? &made->decomposition : nullptr);
   // (Only open scans: components that are open 2-manifolds, each on its own. Welded, non-manifold

@@ -227,8 +227,8 @@ PlanningProblem planning_problem(const fem::SceneWorld& w, const PlannerOptions&
   // not a tree of one node and a final settle that drags the robot to the goal through everything.
   // (Its centre, not any vertex: a robot resting on a floor at the bounds' edge may dip a vertex
   // below it, as it may during the search.)
-  if (!w.bounds.contains(p.robot.com(p.start))) {
-    const Eigen::Vector3d moved = p.robot.com(p.start) - p.robot.rest_com;
+  if (const Eigen::Vector3d com = p.robot.com(p.start); !w.bounds.contains(com)) {
+    const Eigen::Vector3d moved = com - p.robot.rest_com;
     throw InputError(w.scene.file.string() + ": planner.settle_start: the robot leaves the bounds while the start settles " +
                      "without control (its centre moves " + format_number(moved.norm()) + " m in " +
                      std::to_string(p.start_settle_steps) + " steps: nothing holds it, e.g. no floor under it and no pins); " +
