@@ -55,14 +55,12 @@ inline squeeze::meshing::SurfaceMesh ringed_rod(double r, double length, int sid
   return s;
 }
 
-// The scan with four holes of `radius` (a fraction of its bounding-box diagonal) cut around seeded
-// vertices (indices 101, 8020, 15939, 23858 modulo #V): the faces whose centroid lies nearer than
-// that to one of them removed, the vertices kept as they are. A scanner's gaps, for the open-scan
-// routes (meshing versions 15 and 16).
-inline squeeze::meshing::SurfaceMesh with_holes(const squeeze::meshing::SurfaceMesh& scan, double radius) {
+// The scan with holes of `radius` (a fraction of its bounding-box diagonal) cut around `centres`:
+// the faces whose centroid lies nearer than that to one of them removed, the vertices kept as they
+// are.
+inline squeeze::meshing::SurfaceMesh with_holes_at(const squeeze::meshing::SurfaceMesh& scan,
+                                                   const std::vector<Eigen::RowVector3d>& centres, double radius) {
   const double diag = (scan.V.colwise().maxCoeff() - scan.V.colwise().minCoeff()).norm();
-  std::vector<Eigen::RowVector3d> centres;
-  for (int k = 0; k < 4; ++k) centres.push_back(scan.V.row((k * 7919 + 101) % scan.V.rows()));
   std::vector<Eigen::RowVector3i> kept;
   for (Eigen::Index f = 0; f < scan.F.rows(); ++f) {
     const Eigen::RowVector3d c = (scan.V.row(scan.F(f, 0)) + scan.V.row(scan.F(f, 1)) + scan.V.row(scan.F(f, 2))) / 3.0;
@@ -75,6 +73,14 @@ inline squeeze::meshing::SurfaceMesh with_holes(const squeeze::meshing::SurfaceM
   m.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
   for (size_t i = 0; i < kept.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) = kept[i];
   return m;
+}
+// The scan with four holes of `radius` (a fraction of its bounding-box diagonal) cut around seeded
+// vertices (indices 101, 8020, 15939, 23858 modulo #V), as with_holes_at. A scanner's gaps, for the
+// open-scan routes (meshing versions 15 and 16).
+inline squeeze::meshing::SurfaceMesh with_holes(const squeeze::meshing::SurfaceMesh& scan, double radius) {
+  std::vector<Eigen::RowVector3d> centres;
+  for (int k = 0; k < 4; ++k) centres.push_back(scan.V.row((k * 7919 + 101) % scan.V.rows()));
+  return with_holes_at(scan, centres, radius);
 }
 
 // A coil spring along z: wire of radius r (`sides` vertices per ring) wound `turns` times at

@@ -592,21 +592,6 @@ TEST(MeshingV4, ThickBoundarySliversAreMovedNotPeeled) {
 }
 
 
-// `s` without its faces whose centroids lie within `radius` × its bounding-box diagonal of one of
-// the `centres` (holes cut as the thirty-third session's scratch inputs were).
-SurfaceMesh with_holes_at(const SurfaceMesh& s, const std::vector<Vec3>& centres, double radius = 0.03) {
-  const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
-  std::vector<std::array<int, 3>> kept;
-  for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
-    const Vec3 c = (s.V.row(s.F(f, 0)) + s.V.row(s.F(f, 1)) + s.V.row(s.F(f, 2))).transpose() / 3;
-    if (std::all_of(centres.begin(), centres.end(), [&](const Vec3& h) { return (c - h).norm() > radius * diag; }))
-      kept.push_back({s.F(f, 0), s.F(f, 1), s.F(f, 2)});
-  }
-  std::vector<Vec3> V;
-  for (Eigen::Index v = 0; v < s.V.rows(); ++v) V.push_back(s.V.row(v).transpose());
-  return surface_of(V, kept);
-}
-
 // The lumbar spine with three holes cut (faces within 3 % of the diagonal of three points; two
 // vertebrae opened): its slab, the two opened vertebrae as slabs beside the three closed ones,
 // lies 0.4515 % of the diagonal in at 300, the closed ones' own 0.45 %. Kept since meshing
@@ -617,8 +602,10 @@ TEST(MeshingV4, VertebraeWithHolesStayFiveSlabsAndClosedParts) {
   const SurfaceMesh spine =
       squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/scenes/assets/spine_lumbar_L1-L5.off");
   const double diag = (spine.V.colwise().maxCoeff() - spine.V.colwise().minCoeff()).norm();
-  const SurfaceMesh holed = with_holes_at(spine, {{0.00865932, 0.197801, -0.05858313}, {0.03339757, 0.21325533, -0.02452497},
-                                                  {-0.014068, 0.19224233, -0.03184763}});
+  const SurfaceMesh holed = sqs::with_holes_at(spine,
+                                               {{0.00865932, 0.197801, -0.05858313}, {0.03339757, 0.21325533, -0.02452497},
+                                                {-0.014068, 0.19224233, -0.03184763}},
+                                               0.03);
   ASSERT_LT(holed.F.rows(), spine.F.rows());
   const MeshResult r = mesh(holed, 300);
   EXPECT_EQ(r.method, "boundary") << r.fallback_because;
@@ -641,9 +628,11 @@ TEST(MeshingV4, VertebraeWithHolesStayFiveSlabsAndClosedParts) {
 TEST(MeshingV4, SacrumWithHolesIsHollowedFirstAfterItsSlab) {
   const SurfaceMesh sacrum = squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/scenes/assets/sacrum_coccyx.off");
   const double diag = (sacrum.V.colwise().maxCoeff() - sacrum.V.colwise().minCoeff()).norm();
-  const SurfaceMesh holed = with_holes_at(sacrum, {{0.0103615767, 0.1036276667, -0.0833586667},
-                                                   {-0.0042128167, 0.0867579333, -0.1036236667},
-                                                   {0.0175554333, 0.1139286667, -0.0640076}});
+  const SurfaceMesh holed = sqs::with_holes_at(sacrum,
+                                               {{0.0103615767, 0.1036276667, -0.0833586667},
+                                                {-0.0042128167, 0.0867579333, -0.1036236667},
+                                                {0.0175554333, 0.1139286667, -0.0640076}},
+                                               0.03);
   ASSERT_EQ(holed.F.rows(), 11139);  // the scratch input's faces
   const MeshResult r = mesh(holed, 300);
   EXPECT_EQ(r.method, "winding_number_boundary") << r.fallback_because;
