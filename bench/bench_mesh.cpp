@@ -17,6 +17,11 @@
 //                             holes of 2 % of its diagonal: its slab tried first, its widest hole's
 //                             cap estimated from its outline (version 16), against the solid first
 //                             and then the slab (slab_first_for_wide_holes off, version 15)
+//  BM_LiverWithHoles/<hollow first>  the liver (segments welded to each other) with three holes of
+//                             3 % of its diagonal, cut at the thirty-third session's centres, at
+//                             300: its solid hollowed first by its holes' outlines (1, version 38)
+//                             against the capped solid first and then the hollowed one (0, versions
+//                             36-37); both end at the same mesh
 //  BM_HeartShellsRelocated/<N>, BM_HeartShellsPerturbed/<N>  the heart's convex shells meshed by
 //                             Mesh_3 (--shells-fallback): slivers relocated and flipped after the
 //                             exuder (version 17) against Mesh_3's sliver perturber (version 16)
@@ -317,6 +322,27 @@ void BM_ScanWithHolesSlabFirst(benchmark::State& state) { scan_with_holes(state,
 void BM_ScanWithHolesSolidFirst(benchmark::State& state) { scan_with_holes(state, false); }
 BENCHMARK(BM_ScanWithHolesSlabFirst)->Arg(300)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_ScanWithHolesSolidFirst)->Arg(300)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// Welded segments with holes wider than the bound: the hollowed solid made first, or after the
+// capped one (MeshOptions::hollow_first).
+void BM_LiverWithHoles(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh m = sqs::with_holes_at(
+      squeeze::meshing::load_surface(fs::path(SQUEEZE_SOURCE_DIR) / "scenes" / "assets" / "liver.off"),
+      {{-0.0397111, 0.3670973333, 0.0689651}, {-0.0943798667, 0.340173, 0.0258854}, {-0.128658, 0.389611, 0.0096255767}},
+      0.03);
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 300;
+  o.hollow_first = state.range(0) != 0;
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
+  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  int surfaces = 0;
+  for (const auto& [stage, seconds] : r.seconds) surfaces += stage == "winding-number surface";
+  state.counters["tets"] = r.quality.tets;
+  state.counters["solids_made"] = surfaces;
+  state.counters["deviation_out"] = r.deviation_out / diag;
+  state.counters["deviation_in"] = r.deviation_in / diag;
+}
+BENCHMARK(BM_LiverWithHoles)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 // A figure-eight tube 6 mm across on a curve 12 cm wide, which passes through itself (the
 // winding-number boundary route), at a target of 1,000: its solid's growth estimated before the

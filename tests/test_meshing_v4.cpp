@@ -2066,6 +2066,17 @@ TEST(Envelope, HollowOptionsOutOfRangeAreRefused) {
   EXPECT_THROW(squeeze::meshing::winding_number_surface(cube.V, cube.F, wo), squeeze::InputError);
 }
 
+// MeshOptions::first_try_inner_deviation (meshing versions 37-38) out of (0, 1] is refused with
+// InputError before any meshing.
+TEST(Envelope, FirstTryInnerDeviationOutOfRangeIsRefused) {
+  const SurfaceMesh cube = box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  for (const double share : {0.0, -0.5, 1.5, std::nan("")}) {
+    MeshOptions o;
+    o.first_try_inner_deviation = share;
+    EXPECT_THROW(squeeze::meshing::mesh_surface(cube, o), squeeze::InputError) << share;
+  }
+}
+
 // deviation_exceeded_because names each bound a result misses by over 1.5 times (deviation_in
 // since meshing version 37: the heart with holes was 1.23 % of the diagonal in, unexplained), and
 // is empty within them.

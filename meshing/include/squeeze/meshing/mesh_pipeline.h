@@ -258,7 +258,9 @@ void set_mesh_route(MeshOptions& options, const std::string& name);
 /// The report's deviation_exceeded_because for a result `r` of mesh_surface (which sets it): empty
 /// where r.deviation_out is within 1.5 × options.max_deviation of the input's bounding-box diagonal
 /// and r.deviation_in within 1.5 × inner_deviation × max_deviation; else a sentence per excess and
-/// its cause by r.method (meshing versions 17 and, for deviation_in, 37). Throws nothing.
+/// its cause by r.method (meshing versions 17 and, for deviation_in, 37). Lengths in r are model
+/// units; the sentence gives them as percentages of the diagonal. Throws nothing. Source: squeeze's
+/// own report (docs/meshing.md, "Report keys").
 std::string deviation_exceeded_because(const MeshResult& r, const MeshOptions& options);
 
 /// Runs the pipeline on an already loaded surface (faces need not be consistently oriented).
