@@ -5,7 +5,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <climits>
-#include <cmath>
 #include <queue>
 #include <vector>
 
@@ -75,7 +74,7 @@ Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
     adj[e[i + 1].face].push_back({e[i].face, same});
   });
   std::vector<signed char> flip(static_cast<size_t>(F.rows()), -1);
-  std::vector<int> part(static_cast<size_t>(F.rows()), -1);  // the file-consistent part of a face
+  std::vector<char> in_part(static_cast<size_t>(F.rows()), 0);  // a face already in a file-consistent part
   std::vector<int> comp_faces, stack;
   std::queue<int> q;
   for (int seed = 0; seed < F.rows(); ++seed) {
@@ -106,23 +105,21 @@ Eigen::MatrixX3i orient_outward(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
     // consistent.
     bool keep_file = welded && !file_consistent;
     if (keep_file) {
-      int parts = 0;
       for (int f : comp_faces) {
-        if (part[static_cast<size_t>(f)] >= 0) continue;
+        if (in_part[static_cast<size_t>(f)]) continue;
         long size = 0;
-        part[static_cast<size_t>(f)] = parts;
+        in_part[static_cast<size_t>(f)] = 1;
         stack.assign(1, f);
         while (!stack.empty()) {
           const int g = stack.back();
           stack.pop_back();
           ++size;
           for (const Link& l : adj[g])
-            if (!l.same && part[static_cast<size_t>(l.face)] < 0) {
-              part[static_cast<size_t>(l.face)] = parts;
+            if (!l.same && !in_part[static_cast<size_t>(l.face)]) {
+              in_part[static_cast<size_t>(l.face)] = 1;
               stack.push_back(l.face);
             }
         }
-        ++parts;
         keep_file = keep_file && size >= opt.min_seamed_part;
       }
       if (keep_file)
