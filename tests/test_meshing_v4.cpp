@@ -648,6 +648,36 @@ TEST(MeshingV4, SacrumWithHolesIsHollowedFirstAfterItsSlab) {
   EXPECT_LE(r.deviation_in, 0.005 * diag);
 }
 
+// The heart (welded segments) with four holes cut (the thirty-eighth session's scratch input,
+// seed 381): its solid is hollowed first. A flap between two holes is part of that solid only by
+// its dilation (outside it 0.5 % of the diagonal off on both sides). Until meshing version 39 the
+// winding-number surface's cover pass took that flap's surface point on one side only, and Mesh_3
+// never found the flap: an input vertex 0.76 % of the diagonal outside, so the hollowed solid was
+// refused and the capped one (2.9 % out) kept. Now both sides are seeded, and the hollowed solid
+// holds the bounds.
+TEST(MeshingV4, FlapsBetweenHolesAreSeededOnBothSides) {
+  const SurfaceMesh heart = squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/tests/data/organs/heart.off");
+  const double diag = (heart.V.colwise().maxCoeff() - heart.V.colwise().minCoeff()).norm();
+  const SurfaceMesh holed = sqs::with_holes_at(heart,
+                                               {{-0.0288107, 0.44545, 0.0519153},
+                                                {0.00136949, 0.484691, -0.00491019},
+                                                {0.0193634, 0.512833, 0.00228259},
+                                                {0.00543473, 0.474684, 0.00916497}},
+                                               0.04);
+  ASSERT_EQ(heart.F.rows() - holed.F.rows(), 1070);  // the scratch input's faces cut
+  const MeshResult r = mesh(holed, 300);
+  EXPECT_EQ(r.method, "winding_number_boundary") << r.fallback_because;
+  EXPECT_GT(r.winding_stats.hollow_depth, 0.0) << "the capped solid was kept";
+  int surfaces = 0;
+  for (const auto& [stage, seconds] : r.seconds) surfaces += stage == "winding-number surface";
+  EXPECT_EQ(surfaces, 1) << "the hollowed solid made first was refused";
+  EXPECT_TRUE(r.tet_stats.conforming);
+  EXPECT_GE(r.quality.min_dihedral, 5.0);
+  EXPECT_EQ(r.quality.components, r.parts);
+  EXPECT_LE(r.deviation_out, 0.015 * diag);
+  EXPECT_LE(r.deviation_in, 0.005 * diag);
+}
+
 // The sacrum (2 parts; the large one's simplified boundary is not recovered at a crumple of the
 // input): that part is meshed as its own winding-number solid, within the bounds at 150
 // ([0.9, 1.2]) and, with a smaller dilation, at 1000 ([0.95, 1.1]; its volume was 1.19 there).
