@@ -1882,11 +1882,15 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   // fan about its rim's centroid is a closed part, meshed by the boundary route (simplified against
   // itself, the outer bound less the caps' distance). Empty where the input is not such a scan or the capped surface is not
   // closed parts (a fan that crosses the scan).
-  auto capped_route = [&](const std::string& why,
-                          const std::function<MeshResult(const std::string&)>& fail) -> std::optional<MeshResult> {
+  // The parts capped_route meshes: those of an open 2-manifold input with each hole capped by a fan
+  // from its centroid, where every cap lies within the outer bound (`widest`: the farthest cap's
+  // distance, units; `holes`: how many) and the capped input is closed parts without
+  // self-intersection; else none.
+  auto capped_parts = [&](double& widest, size_t& holes) -> std::optional<std::vector<Part>> {
     if (!is_open_two_manifold(r.input.F)) return std::nullopt;
     const std::vector<std::vector<int>> loops = boundary_loops(r.input.F);
-    double widest = 0;
+    widest = 0;
+    holes = loops.size();
     for (const std::vector<int>& loop : loops) {
       if (loop.size() < 3) return std::nullopt;
       widest = std::max(widest, hole_cap_distance(r.input.V, loop));
@@ -1930,8 +1934,17 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     int bad;
     std::vector<Part> parts = closed_components(capped, [](double volume) { return volume > 0; }, &bad);
     if (bad >= 0 || parts.empty() || does_self_intersect(capped)) return std::nullopt;
-    spdlog::info("meshing the input with its {} holes capped (each cap within {:.3g} of it): {}", loops.size(), widest, why);
-    leave_boundary_route("capped_boundary", why + "; its " + std::to_string(loops.size()) + " holes are narrower than "
+    return parts;
+  };
+  auto capped_route = [&](const std::string& why,
+                          const std::function<MeshResult(const std::string&)>& fail) -> std::optional<MeshResult> {
+    double widest = 0;
+    size_t holes = 0;
+    std::optional<std::vector<Part>> capped = capped_parts(widest, holes);
+    if (!capped) return std::nullopt;
+    std::vector<Part> parts = std::move(*capped);
+    spdlog::info("meshing the input with its {} holes capped (each cap within {:.3g} of it): {}", holes, widest, why);
+    leave_boundary_route("capped_boundary", why + "; its " + std::to_string(holes) + " holes are narrower than "
                          "the bound: meshed capped", static_cast<int>(parts.size()));
     EnvelopeOptions e = eopt;  // (the caps lie up to `widest` off the input; at least a quarter kept, as the wrap's)
     e.max_outside = std::max(0.25 * eopt.max_outside, eopt.max_outside - widest);
@@ -1965,6 +1978,14 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     WindingTetrahedralizeOptions wo = opt.winding_mesh;
     wo.seed = opt.tetrahedralize.seed;
     if (only) wo.seed_faces_if_no_facet = true;  // (a few small components: their faces are few)
+    // (Where the solid is not found, a thin open scan with narrow holes is meshed capped; the whole
+    // of any other input has its seeds taken again finer first: the spinal cord with holes. `only`
+    // components are seeded along their faces instead, as before.)
+    {
+      double widest;
+      size_t holes;
+      wo.seed_finer_if_no_facet = wo.seed_finer_if_no_facet && !only && !capped_parts(widest, holes);
+    }
     if (opt.hollow_winding_solid && !only) {
       wo.hollow_cell = opt.hollow_cell;
       wo.hollow_depth = opt.hollow_depth * opt.max_deviation;

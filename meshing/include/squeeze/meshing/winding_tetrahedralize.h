@@ -31,6 +31,13 @@ struct WindingTetrahedralizeOptions {
   double cover_tolerance = 0.003; // fraction of the diagonal: winding_number_surface seeds the
                                  // input's points left outside its surface by more than this (sharp
                                  // corners and edges the facets cut off) and refines again (0: not)
+  bool seed_finer_if_no_facet = true;  // winding_number_surface: where the vertices' seeds, 8
+                                 // facet distances apart, give Mesh_3 no facet (a long, thin scan),
+                                 // seeds at the vertices a facet distance apart are tried (meshing
+                                 // version 39; mesh_surface turns it off where a thin open scan's
+                                 // narrow holes are capped instead, the dilated solid of a pipe
+                                 // 4 mm across being 12 times its volume, and for the components
+                                 // beside closed parts, seeded along their faces instead)
   bool seed_faces_if_no_facet = false;  // winding_number_surface: where the vertices' seeds give
                                  // Mesh_3 no facet (a part smaller than their spacing, a fin), seeds
                                  // along the input's faces too (a knot's tube 2 mm across with faces
