@@ -1885,17 +1885,25 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   // The parts capped_route meshes: those of an open 2-manifold input with each hole capped by a fan
   // from its centroid, where every cap lies within the outer bound (`widest`: the farthest cap's
   // distance, units; `holes`: how many) and the capped input is closed parts without
-  // self-intersection; else none.
-  auto capped_parts = [&](double& widest, size_t& holes) -> std::optional<std::vector<Part>> {
-    if (!is_open_two_manifold(r.input.F)) return std::nullopt;
+  // self-intersection; else none. Made once: the winding-number route asks before its
+  // surface is made (seed_finer_if_no_facet), capped_route after it is not found.
+  struct Capped {
+    std::optional<std::vector<Part>> parts;
+    double widest = 0;
+    size_t holes = 0;
+  };
+  std::optional<Capped> capped_made;
+  auto capped_parts = [&]() -> const Capped& {
+    if (capped_made) return *capped_made;
+    Capped& c = capped_made.emplace();
+    if (!is_open_two_manifold(r.input.F)) return c;
     const std::vector<std::vector<int>> loops = boundary_loops(r.input.F);
-    widest = 0;
-    holes = loops.size();
+    c.holes = loops.size();
     for (const std::vector<int>& loop : loops) {
-      if (loop.size() < 3) return std::nullopt;
-      widest = std::max(widest, hole_cap_distance(r.input.V, loop));
+      if (loop.size() < 3) return c;
+      c.widest = std::max(c.widest, hole_cap_distance(r.input.V, loop));
     }
-    if (!(widest <= eopt.max_outside)) return std::nullopt;
+    if (!(c.widest <= eopt.max_outside)) return c;
     // Each boundary edge as its face runs along it; a cap face runs the other way.
     std::set<std::pair<int, int>> along;
     {
@@ -1933,16 +1941,17 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     capped.F = orient_outward(capped.V, capped.F);
     int bad;
     std::vector<Part> parts = closed_components(capped, [](double volume) { return volume > 0; }, &bad);
-    if (bad >= 0 || parts.empty() || does_self_intersect(capped)) return std::nullopt;
-    return parts;
+    if (bad >= 0 || parts.empty() || does_self_intersect(capped)) return c;
+    c.parts = std::move(parts);
+    return c;
   };
   auto capped_route = [&](const std::string& why,
                           const std::function<MeshResult(const std::string&)>& fail) -> std::optional<MeshResult> {
-    double widest = 0;
-    size_t holes = 0;
-    std::optional<std::vector<Part>> capped = capped_parts(widest, holes);
-    if (!capped) return std::nullopt;
-    std::vector<Part> parts = std::move(*capped);
+    const Capped& c = capped_parts();
+    if (!c.parts) return std::nullopt;
+    std::vector<Part> parts = *c.parts;  // (boundary_route takes them to mesh)
+    const double widest = c.widest;
+    const size_t holes = c.holes;
     spdlog::info("meshing the input with its {} holes capped (each cap within {:.3g} of it): {}", holes, widest, why);
     leave_boundary_route("capped_boundary", why + "; its " + std::to_string(holes) + " holes are narrower than "
                          "the bound: meshed capped", static_cast<int>(parts.size()));
@@ -1981,11 +1990,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // (Where the solid is not found, a thin open scan with narrow holes is meshed capped; the whole
     // of any other input has its seeds taken again finer first: the spinal cord with holes. `only`
     // components are seeded along their faces instead, as before.)
-    {
-      double widest;
-      size_t holes;
-      wo.seed_finer_if_no_facet = wo.seed_finer_if_no_facet && !only && !capped_parts(widest, holes);
-    }
+    wo.seed_finer_if_no_facet = wo.seed_finer_if_no_facet && !only && !capped_parts().parts;
     if (opt.hollow_winding_solid && !only) {
       wo.hollow_cell = opt.hollow_cell;
       wo.hollow_depth = opt.hollow_depth * opt.max_deviation;

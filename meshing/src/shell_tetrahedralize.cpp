@@ -798,10 +798,10 @@ SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::Matri
   spdlog::debug("Mesh_3 (winding number, surface): {} seeds refined in {:.2f} s", seeds.size(),
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   // No facet from the vertices' seeds 8 facet distances apart: again, where asked, from the
-  // vertices' seeds a facet distance apart (a long, thin input: the spinal cord with holes, 32 seeds along its
-  // 0.49 m and no facet among them; meshing version 39). Then, where asked, seeds along the faces,
-  // a facet distance apart (a part smaller than the vertices' spacing has one or two, a fin's seeds
-  // give no restricted facet).
+  // vertices' seeds a facet distance apart (a long, thin input: the spinal cord with holes, 32
+  // seeds along its 0.49 m and no facet among them; meshing version 39). Then, where asked, seeds
+  // along the faces, a facet distance apart (a part smaller than the vertices' spacing has one or
+  // two, a fin's seeds give no restricted facet).
   if (opt.seed_finer_if_no_facet && c3t3.number_of_facets_in_complex() == 0) {
     const std::vector<Eigen::Vector3d> more = solid.seeds(fd);
     spdlog::debug("Mesh_3 (winding number, surface): no facet; {} seeds a facet distance apart", more.size());
