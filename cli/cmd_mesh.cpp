@@ -194,13 +194,16 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
       double total = 0;
       for (const auto& s : r.seconds) total += s.second;
       const double diag = meshing::bounding_box_diagonal(r.input.V);
+      // (No ratio where the input encloses no volume that can be measured: a sheet, or an open
+      // scan whose winding-number volume is not positive.)
+      char ratio[32] = "n/a";
+      if (r.input_volume > 0) std::snprintf(ratio, sizeof ratio, "%.3f", r.quality.volume / r.input_volume);
       std::fprintf(stderr,
                    "squeeze: %s: %zu convex shells (max concavity %.3g%% of diagonal), %d tetrahedra, %d vertices, "
-                   "dihedral %.1f..%.1f deg, volume ratio %.3f, deviation out %.3g%% / in %.3g%% of diagonal, %.2f s\n",
+                   "dihedral %.1f..%.1f deg, volume ratio %s, deviation out %.3g%% / in %.3g%% of diagonal, %.2f s\n",
                    a.input.c_str(), r.decomposition.shells.size(), 100.0 * r.decomposition.max_concavity / diag,
-                   r.quality.tets, r.quality.vertices, r.quality.min_dihedral, r.quality.max_dihedral,
-                   r.input_volume > 0 ? r.quality.volume / r.input_volume : 0.0, 100.0 * r.deviation_out / diag,
-                   100.0 * r.deviation_in / diag, total);
+                   r.quality.tets, r.quality.vertices, r.quality.min_dihedral, r.quality.max_dihedral, ratio,
+                   100.0 * r.deviation_out / diag, 100.0 * r.deviation_in / diag, total);
     }
     return kExitOk;
   };

@@ -22,9 +22,9 @@ namespace squeeze::meshing::detail {
 
 class LabelMemo {
  public:
-  /// max_slots  power of two >= 2: the table's largest size (32 bytes a slot; the default, 2^22,
-  ///            is 128 MiB and remembers about 2 M points)
-  explicit LabelMemo(std::size_t max_slots = std::size_t{1} << 22) : max_slots_(max_slots) {
+  /// max_slots  power of two >= 2: the table's largest size (32 bytes a slot; the default, 2^23,
+  ///            is 256 MiB and remembers about 4.2 M points)
+  explicit LabelMemo(std::size_t max_slots = std::size_t{1} << 23) : max_slots_(max_slots) {
     slots_.resize(std::min<std::size_t>(max_slots, 1 << 12));
   }
 

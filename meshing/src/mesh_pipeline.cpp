@@ -535,40 +535,6 @@ std::vector<Part> closed_components(const SurfaceMesh& s, const std::function<bo
   return parts;
 }
 
-// The volume of the solid {x : winding number of `surface` at x ≥ ½}, the union of overlapping
-// or welded segments with each point counted once: the divergence theorem over the faces where the
-// solid's indicator jumps, each face's cone volume weighted by the jump across it (+1 where it is
-// inside behind the face and outside in front, -1 the other way, 0 for walls inside the solid or
-// outside it; Jacobson et al., "Robust inside-outside segmentation using generalized winding
-// numbers", SIGGRAPH 2013). The jump is read off the rest of the surface's winding number R at the
-// face's centroid (the face's own ±½ taken out of the values a ten-thousandth of the diagonal to
-// each side, and the two averaged): behind the face it is R + ½, in front R − ½, so the face is on
-// the boundary where R is about ½ (or −½, a cavity's face), inside the solid where R is about 1
-// (a wall between welded segments, in front of which the winding number is ½ exactly: a knife
-// edge for any approximation, meshing version 19) or more, and a sheet where R is about 0. R is
-// taken as the nearest of these, the thresholds a quarter away from each. Exact where every face
-// is wholly on the solid's boundary or wholly not; a face that crosses another counts by its
-// centroid's side.
-double winding_volume(const SurfaceMesh& surface) {
-  const FastWindingNumber w(surface.V, surface.F);
-  const double eps = 1e-4 * bounding_box_diagonal(surface.V);
-  std::vector<double> vol(static_cast<size_t>(surface.F.rows()), 0.0);
-  tbb::parallel_for(Eigen::Index(0), surface.F.rows(), [&](Eigen::Index f) {
-    const Eigen::RowVector3d a = surface.V.row(surface.F(f, 0)), b = surface.V.row(surface.F(f, 1)),
-                             c = surface.V.row(surface.F(f, 2));
-    const Eigen::RowVector3d n = (b - a).cross(c - a);
-    if (!(n.norm() > 0)) return;
-    const Eigen::RowVector3d m = (a + b + c) / 3.0, u = n.normalized() * eps;
-    auto own = [&](const Eigen::RowVector3d& q) { return triangle_winding_number(a, b, c, q); };
-    const double rest = 0.5 * ((w(m - u) - own(m - u)) + (w(m + u) - own(m + u)));
-    const int jump = (rest > -0.25 ? 1 : 0) - (rest > 0.75 ? 1 : 0);
-    vol[static_cast<size_t>(f)] = jump * a.dot(b.cross(c)) / 6.0;
-  });
-  double sum = 0;
-  for (double x : vol) sum += x;
-  return sum;
-}
-
 // The report's measures of r.tets against r.input: quality, volume ratio (closed inputs),
 // deviation_out / deviation_in, coverage of the input's vertices.
 void measure(MeshResult& r, const MeshOptions& opt) {
@@ -655,7 +621,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   // whichever routes ask (the winding-number boundary's route, then Mesh_3's where it falls back).
   std::optional<double> input_winding_volume_once;
   auto input_winding_volume = [&]() {
-    if (!input_winding_volume_once) input_winding_volume_once = winding_volume(r.input);
+    if (!input_winding_volume_once) input_winding_volume_once = winding_volume(r.input.V, r.input.F);
     return *input_winding_volume_once;
   };
 
@@ -2056,7 +2022,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // tubes 16 mm across in a chain 0.41 m long, at 1,000: 19.2 %, then 12.1 % at 0.42 and 8.9 %
     // at 0.28 of the dilation, so 1.089 after simplification, not 1.121), and rounds below that
     // line only add faces (the liver at 1,000: 9.7 %, 8.4 %, then 8.1 % and 8.0 % in 6 s more).
-    const double source_volume = only ? winding_volume(*only) : r.input_volume;
+    const double source_volume = only ? winding_volume(only->V, only->F) : r.input_volume;
     if (r.info.closed && source_volume > 0 && solid.F.rows() > 0) {
       const double again = fine_target ? 0.09 : 0.175;
       for (int round = 0; round < 3; ++round) {
@@ -2092,8 +2058,13 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
       return tetrahedra(because);
     };
     // No solid at all (triangles welded into a fan, say: no volume, and not open sheets either):
-    // the convex shells of a flat input took minutes to grow a blob around it.
-    if (solid.F.rows() == 0 && !(std::abs(r.input_volume) > 1e-9 * diag * diag * diag))
+    // the convex shells of a flat input took minutes to grow a blob around it. (Judged, as before
+    // version 40, by the winding-number volume with its cones from the origin: 0 for a fan through
+    // the origin. From the bounding box's centre a fan has some, and so do its faces anywhere else:
+    // moved 5 m away, the fan goes to convex shells, as it did. The decomposition's interior
+    // voxels are none for a rod 4 mm across too, so they cannot tell either.)
+    const Eigen::RowVector3d origin = Eigen::RowVector3d::Zero();
+    if (solid.F.rows() == 0 && !(std::abs(winding_volume(r.input.V, r.input.F, &origin)) > 1e-9 * diag * diag * diag))
       throw InputError("the surface encloses no volume (winding number above 1/2 nowhere) and is not open sheets "
                        "(one layer of triangles, each sheet on its own: these are welded to each other)");
     int bad;

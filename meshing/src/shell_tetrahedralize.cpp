@@ -466,7 +466,7 @@ class SpacedPoints {
 class WindingSolid {
  public:
   WindingSolid(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const WindingTetrahedralizeOptions& opt)
-      : V_(V), F_(F), winding_(V, F, 1.25), bvh_(V, F) {
+      : V_(V), F_(F), winding_(V, F, 1.25), bvh_(V, F), memo_(memo_slots(opt.label_memo_log2_slots)) {
     if (F.rows() == 0 || V.rows() == 0) throw InputError("tetrahedralize_winding_number: no triangles");
     if (!(opt.facet_distance > 0 && opt.facet_distance < 1)) throw InputError("winding-number facet distance must be in (0, 1)");
     if (!(opt.dilation >= 0 && opt.dilation < 1)) throw InputError("winding-number dilation must be in [0, 1)");
@@ -488,6 +488,11 @@ class WindingSolid {
       spdlog::debug("winding-number solid: hollowed where the outside reaches, flooded over {} x {} x {} cells {:.3g} wide "
                     "in {:.2f} s", n_(0), n_(1), n_(2), cell_, sec(t0, std::chrono::steady_clock::now()));
     }
+  }
+  static std::size_t memo_slots(int log2) {
+    if (log2 < 12 || log2 > 30)
+      throw InputError("winding-number label memo: 2^" + std::to_string(log2) + " slots is outside 2^12..2^30");
+    return std::size_t{1} << log2;
   }
   double diag() const { return diag_; }
   double dilation() const { return dil_; }       // units
@@ -733,9 +738,11 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
   // Cell size: Delaunay refinement with cell_size s gives about volume / (0.07 s³) tetrahedra
   // (measured), corrected from each attempt's count; at most three attempts. Where the facet
   // distance, not the cell size, sets the count (it does not fall with a larger size), the
-  // attempts stop.
+  // attempts stop. (The volume's magnitude: an input whose faces mostly face inward has a
+  // negative winding volume, -1.08e-6 m³ for the spinal cord with holes cut, which the floor of
+  // 1e-12 diag³ made a cell size of 17 µm and each attempt 30 s for no tetrahedron.)
   const double target = opt.target_tets;
-  double size = std::cbrt(std::max(volume, 1e-12 * diag * diag * diag) / (0.07 * target));
+  double size = std::cbrt(std::max(std::abs(volume), 1e-12 * diag * diag * diag) / (0.07 * target));
   TetMesh best;
   double best_score = INFINITY, previous = INFINITY;
   for (int attempt = 0; attempt < 3; ++attempt) {

@@ -303,6 +303,12 @@ class Mesher {
   std::unordered_map<const void*, int> id_;
   std::vector<std::array<int, 3>> tri_;  // surface triangles, outward; dead ones have tri_alive_ 0
   std::vector<char> tri_alive_;
+  // A cell that had the triangle as a facet when make_conforming last found it (null: none yet).
+  // The triangle is still a facet where that cell is still in the triangulation with its three
+  // corners; else TDS::is_facet searches the cells around a corner, whose count is large in a
+  // Delaunay triangulation of surface points (a thin shell of 22,800 triangles: 190 passes over
+  // its triangles in two tetrahedralizations).
+  std::vector<Ch> tri_cell_;
   std::vector<int> tri_patch_;     // flat patch of the input each triangle lies in
   std::vector<int> tri_depth_;     // how many splits made it from a triangle of the first surface
   std::unordered_map<uint64_t, std::array<int, 2>> edge_tris_;
@@ -324,6 +330,7 @@ class Mesher {
     const int t = static_cast<int>(tri_.size());
     tri_.push_back({a, b, c});
     tri_alive_.push_back(1);
+    tri_cell_.push_back(Ch());
     tri_patch_.push_back(patch);
     tri_depth_.push_back(depth);
     const int e[3][2] = {{a, b}, {b, c}, {c, a}};
@@ -740,6 +747,17 @@ class Mesher {
     int k = 0;
     while (v[k] != c) ++k;
     const int x = v[(k + 1) % 3], y = v[(k + 2) % 3];
+    // Only across a convex quad (c, x, d, y): where a corner lies on the new diagonal (a split point
+    // of that edge, put back by earlier flips), a flipped triangle would be a needle of zero area,
+    // never a face of the triangulation, its edge split at the same point again and again (the
+    // heart with holes, hollowed, at 300: one such edge left its 8,966 faces not conforming).
+    {
+      const Vec3 &C = P_[c], &X = P_[x], &D = P_[d], &Y = P_[y];
+      const Vec3 n = (X - C).cross(Y - C), m0 = (X - C).cross(D - C), m1 = (D - C).cross(Y - C);
+      const double l2 = std::max({(X - C).squaredNorm(), (D - C).squaredNorm(), (Y - C).squaredNorm(),
+                                  (D - X).squaredNorm(), (Y - D).squaredNorm()});
+      if (!(m0.norm() > 1e-10 * l2 && m1.norm() > 1e-10 * l2 && m0.dot(n) > 0 && m1.dot(n) > 0)) return false;
+    }
     const int pa = tri_patch_[static_cast<size_t>(t0)];
     const int depth = std::max(tri_depth_[static_cast<size_t>(t0)], tri_depth_[static_cast<size_t>(t1)]);
     remove_tri(t0);
@@ -769,9 +787,16 @@ class Mesher {
       for (size_t t = 0; t < tri_.size(); ++t) {
         if (!tri_alive_[t]) continue;
         const auto& v = tri_[t];
+        Ch& was = tri_cell_[t];
+        if (opt_.remember_facet_cells && was != Ch() && tr_.tds().cells().is_used(was) && was->has_vertex(vh_[v[0]]) &&
+            was->has_vertex(vh_[v[1]]) && was->has_vertex(vh_[v[2]]))
+          continue;
         Ch c;
         int i, j, k;
-        if (tr_.is_facet(vh_[v[0]], vh_[v[1]], vh_[v[2]], c, i, j, k)) continue;
+        if (tr_.is_facet(vh_[v[0]], vh_[v[1]], vh_[v[2]], c, i, j, k)) {
+          was = c;
+          continue;
+        }
         // Steiner points (inside, not on the surface) in the triangle's diametral ball keep it out
         // of the triangulation whatever the surface does: they go.
         const size_t before = remove.size();

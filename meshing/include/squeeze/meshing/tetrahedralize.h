@@ -53,6 +53,10 @@ struct TetrahedralizeOptions {
                                   // every step is deterministic); false runs it (tests pin that it
                                   // gives the same mesh kept)
   unsigned seed = 1;              // CGAL's random generator, for run-to-run determinism
+  bool remember_facet_cells = true;  // conformity recovery remembers, per boundary triangle, a
+                                  // cell that had it as a facet, and asks the triangulation again
+                                  // only where that cell is gone (false: asks each time; the same
+                                  // mesh, slower: bench_mesh's A/B; meshing version 40)
   double max_refine_work = 0;     // cells of the conflict zones refinement may search in all attempts
                                   // (its work, a deterministic measure of its time: about 4 million
                                   // per second here); beyond it refinement stops and no further

@@ -71,4 +71,30 @@ Eigen::VectorXd face_offset_winding_numbers(const FastWindingNumber& w, const Ei
                                             const Eigen::MatrixX3i& F, double offset, Eigen::VectorXd* outside,
                                             Eigen::VectorXd* inside);
 
+/// The volume of the solid {x : winding number of (V, F) at x ≥ ½}: the union of overlapping or
+/// welded segments, each point counted once. The divergence theorem over the faces where the
+/// solid's indicator jumps, each face's cone volume weighted by the jump across it (+1 where it is
+/// inside behind the face and outside in front, -1 the other way, 0 for walls inside the solid or
+/// outside it; Jacobson, Kavan, Sorkine-Hornung, "Robust inside-outside segmentation using
+/// generalized winding numbers", SIGGRAPH 2013, DOI 10.1145/2461912.2461916). The jump is read off
+/// the rest of the surface's winding number R at the face's centroid (the face's own ±½ taken out
+/// of the values a ten-thousandth of the diagonal to each side, and the two averaged): behind the
+/// face it is R + ½, in front R − ½, so the face is on the boundary where R is about ½ (or −½, a
+/// cavity's face), inside the solid where R is about 1 (a wall between welded segments, in front
+/// of which the winding number is ½ exactly: a knife edge for any approximation, meshing version
+/// 19) or more, and a sheet where R is about 0. R is taken as the nearest of these, the thresholds
+/// a quarter away from each. Exact where every face is wholly on the solid's boundary or wholly
+/// not; a face that crosses another counts by its centroid's side.
+/// The cones are taken from the bounding box's centre (meshing version 40; from the origin
+/// before): where the faces do not close (an open scan's holes) the sum misses the cones over the
+/// holes, which grow with the apex's distance (the spinal cord with four holes cut, 0.5-1 m from
+/// the origin at its atlas position, whose closed segments hold 2.84e-5 m³: -1.08e-6 m³ from the
+/// origin, 1.44e-5 m³ from the centre). One apex for all faces: the faces of overlapping segments
+/// that bound their union close only together.
+///   V  #V by 3 positions (units); F  #F by 3 vertex indices
+///   from  optional: the cones' apex instead of the bounding box's centre (units)
+/// Returns units³ (0 without faces); negative where most faces face inward. Parallel over the
+/// faces; the same sum whatever the threads. Throws nothing.
+double winding_volume(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::RowVector3d* from = nullptr);
+
 }  // namespace squeeze::meshing

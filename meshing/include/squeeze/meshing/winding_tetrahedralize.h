@@ -42,6 +42,12 @@ struct WindingTetrahedralizeOptions {
                                  // Mesh_3 no facet (a part smaller than their spacing, a fin), seeds
                                  // along the input's faces too (a knot's tube 2 mm across with faces
                                  // 0.11 m long: minutes; so only where asked)
+  int label_memo_log2_slots = 23;  // the solid's inside test remembers its answers in a table of
+                                 // up to 2^this slots of 32 bytes, half of them filled: 2^23, 256
+                                 // MiB at most, about 4.2 million points (meshing version 40; 2^22
+                                 // before: the hollowed heart with holes asks about 3.0-3.6 million,
+                                 // and each resumed refinement asked again about those not kept);
+                                 // 12 to 30 (bench_mesh's A/B)
   bool cover_skip = true;        // that pass skips input points whose surface point could only land
                                  // near a point already taken (false: tests each; the same points,
                                  // slower: bench_mesh's A/B)
