@@ -344,6 +344,41 @@ void BM_LiverWithHoles(benchmark::State& state) {
 }
 BENCHMARK(BM_LiverWithHoles)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
+// The heart of tests/data with four holes 3 % of its diagonal in radius around seeded vertices
+// (seed 391 of the thirty-eighth session): its solid hollowed, a thin shell of 29,730
+// tetrahedra, at 300 (meshing version 40). Arg 0: conformity recovery
+// remembers a cell per boundary triangle (TetrahedralizeOptions::remember_facet_cells; 0 asks the
+// triangulation each time); arg 1: the inside test's memo, 2^arg slots
+// (WindingTetrahedralizeOptions::label_memo_log2_slots; 22 before). The same mesh in every run.
+void BM_HeartWithHoles(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh m = sqs::with_holes_at(squeeze::meshing::load_surface(data("organs/heart.off")),
+                                                             {{0.075214, 0.467939, 0.0640765},
+                                                              {0.00254863, 0.47815, 0.0756827},
+                                                              {0.0392196, 0.429359, 0.0836583},
+                                                              {0.0058577, 0.430776, 0.0496153}},
+                                                             0.03);
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 300;
+  o.tetrahedralize.remember_facet_cells = state.range(0) != 0;
+  o.winding_mesh.label_memo_log2_slots = static_cast<int>(state.range(1));
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
+  for (const auto& [stage, seconds] : r.seconds) {
+    if (stage == "winding-number surface") state.counters["surface_s"] = seconds;
+    if (stage == "tetrahedralizing") state.counters["tetrahedralizing_s"] = seconds;
+  }
+  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  state.counters["deviation_out"] = r.deviation_out / diag;
+  state.counters["deviation_in"] = r.deviation_in / diag;
+}
+BENCHMARK(BM_HeartWithHoles)
+    ->Args({1, 23})
+    ->Args({0, 23})
+    ->Args({1, 22})
+    ->Args({0, 22})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
 // A figure-eight tube 6 mm across on a curve 12 cm wide, which passes through itself (the
 // winding-number boundary route), at a target of 1,000: its solid's growth estimated before the
 // first Mesh_3 run (arg 1, meshing version 31) against made at the full dilation and made again
