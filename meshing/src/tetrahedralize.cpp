@@ -833,15 +833,19 @@ class Mesher {
       }
       std::sort(split.begin(), split.end());
       split.erase(std::unique(split.begin(), split.end()), split.end());
-      // Edges of triangles split 10 times already are not split further: around a sharp crease
-      // recovery by splitting can go on without end.
+      // Edges whose triangles were all split 10 times already are not split further: around a
+      // sharp crease recovery by splitting can go on without end. (An edge with a triangle split
+      // fewer times on one side is: until meshing version 40 one such triangle on either side
+      // stopped it, and a triangle split 9 times beside one split 10 times, missing with all its
+      // edges in place, left the hollowed heart with holes of seed 391 not conforming. Each split
+      // of such an edge deepens its shallower side, so the splits still end.)
       split.erase(std::remove_if(split.begin(), split.end(),
                                  [&](uint64_t k) {
                                    const auto it = edge_tris_.find(k);
                                    if (it == edge_tris_.end()) return true;
                                    for (int t : it->second)
-                                     if (t >= 0 && tri_depth_[static_cast<size_t>(t)] >= 10) return true;
-                                   return false;
+                                     if (t >= 0 && tri_depth_[static_cast<size_t>(t)] < 10) return false;
+                                   return true;
                                  }),
                   split.end());
       if (split.empty()) {
