@@ -1100,6 +1100,15 @@ TEST(MeshingWindingNumber, WindingVolumeDoesNotDependOnWhereTheInputLies) {
     EXPECT_NEAR(squeeze::meshing::winding_volume(far, m->F) / here, 1.0, 1e-6) << (m == &cap ? "hemisphere" : "sphere");
   }
   EXPECT_EQ(squeeze::meshing::winding_volume(Eigen::MatrixX3d(0, 3), Eigen::MatrixX3i(0, 3)), 0.0);
+  // The jump-weighted area: none for the closed sphere; for the hemisphere, whose every face
+  // bounds its solid, its rim's polygon (32 sides, radius 1) along +z, a third of its area.
+  Eigen::RowVector3d S;
+  squeeze::meshing::winding_volume(sphere.V, sphere.F, &S);
+  EXPECT_LT(S.norm(), 1e-9 * own);
+  squeeze::meshing::winding_volume(cap.V, cap.F, &S);
+  const double rim = 16 * std::sin(2 * M_PI / 32);
+  EXPECT_NEAR(S(2), rim / 3, 1e-9);
+  EXPECT_NEAR(S.head<2>().norm(), 0.0, 1e-9);
 }
 
 // face_offset_winding_numbers: on the corpus sphere (closed, outward) about 0 just outside every

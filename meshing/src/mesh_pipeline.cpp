@@ -620,8 +620,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   // The input's winding-number volume (winding_volume: 1.7 s on the heart), computed once for
   // whichever routes ask (the winding-number boundary's route, then Mesh_3's where it falls back).
   std::optional<double> input_winding_volume_once;
+  Eigen::RowVector3d input_jump_area = Eigen::RowVector3d::Zero();  // (winding_volume's, with it)
   auto input_winding_volume = [&]() {
-    if (!input_winding_volume_once) input_winding_volume_once = winding_volume(r.input.V, r.input.F);
+    if (!input_winding_volume_once) input_winding_volume_once = winding_volume(r.input.V, r.input.F, &input_jump_area);
     return *input_winding_volume_once;
   };
 
@@ -2062,9 +2063,13 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // version 40, by the winding-number volume with its cones from the origin: 0 for a fan through
     // the origin. From the bounding box's centre a fan has some, and so do its faces anywhere else:
     // moved 5 m away, the fan goes to convex shells, as it did. The decomposition's interior
-    // voxels are none for a rod 4 mm across too, so they cannot tell either.)
-    const Eigen::RowVector3d origin = Eigen::RowVector3d::Zero();
-    if (solid.F.rows() == 0 && !(std::abs(winding_volume(r.input.V, r.input.F, &origin)) > 1e-9 * diag * diag * diag))
+    // voxels are none for a rod 4 mm across too, so they cannot tell either. The volume from the
+    // origin is the one from the centre moved by the jump-weighted area: no second pass.)
+    auto from_origin = [&] {
+      const Eigen::RowVector3d centre = 0.5 * (r.input.V.colwise().minCoeff() + r.input.V.colwise().maxCoeff());
+      return input_winding_volume() + centre.dot(input_jump_area);
+    };
+    if (solid.F.rows() == 0 && !(std::abs(from_origin()) > 1e-9 * diag * diag * diag))
       throw InputError("the surface encloses no volume (winding number above 1/2 nowhere) and is not open sheets "
                        "(one layer of triangles, each sheet on its own: these are welded to each other)");
     int bad;

@@ -739,9 +739,6 @@ class Mesher {
           n0.dot(n1) <= 0)
         return false;
     }
-    Ch cell;
-    int i, j;
-    if (!tr_.is_edge(vh_[c], vh_[d], cell, i, j)) return false;
     // Keep the orientation: t0 = (c, x, y) in its own order, t1 = (d, y, x); flipped: (c, x, d), (c, d, y).
     const auto v = tri_[static_cast<size_t>(t0)];
     int k = 0;
@@ -758,6 +755,9 @@ class Mesher {
                                   (D - X).squaredNorm(), (Y - D).squaredNorm()});
       if (!(m0.norm() > 1e-10 * l2 && m1.norm() > 1e-10 * l2 && m0.dot(n) > 0 && m1.dot(n) > 0)) return false;
     }
+    Ch cell;  // (after the quad's test: the cells around c are many)
+    int i, j;
+    if (!tr_.is_edge(vh_[c], vh_[d], cell, i, j)) return false;
     const int pa = tri_patch_[static_cast<size_t>(t0)];
     const int depth = std::max(tri_depth_[static_cast<size_t>(t0)], tri_depth_[static_cast<size_t>(t1)]);
     remove_tri(t0);
@@ -835,7 +835,7 @@ class Mesher {
       split.erase(std::unique(split.begin(), split.end()), split.end());
       // Edges whose triangles were all split 10 times already are not split further: around a
       // sharp crease recovery by splitting can go on without end. (An edge with a triangle split
-      // fewer times on one side is: until meshing version 40 one such triangle on either side
+      // fewer times on one side is: until meshing version 41 one such triangle on either side
       // stopped it, and a triangle split 9 times beside one split 10 times, missing with all its
       // edges in place, left the hollowed heart with holes of seed 391 not conforming. Each split
       // of such an edge deepens its shallower side, so the splits still end.)

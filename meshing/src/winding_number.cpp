@@ -250,13 +250,15 @@ Eigen::VectorXd face_offset_winding_numbers(const FastWindingNumber& w, const Ei
   return area;
 }
 
-double winding_volume(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::RowVector3d* from) {
+double winding_volume(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, Eigen::RowVector3d* jump_area) {
+  if (jump_area) jump_area->setZero();
   if (V.rows() == 0 || F.rows() == 0) return 0.0;
   const FastWindingNumber w(V, F);
   const Eigen::RowVector3d lo = V.colwise().minCoeff(), hi = V.colwise().maxCoeff();
   const double eps = 1e-4 * (hi - lo).norm();
-  const Eigen::RowVector3d apex = from ? *from : Eigen::RowVector3d(0.5 * (lo + hi));
+  const Eigen::RowVector3d apex = 0.5 * (lo + hi);
   std::vector<double> vol(static_cast<size_t>(F.rows()), 0.0);
+  std::vector<int> jumps(static_cast<size_t>(F.rows()), 0);
   tbb::parallel_for(Eigen::Index(0), F.rows(), [&](Eigen::Index f) {
     const Eigen::RowVector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
     const Eigen::RowVector3d n = (b - a).cross(c - a);
@@ -265,10 +267,16 @@ double winding_volume(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, cons
     auto own = [&](const Eigen::RowVector3d& q) { return triangle_winding_number(a, b, c, q); };
     const double rest = 0.5 * ((w(m - u) - own(m - u)) + (w(m + u) - own(m + u)));
     const int jump = (rest > -0.25 ? 1 : 0) - (rest > 0.75 ? 1 : 0);
+    jumps[static_cast<size_t>(f)] = jump;
     vol[static_cast<size_t>(f)] = jump * (a - apex).dot((b - apex).cross(c - apex)) / 6.0;
   });
   double sum = 0;
   for (double x : vol) sum += x;  // (in face order: the same sum whatever the threads)
+  if (jump_area)
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      if (jumps[static_cast<size_t>(f)] != 0)
+        *jump_area += jumps[static_cast<size_t>(f)] / 6.0 *
+                      (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0)));
   return sum;
 }
 

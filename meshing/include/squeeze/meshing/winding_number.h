@@ -92,9 +92,11 @@ Eigen::VectorXd face_offset_winding_numbers(const FastWindingNumber& w, const Ei
 /// origin, 1.44e-5 m³ from the centre). One apex for all faces: the faces of overlapping segments
 /// that bound their union close only together.
 ///   V  #V by 3 positions (units); F  #F by 3 vertex indices
-///   from  optional: the cones' apex instead of the bounding box's centre (units)
+///   jump_area  optional output (units²): the faces' area vectors, (b − a) × (c − a) / 6, each
+///              weighted by its jump. The same sum from another apex p is the returned volume
+///              − (p − the box's centre) · jump_area (0 where the weighted faces close)
 /// Returns units³ (0 without faces); negative where most faces face inward. Parallel over the
 /// faces; the same sum whatever the threads. Throws nothing.
-double winding_volume(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::RowVector3d* from = nullptr);
+double winding_volume(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, Eigen::RowVector3d* jump_area = nullptr);
 
 }  // namespace squeeze::meshing
