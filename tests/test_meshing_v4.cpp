@@ -203,6 +203,74 @@ TEST(MeshingV4, BoxesAndPlatesComeOutExact) {
     }
 }
 
+// The same boxes, and a plate 6 mm thick, turned about an axis along no box edge and moved away
+// from the origin: still exact (their corners now carry rounding). The 6 mm plate at 300 had its
+// slab 0.26 % of the diagonal inside (meshing version 41): the ray from a rim vertex of its
+// mid-surface ran along a side wall, Möller–Trumbore met that wall at a random parameter, and the
+// slab lost half its thickness there.
+TEST(MeshingV4, BoxesAndPlatesTurnedInSpaceComeOutExact) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  const Vec3 shift(3, -2, 5);
+  std::vector<BoxCase> cases(std::begin(kBoxes), std::end(kBoxes));
+  cases.push_back({"plate 0.8 x 0.4 x 0.006, 8 vertices", {0, 0, 0}, {0.8, 0.4, 0.006}, {1, 1, 1}});
+  for (const BoxCase& c : cases)
+    for (int target : {150, 300, 1000}) {
+      const std::string what = std::string(c.name) + ", turned, at target " + std::to_string(target);
+      SurfaceMesh s = box(c.lo, c.hi, c.n);
+      for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = (R * s.V.row(i).transpose() + shift).transpose();
+      const MeshResult r = mesh(s, target);
+      const double diag = (c.hi - c.lo).norm();
+      ASSERT_GT(r.tets.T.rows(), 0) << what;
+      EXPECT_NEAR(tet_volume(r.tets) / box_volume(c.lo, c.hi), 1.0, 0.01) << what;
+      for (Eigen::Index i = 0; i < r.tets.V.rows(); ++i) {
+        const Vec3 x = R.transpose() * (r.tets.V.row(i).transpose() - shift);  // back in the box's frame
+        for (int k = 0; k < 3; ++k) {
+          EXPECT_GE(x(k), c.lo(k) - 0.002 * diag) << what << ", vertex " << i;
+          EXPECT_LE(x(k), c.hi(k) + 0.002 * diag) << what << ", vertex " << i;
+        }
+      }
+      // (The report's deviations are fractions of the input's bounding-box diagonal, which a turn
+      // lengthens: 1.18 m for the 6 mm plate, whose own diagonal is 0.89 m.)
+      const double input_diag = squeeze::meshing::bounding_box_diagonal(s.V);
+      EXPECT_LE(r.deviation_out, 0.002 * input_diag) << what;
+      EXPECT_LE(r.deviation_in, 0.002 * input_diag) << what;
+      EXPECT_EQ(r.quality.components, 1) << what;
+      EXPECT_GE(r.quality.min_dihedral, 5.0) << what;
+    }
+}
+
+// TriangleBvh: a segment in a triangle's plane crosses nothing, turned any way. From each corner
+// of a 6 mm box's top face, 3 thicknesses straight down (along its side walls, which hold the
+// segment up to rounding): the first crossing, if any, is the bottom face, at a third of the way.
+// Through the middle of the top face, from above: crossed half way. Before meshing version 42 a
+// rounding-level determinant passed, and a side wall was met at a random parameter.
+TEST(MeshingTriangleBvh, SegmentsInATrianglesPlaneCrossNothing) {
+  std::mt19937 rng(42);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> angle(0.1, 3.0);
+  int wrong = 0, crossed_middle = 0;
+  const int turns = 200;
+  for (int k = 0; k < turns; ++k) {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(angle(rng), Vec3(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
+    const Vec3 shift(g(rng), g(rng), g(rng));
+    const Vec3 hi(0.8, 0.4, 0.006);
+    SurfaceMesh s = box(Vec3::Zero(), hi);
+    for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = (R * s.V.row(i).transpose() + shift).transpose();
+    const squeeze::meshing::TriangleBvh bvh(s.V, s.F);
+    const Vec3 down = -R.col(2);
+    for (const Vec3 corner : {Vec3(0, 0, hi(2)), Vec3(hi(0), 0, hi(2)), Vec3(0, hi(1), hi(2)), Vec3(hi(0), hi(1), hi(2))}) {
+      const Vec3 a = R * corner + shift;
+      double t = -1;
+      if (bvh.first_crossing(a, a + 3 * hi(2) * down, 1e-4, &t) && std::abs(t - 1.0 / 3.0) > 1e-6) ++wrong;
+    }
+    const Vec3 top = R * Vec3(0.3, 0.1, hi(2)) + shift;
+    double t = -1;
+    crossed_middle += bvh.first_crossing(top - 0.01 * down, top + 0.01 * down, 0.0, &t) && std::abs(t - 0.5) < 1e-9;
+  }
+  EXPECT_EQ(wrong, 0) << "of " << 4 * turns << " segments along side walls";
+  EXPECT_EQ(crossed_middle, turns);
+}
+
 // ... by the boundary route (no fallback to the convex shells), with dihedral angles of at least 5
 // degrees (the curtain at 300 once got a flat interior tetrahedron from Steiner points on its
 // mid-plane).

@@ -201,7 +201,11 @@ bool TriangleBvh::crossing(const Vec3& a, const Vec3& b, double hint, bool after
       // Möller–Trumbore.
       const Vec3 e1 = p1 - p0, e2 = p2 - p0, h = d.cross(e2);
       const double det = e1.dot(h);
-      if (std::abs(det) < 1e-300) continue;
+      // (A segment in the triangle's plane crosses nothing: det = -d · (e1 × e2) is then rounding
+      // alone, and u, v and t are noise. Skipped where |det| is under 1e-12 of its bound
+      // |d| |e1| |e2|: a ray along a rotated box's side wall met it there at a random t, and a thin
+      // plate's slab lost half its thickness at the rim; meshing version 42.)
+      if (det * det <= 1e-24 * d.squaredNorm() * e1.squaredNorm() * e2.squaredNorm() || std::abs(det) < 1e-300) continue;
       const double inv = 1.0 / det;
       const Vec3 s = a - p0;
       const double u = inv * s.dot(h);
