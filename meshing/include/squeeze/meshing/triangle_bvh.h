@@ -29,7 +29,9 @@ class TriangleBvh {
   bool any_within(const Eigen::Vector3d& p, double r) const;
 
   /// Of the points where the segment a→b crosses a triangle (Möller–Trumbore; parameter t in
-  /// [0, 1]), the parameter nearest to `hint`. Returns false when the segment crosses none.
+  /// [0, 1]), the parameter nearest to `hint`. Returns false when the segment crosses none. A
+  /// segment in a triangle's plane (up to rounding: the determinant under 1e-12 of |d| |e1| |e2|)
+  /// crosses nothing there (meshing version 42).
   bool crossing_nearest(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double hint, double* t) const;
 
   /// The first crossing of the segment a→b at parameter t >= t_min (see crossing_nearest).
