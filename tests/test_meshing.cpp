@@ -1449,8 +1449,6 @@ TEST(MeshingNormals, AreaWeightedNormalsSumTheFacesAreaVectors) {
 
 }  // namespace
 
-// The memo of an inside test answers as the test does, asks the test once per distinct point (bit
-// pattern), grows past its first table, and once full still answers right without remembering.
 // detail::run_unless_sigfpe, the guard around CGAL 5.5's sliver exuder: GMP answers a NaN with
 // raise(SIGFPE) (the exuder's NaN weight beside a numerically flat cell: `squeeze mesh` of a
 // 64-sided cone died with exit 136); the guard returns false instead, and true where the call
@@ -1470,6 +1468,8 @@ TEST(MeshingSigfpeTrap, GmpsSigfpeOnANanIsSurvived) {
   EXPECT_EQ(ran, 2);
 }
 
+// The memo of an inside test answers as the test does, asks the test once per distinct point (bit
+// pattern), grows past its first table, and once full still answers right without remembering.
 TEST(MeshingLabelMemo, AnswersAsTheTestAndAsksItOncePerPoint) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

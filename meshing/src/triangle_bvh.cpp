@@ -182,6 +182,7 @@ bool TriangleBvh::crossing_nearest(const Vec3& a, const Vec3& b, double hint, do
 bool TriangleBvh::crossing(const Vec3& a, const Vec3& b, double hint, bool after, double* t_out) const {
   if (nodes_.empty()) return false;
   const Vec3 d = b - a;
+  const double d2 = d.squaredNorm();  // (the in-plane test's, once per segment)
   bool found = false;
   double best = INFINITY, best_t = 0;
   int stack[128];
@@ -205,7 +206,7 @@ bool TriangleBvh::crossing(const Vec3& a, const Vec3& b, double hint, bool after
       // alone, and u, v and t are noise. Skipped where |det| is under 1e-12 of its bound
       // |d| |e1| |e2|: a ray along a rotated box's side wall met it there at a random t, and a thin
       // plate's slab lost half its thickness at the rim; meshing version 42.)
-      if (det * det <= 1e-24 * d.squaredNorm() * e1.squaredNorm() * e2.squaredNorm() || std::abs(det) < 1e-300) continue;
+      if (det * det <= 1e-24 * d2 * e1.squaredNorm() * e2.squaredNorm() || std::abs(det) < 1e-300) continue;
       const double inv = 1.0 / det;
       const Vec3 s = a - p0;
       const double u = inv * s.dot(h);
