@@ -34,8 +34,12 @@
 //                             against no bound (0), with the conflict-zone cells searched
 //  BM_ThinBottle/<prisms>       squeeze mesh's pipeline on a 1.5 mm bottle at 300: one layer of
 //                             prisms (1, version 24) against the boundary route (0, as before it)
-//  BM_CombExuder/<bounded>     squeeze mesh's pipeline on a comb of 2 mm teeth at 1000: the exuder
-//                             stopped at 20 pumps per sliver (1, version 25) against no bound (0)
+//  BM_CombExuder/<pumps>       squeeze mesh's pipeline on a comb of 2 mm teeth at 1000: the exuder
+//                             stopped at 5 pumps per sliver (version 43) or 20 (versions 25-42)
+//                             against no bound (0)
+//  BM_TurnedPlate/<placement>/<flip>/<pumps>  two thin plates turned in space at 2000: flat cells
+//                             on the surface flipped outside (1, version 43) or refined (0), the
+//                             exuder's pumps per sliver 5 (version 43) or 20
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
 //                             of points the winding-number route's Mesh_3 oracle asks about: the
 //                             input's vertices moved along their normals by 0.5-8 times the
@@ -55,6 +59,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "shapes.h"
 #include "squeeze/meshing/mesh_pipeline.h"
@@ -288,6 +293,48 @@ squeeze::meshing::SurfaceMesh plate_5mm() {
   return m;
 }
 
+// A closed box lx × ly × lz (12 triangles) turned by `angle` about `axis` and moved by `shift`.
+squeeze::meshing::SurfaceMesh turned_box(double lx, double ly, double lz, double angle, const Eigen::Vector3d& axis,
+                                         const Eigen::Vector3d& shift) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  squeeze::meshing::SurfaceMesh m = plate_5mm();
+  for (int i = 0; i < 8; ++i)
+    m.V.row(i) = (R * Eigen::Vector3d((i & 1) * lx, ((i >> 1) & 1) * ly, ((i >> 2) & 1) * lz) + shift).transpose();
+  return m;
+}
+
+// Plates turned in space at 2000 tetrahedra (meshing version 43), the boundary route: Arg 0 the
+// placement (0: 0.8 × 0.4 × 0.006 m turned 0.7 rad about (1, 2, 3) and moved to (3, -2, 5); 1: 0.5
+// × 0.5 × 0.004 m turned 2 rad about (1, 1, 1)); Arg 1 whether flat cells on the surface are flipped
+// outside (TetrahedralizeOptions::flip_flat_surface_cells) or refined (0, version 42); Arg 2 the
+// exuder's pumps per sliver (5 since version 43, 20 before).
+void BM_TurnedPlate(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh m =
+      state.range(0) == 0 ? turned_box(0.8, 0.4, 0.006, 0.7, {1, 2, 3}, {3, -2, 5})
+                          : turned_box(0.5, 0.5, 0.004, 2.0, {1, 1, 1}, {0, 0, 0});
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 2000;
+  o.tetrahedralize.flip_flat_surface_cells = state.range(1) != 0;
+  o.tetrahedralize.exude_pumps_per_sliver = state.range(2);
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
+  state.counters["volume_ratio"] = r.volume_ratio.value_or(0.0);
+  state.counters["min_dihedral"] = r.quality.min_dihedral;
+  state.counters["boundary_splits"] = r.tet_stats.boundary_splits;
+  state.counters["pump_bounds"] = r.tet_stats.exuder_pump_bounds;
+}
+BENCHMARK(BM_TurnedPlate)
+    ->Args({0, 1, 5})
+    ->Args({0, 0, 5})
+    ->Args({0, 1, 20})
+    ->Args({0, 0, 20})
+    ->Args({1, 1, 5})
+    ->Args({1, 0, 5})
+    ->Args({1, 1, 20})
+    ->Args({1, 0, 20})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
 void plate(benchmark::State& state, bool prisms) {
   const squeeze::meshing::SurfaceMesh m = plate_5mm();
   squeeze::meshing::MeshOptions o;
@@ -500,14 +547,14 @@ void BM_ThinBottle(benchmark::State& state) {
 }
 BENCHMARK(BM_ThinBottle)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 // squeeze mesh's pipeline on the comb (sqs::comb, read from an OFF file as squeeze mesh reads it) at
-// 1000: the exuder of its first attempt stopped at 20 pumps per sliver since version 25 (Arg 1),
-// against no pump bound (Arg 0: it pumps round in a circle to its 30 s time limit).
+// 1000: the exuder of its first attempt stopped at Arg pumps per sliver (5 since version 43, 20 in
+// versions 25-42), against no pump bound (Arg 0: it pumps round in a circle to its 30 s time limit).
 void BM_CombExuder(benchmark::State& state) {
   const fs::path path = fs::temp_directory_path() / ("squeeze_bench_comb_" + std::to_string(getpid()) + ".off");
   squeeze::meshing::save_surface(path, sqs::comb());
   squeeze::meshing::MeshOptions o;
   o.tetrahedralize.target_tets = 1000;
-  o.tetrahedralize.exude_pumps_per_sliver = state.range(0) != 0 ? 20 : 0;
+  o.tetrahedralize.exude_pumps_per_sliver = state.range(0);
   squeeze::meshing::MeshResult r;
   for (auto _ : state) r = squeeze::meshing::mesh_file(path, o);
   fs::remove(path);
@@ -515,7 +562,7 @@ void BM_CombExuder(benchmark::State& state) {
   state.counters["pump_bounds"] = r.tet_stats.exuder_pump_bounds;
   state.counters["volume_ratio"] = r.volume_ratio.value_or(0);
 }
-BENCHMARK(BM_CombExuder)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_CombExuder)->Arg(5)->Arg(20)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 BENCHMARK(BM_TetrahedralizeNotRecovered)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 

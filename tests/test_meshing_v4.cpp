@@ -135,6 +135,26 @@ double tet_volume(const squeeze::meshing::TetMesh& m) {
   return v;
 }
 
+/// Interior faces whose two tetrahedra lie on the same side of them (one of the two inverted over
+/// the other): 0 in a mesh that is a proper tetrahedralization.
+int folded_faces(const squeeze::meshing::TetMesh& m) {
+  std::map<std::array<int, 3>, std::vector<int>> opposite;  // sorted face → the vertices opposite it
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      std::array<int, 3> f{m.T(t, (k + 1) % 4), m.T(t, (k + 2) % 4), m.T(t, (k + 3) % 4)};
+      std::sort(f.begin(), f.end());
+      opposite[f].push_back(m.T(t, k));
+    }
+  int folded = 0;
+  for (const auto& [f, o] : opposite) {
+    if (o.size() != 2) continue;
+    const Vec3 a = m.V.row(f[0]), b = m.V.row(f[1]), c = m.V.row(f[2]);
+    const Vec3 n = (b - a).cross(c - a);
+    folded += n.dot(Vec3(m.V.row(o[0])) - a) * n.dot(Vec3(m.V.row(o[1])) - a) > 0;
+  }
+  return folded;
+}
+
 /// The bounds on a mesh of one closed input: volume ratio within `volume` of 1, deviations
 /// out and in within the given fractions of the diagonal, the dihedral floor of 5°, `components`
 /// pieces.
@@ -239,6 +259,60 @@ TEST(MeshingV4, BoxesAndPlatesTurnedInSpaceComeOutExact) {
     }
 }
 
+// Cells of no volume on a turned plate's faces (meshing version 43). Turned in space, the points
+// of a face (its corners, split points and lattice) are coplanar only up to rounding, so Delaunay
+// makes cells of four of them on the face, inside by parity. Refined, each asked for splits of the
+// surface that made more: the 6 mm plate at 2000 took 16 s in 4 attempts (under 1 s axis-aligned).
+// Flipping the surface's diagonal under such a cell puts it outside, the surface where it was. On
+// three placements at 1000, one attempt each: the flips happen, the plates come out exact and
+// conforming, and refinement searches under half the cells it did without them (4.3 million
+// against 10.5 million when this was written) for fewer boundary splits (462 against 846). (The 4 mm plate also
+// came out 1.00027 of its volume: a nearly flat cell across it, turned the wrong way round by a
+// floating-point orientation test, was inflated inverted by the sliver moves; tetrahedralize now
+// keeps CGAL's orientation, and no face is folded.)
+TEST(MeshingV4, FlatCellsOnATurnedPlatesFacesAreFlippedOutsideNotRefined) {
+  struct Placement {
+    Vec3 size;
+    double angle;
+    Vec3 axis, shift;
+  };
+  const Placement placements[] = {{{0.8, 0.4, 0.006}, 0.7, {1, 2, 3}, {3, -2, 5}},
+                                  {{0.8, 0.4, 0.006}, 1.1, {-2, 1, 0.5}, {-1, 4, 2}},
+                                  {{0.5, 0.5, 0.004}, 2.0, {1, 1, 1}, {0, 0, 0}}};
+  double work_with = 0, work_without = 0;
+  int splits_with = 0, splits_without = 0;
+  for (const Placement& p : placements) {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(p.angle, p.axis.normalized()).toRotationMatrix();
+    SurfaceMesh s = box(Vec3::Zero(), p.size);
+    for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = (R * s.V.row(i).transpose() + p.shift).transpose();
+    squeeze::meshing::TetrahedralizeOptions o;
+    o.target_tets = 1000;
+    o.max_attempts = 1;
+    squeeze::meshing::TetrahedralizeStats with, without;
+    const squeeze::meshing::TetMesh m = squeeze::meshing::tetrahedralize(s, o, &with);
+    o.flip_flat_surface_cells = false;
+    squeeze::meshing::tetrahedralize(s, o, &without);
+    const std::string what = "plate " + std::to_string(p.size(2)) + " thick, turned " + std::to_string(p.angle);
+    EXPECT_GT(with.flat_cells_flipped, 0) << what;
+    EXPECT_EQ(without.flat_cells_flipped, 0) << what;
+    EXPECT_TRUE(with.conforming) << what;
+    EXPECT_NEAR(tet_volume(m) / p.size.prod(), 1.0, 1e-9) << what;
+    for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
+      const Vec3 x = R.transpose() * (m.V.row(i).transpose() - p.shift);  // in the plate's frame
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_GE(x(k), -1e-9) << what << ", vertex " << i;
+        EXPECT_LE(x(k), p.size(k) + 1e-9) << what << ", vertex " << i;
+      }
+    }
+    EXPECT_GE(squeeze::meshing::tet_quality(m).min_dihedral, 5.0) << what;
+    EXPECT_EQ(folded_faces(m), 0) << what;
+    work_with += with.refine_work, work_without += without.refine_work;
+    splits_with += with.boundary_splits, splits_without += without.boundary_splits;
+  }
+  EXPECT_LT(work_with, 0.5 * work_without);
+  EXPECT_LT(splits_with, splits_without);
+}
+
 // TriangleBvh: a segment in a triangle's plane crosses nothing, turned any way. From each corner
 // of a 6 mm box's top face, 3 thicknesses straight down (along its side walls, which hold the
 // segment up to rounding): the first crossing, if any, is the bottom face, at a third of the way.
@@ -258,7 +332,7 @@ TEST(MeshingTriangleBvh, SegmentsInATrianglesPlaneCrossNothing) {
     for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = (R * s.V.row(i).transpose() + shift).transpose();
     const squeeze::meshing::TriangleBvh bvh(s.V, s.F);
     const Vec3 down = -R.col(2);
-    for (const Vec3 corner : {Vec3(0, 0, hi(2)), Vec3(hi(0), 0, hi(2)), Vec3(0, hi(1), hi(2)), Vec3(hi(0), hi(1), hi(2))}) {
+    for (const Vec3& corner : {Vec3(0, 0, hi(2)), Vec3(hi(0), 0, hi(2)), Vec3(0, hi(1), hi(2)), Vec3(hi(0), hi(1), hi(2))}) {
       const Vec3 a = R * corner + shift;
       double t = -1;
       if (bvh.first_crossing(a, a + 3 * hi(2) * down, 1e-4, &t) && std::abs(t - 1.0 / 3.0) > 1e-6) ++wrong;
@@ -632,14 +706,16 @@ TEST(MeshingV4, SceneSurfacesOfPlatesAndWallsComeOutExact) {
 
 namespace {
 
-// The spinal cord at 150 tetrahedra (30 closed segments, the boundary route): Mesh_3's exuder left
+// The spinal cord (30 closed segments, the boundary route): at 150 tetrahedra Mesh_3's exuder left
 // an interior sliver of 2.7 degrees in one flat segment, all four corners on the boundary. The
-// relocation and flips at the end of tetrahedralize() lift it above the 5-degree floor while the
-// volume and the deviations stay those of the input's own boundary.
+// relocation and flips at the end of tetrahedralize() lift such slivers above the 5-degree floor
+// while the volume and the deviations stay those of the input's own boundary. (Since meshing
+// version 43, which flips flat cells on the surface outside instead of refining them, the cord at
+// 150 keeps no sliver to mend; at 300 four vertices are moved.)
 TEST(MeshingV4, ThinSegmentsKeepDihedralsOfFiveDegreesOnTheBoundaryRoute) {
   const SurfaceMesh s = squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/scenes/assets/spinal_cord.off");
   const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
-  const MeshResult r = mesh(s, 150);
+  const MeshResult r = mesh(s, 300);
   EXPECT_EQ(r.method, "boundary") << r.fallback_because;
   EXPECT_TRUE(r.tet_stats.conforming);
   EXPECT_GT(r.tet_stats.relocated + r.tet_stats.flips, 0) << "no sliver was left to mend: the test no longer tests it";
@@ -876,8 +952,11 @@ TEST(MeshingV4, ThinShellRefinementStopsWhereConformityIsLost) {
   squeeze::meshing::TetrahedralizeStats st;
   const squeeze::meshing::TetMesh m = squeeze::meshing::tetrahedralize(s, t, &st);
   EXPECT_GT(m.T.rows(), 0);
-  EXPECT_LT(m.T.rows(), 9000) << st.boundary_splits << " boundary splits, " << st.steiner_points << " Steiner points, conforming " << st.conforming << ", attempts " << st.attempts;
-  EXPECT_LT(st.boundary_splits, 2000);
+  // (Since meshing version 43 the shell's flat quads' cells are flipped outside, not split, so its
+  // conformity is lost in the third round, not the first: 11,330 tetrahedra and 2,664 splits,
+  // where the first round's loss gave 6,847 and 1,069, and refinement on without the stop 18,077.)
+  EXPECT_LT(m.T.rows(), 13000) << st.boundary_splits << " boundary splits, " << st.steiner_points << " Steiner points, conforming " << st.conforming << ", attempts " << st.attempts;
+  EXPECT_LT(st.boundary_splits, 3500);
 
   const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
   expect_within(mesh(s, 150), diag, 0.1, 0.015, 0.01, 1);

@@ -29,11 +29,12 @@ struct TetrahedralizeOptions {
                                   // improve and on which it ran into exude_seconds)
   double exude_seconds = 30.0;    // the exuder's time limit (0: none): a bound for pathological inputs,
                                   // far above what it takes on real meshes (reaching it is warned)
-  long exude_pumps_per_sliver = 20;  // the exuder stops after this many pumps per tetrahedron under
+  long exude_pumps_per_sliver = 5;  // the exuder stops after this many pumps per tetrahedron under
                                   // sliver_bound (1,000 at least): a deterministic bound where it
                                   // would pump round in a circle to exude_seconds (thin walls whose
                                   // flat tetrahedra it cannot lift); real meshes take about one
-                                  // per sliver. 0: no bound
+                                  // per sliver. 0: no bound. (20 in meshing versions 25-42: a 4 mm
+                                  // plate turned in space spent 6.4 s of 8.5 in such pumps at 2000)
   double min_dihedral = 5.0;      // degrees: the floor the result is checked against (stats)
   double peel_max_height = INFINITY;  // units: boundary slivers are peeled off only where that moves the
                                   // boundary by at most this (peel_boundary_slivers); thicker ones
@@ -57,6 +58,13 @@ struct TetrahedralizeOptions {
                                   // cell that had it as a facet, and asks the triangulation again
                                   // only where that cell is gone (false: asks each time; the same
                                   // mesh, slower: bench_mesh's A/B; meshing version 40)
+  bool flip_flat_surface_cells = true;  // an inside cell of no volume on the surface (four points of
+                                  // one flat patch, two of its faces surface triangles) has the
+                                  // surface's diagonal there flipped to its other one, which puts
+                                  // the cell outside (false: refined like any flat cell, which asks
+                                  // for surface splits that make more of them: a plate turned in
+                                  // space, coplanar only up to rounding; bench_mesh's A/B; meshing
+                                  // version 43)
   double max_refine_work = 0;     // cells of the conflict zones refinement may search in all attempts
                                   // (its work, a deterministic measure of its time: about 4 million
                                   // per second here); beyond it refinement stops and no further
@@ -91,6 +99,8 @@ struct TetrahedralizeStats {
   int steiner_points = 0;        // interior points inserted in the mesh kept
   int peeled = 0;                // boundary tetrahedra under min_dihedral removed (peel_max_height)
   int relocated = 0;             // vertex moves of relocate_sliver_vertices at the end (tet_cleanup.h)
+  int flat_cells_flipped = 0;    // surface diagonals flipped to put flat cells outside, all attempts
+                                 // (TetrahedralizeOptions::flip_flat_surface_cells)
   int flips = 0;                 // 2-3 and 3-2 flips of interior slivers under min_dihedral at the
                                  // end (tet_cleanup.h: flip_slivers; boundary and volume unchanged)
   bool conforming = true;        // every boundary triangle (after splits) is a face of the mesh
