@@ -92,7 +92,11 @@ double sec(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::t
   return std::chrono::duration<double>(b - a).count();
 }
 
-// The cells of the complex as a tet mesh (vertices in order of first use), positively oriented.
+// The cells of the complex as a tet mesh (vertices in order of first use), positively oriented:
+// in CGAL's vertex order, positive by its exact predicate. (Not by the sign of a floating-point
+// volume, which can turn a nearly flat cell the wrong way round: the sliver moves then inflate it
+// inverted, and its boundary faces face inward; meshing version 43. Callers apply
+// orient_positively after their sliver moves, where no vertex moves any more.)
 TetMesh to_tet_mesh(const C3t3& c3t3) {
   const Tr& tr = c3t3.triangulation();
   TetMesh mesh;
@@ -116,7 +120,6 @@ TetMesh to_tet_mesh(const C3t3& c3t3) {
   for (size_t i = 0; i < pts.size(); ++i) mesh.V.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
   mesh.T.resize(static_cast<Eigen::Index>(tets.size()), 4);
   for (size_t i = 0; i < tets.size(); ++i) mesh.T.row(static_cast<Eigen::Index>(i)) = tets[i].transpose();
-  orient_positively(mesh);
   return mesh;
 }
 
@@ -350,6 +353,7 @@ TetMesh tetrahedralize_shells(const std::vector<ConvexShell>& shells, const Shel
     // Interior slivers the exuder left (the boundary's are peeled above).
     const int relocated = opt.perturb ? 0 : relocate_sliver_vertices(mesh, opt.min_dihedral);
     const int flips = opt.perturb ? 0 : flip_slivers(mesh, opt.min_dihedral);
+    orient_positively(mesh);  // (a cell still nearly flat: its floating-point volume positive too)
     st.attempts = attempt + 1;
     const double n = static_cast<double>(mesh.T.rows());
     double needed = 0.0;
@@ -776,6 +780,7 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
     remove_unused_vertices(best);
     st.relocated = relocate_sliver_vertices(best, opt.min_dihedral);
     st.flips = flip_slivers(best, opt.min_dihedral);
+    orient_positively(best);  // (a cell still nearly flat: its floating-point volume positive too)
     best.label = Eigen::VectorXi::Ones(best.T.rows());
   }
   if (st.time_limit_reached)

@@ -1229,7 +1229,8 @@ class Mesher {
     // predicate. (Not by the sign of a floating-point volume, orient_positively: that turned a
     // nearly flat cell the wrong way round by rounding, and relocate_sliver_vertices, which keeps
     // every volume positive, then moved a vertex to inflate it, inverted over its neighbours: a
-    // 4 mm plate turned in space came out 1.00027 of its volume; meshing version 43.)
+    // 4 mm plate turned in space came out 1.00027 of its volume; meshing version 43. It is applied
+    // at the very end, after the sliver moves.)
     return m;
   }
 };
@@ -1343,6 +1344,10 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
   const int late = peel_boundary_slivers(best.mesh, opt.min_dihedral);
   if (late > 0) remove_unused_vertices(best.mesh);
   st.peeled += late;
+  // A cell still nearly flat has its floating-point volume made positive as well, now that no
+  // vertex moves any more (extract: the moves before must see CGAL's orientation). Consumers such
+  // as the FEM's rest state test that sign.
+  orient_positively(best.mesh);
   if (stats) *stats = st;
   if (progress) progress->finish();
   return std::move(best.mesh);
