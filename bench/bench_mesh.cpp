@@ -280,28 +280,26 @@ void BM_UCurtainDecomposition(benchmark::State& state) {
 }
 BENCHMARK(BM_UCurtainDecomposition)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
-// A closed plate 1 m square and 5 mm thick (12 triangles) at a target of 150, meshing version 15:
-// one layer of prisms across its thickness (MeshOptions::thin_parts_as_prisms), against the same
-// pipeline with it off (version 14's way: its boundary tetrahedralized, Delaunay refinement between
-// sides 5 mm apart).
-squeeze::meshing::SurfaceMesh plate_5mm() {
+// The closed box [0, lx] × [0, ly] × [0, lz], turned by `angle` (rad) about `axis` and then moved by
+// `shift`: 8 vertices, 12 outward triangles.
+squeeze::meshing::SurfaceMesh turned_box(double lx, double ly, double lz, double angle = 0.0,
+                                         const Eigen::Vector3d& axis = Eigen::Vector3d::UnitZ(),
+                                         const Eigen::Vector3d& shift = Eigen::Vector3d::Zero()) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
   squeeze::meshing::SurfaceMesh m;
   m.V.resize(8, 3);
-  for (int i = 0; i < 8; ++i) m.V.row(i) << (i & 1), ((i >> 1) & 1), 0.005 * ((i >> 2) & 1);
+  for (int i = 0; i < 8; ++i)
+    m.V.row(i) = (R * Eigen::Vector3d((i & 1) * lx, ((i >> 1) & 1) * ly, ((i >> 2) & 1) * lz) + shift).transpose();
   m.F.resize(12, 3);
   m.F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
   return m;
 }
 
-// A closed box lx × ly × lz (12 triangles) turned by `angle` about `axis` and moved by `shift`.
-squeeze::meshing::SurfaceMesh turned_box(double lx, double ly, double lz, double angle, const Eigen::Vector3d& axis,
-                                         const Eigen::Vector3d& shift) {
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
-  squeeze::meshing::SurfaceMesh m = plate_5mm();
-  for (int i = 0; i < 8; ++i)
-    m.V.row(i) = (R * Eigen::Vector3d((i & 1) * lx, ((i >> 1) & 1) * ly, ((i >> 2) & 1) * lz) + shift).transpose();
-  return m;
-}
+// A closed plate 1 m square and 5 mm thick (12 triangles) at a target of 150, meshing version 15:
+// one layer of prisms across its thickness (MeshOptions::thin_parts_as_prisms), against the same
+// pipeline with it off (version 14's way: its boundary tetrahedralized, Delaunay refinement between
+// sides 5 mm apart).
+squeeze::meshing::SurfaceMesh plate_5mm() { return turned_box(1.0, 1.0, 0.005); }
 
 // Plates turned in space at 2000 tetrahedra (meshing version 43), the boundary route: Arg 0 the
 // placement (0: 0.8 × 0.4 × 0.006 m turned 0.7 rad about (1, 2, 3) and moved to (3, -2, 5); 1: 0.5

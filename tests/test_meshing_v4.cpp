@@ -135,23 +135,29 @@ double tet_volume(const squeeze::meshing::TetMesh& m) {
   return v;
 }
 
+/// `s` with every vertex turned by R and then moved by `shift`.
+SurfaceMesh turned(SurfaceMesh s, const Eigen::Matrix3d& R, const Vec3& shift) {
+  for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = (R * s.V.row(i).transpose() + shift).transpose();
+  return s;
+}
+
 /// Interior faces whose two tetrahedra lie on the same side of them (one of the two inverted over
 /// the other): 0 in a mesh that is a proper tetrahedralization.
 int folded_faces(const squeeze::meshing::TetMesh& m) {
-  std::map<std::array<int, 3>, std::vector<int>> opposite;  // sorted face → the vertices opposite it
+  using squeeze::meshing::kTetFace;
+  const squeeze::meshing::TetFaces faces = squeeze::meshing::tet_faces(m.T);
+  int folded = 0;
   for (Eigen::Index t = 0; t < m.T.rows(); ++t)
     for (int k = 0; k < 4; ++k) {
-      std::array<int, 3> f{m.T(t, (k + 1) % 4), m.T(t, (k + 2) % 4), m.T(t, (k + 3) % 4)};
-      std::sort(f.begin(), f.end());
-      opposite[f].push_back(m.T(t, k));
+      const int n = faces.neighbor(t, k);
+      if (n <= t) continue;  // each interior face once
+      int j = 0;             // n's vertex opposite the shared face
+      while (faces.neighbor(n, j) != t) ++j;
+      const Vec3 a = m.V.row(m.T(t, kTetFace[k][0])), b = m.V.row(m.T(t, kTetFace[k][1])),
+                 c = m.V.row(m.T(t, kTetFace[k][2]));
+      const Vec3 normal = (b - a).cross(c - a);
+      folded += normal.dot(Vec3(m.V.row(m.T(t, k))) - a) * normal.dot(Vec3(m.V.row(m.T(n, j))) - a) > 0;
     }
-  int folded = 0;
-  for (const auto& [f, o] : opposite) {
-    if (o.size() != 2) continue;
-    const Vec3 a = m.V.row(f[0]), b = m.V.row(f[1]), c = m.V.row(f[2]);
-    const Vec3 n = (b - a).cross(c - a);
-    folded += n.dot(Vec3(m.V.row(o[0])) - a) * n.dot(Vec3(m.V.row(o[1])) - a) > 0;
-  }
   return folded;
 }
 
@@ -236,8 +242,7 @@ TEST(MeshingV4, BoxesAndPlatesTurnedInSpaceComeOutExact) {
   for (const BoxCase& c : cases)
     for (int target : {150, 300, 1000}) {
       const std::string what = std::string(c.name) + ", turned, at target " + std::to_string(target);
-      SurfaceMesh s = box(c.lo, c.hi, c.n);
-      for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = (R * s.V.row(i).transpose() + shift).transpose();
+      const SurfaceMesh s = turned(box(c.lo, c.hi, c.n), R, shift);
       const MeshResult r = mesh(s, target);
       const double diag = (c.hi - c.lo).norm();
       ASSERT_GT(r.tets.T.rows(), 0) << what;
@@ -283,8 +288,7 @@ TEST(MeshingV4, FlatCellsOnATurnedPlatesFacesAreFlippedOutsideNotRefined) {
   int splits_with = 0, splits_without = 0;
   for (const Placement& p : placements) {
     const Eigen::Matrix3d R = Eigen::AngleAxisd(p.angle, p.axis.normalized()).toRotationMatrix();
-    SurfaceMesh s = box(Vec3::Zero(), p.size);
-    for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = (R * s.V.row(i).transpose() + p.shift).transpose();
+    const SurfaceMesh s = turned(box(Vec3::Zero(), p.size), R, p.shift);
     squeeze::meshing::TetrahedralizeOptions o;
     o.target_tets = 1000;
     o.max_attempts = 1;
@@ -328,8 +332,7 @@ TEST(MeshingTriangleBvh, SegmentsInATrianglesPlaneCrossNothing) {
     const Eigen::Matrix3d R = Eigen::AngleAxisd(angle(rng), Vec3(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
     const Vec3 shift(g(rng), g(rng), g(rng));
     const Vec3 hi(0.8, 0.4, 0.006);
-    SurfaceMesh s = box(Vec3::Zero(), hi);
-    for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = (R * s.V.row(i).transpose() + shift).transpose();
+    const SurfaceMesh s = turned(box(Vec3::Zero(), hi), R, shift);
     const squeeze::meshing::TriangleBvh bvh(s.V, s.F);
     const Vec3 down = -R.col(2);
     for (const Vec3& corner : {Vec3(0, 0, hi(2)), Vec3(hi(0), 0, hi(2)), Vec3(0, hi(1), hi(2)), Vec3(hi(0), hi(1), hi(2))}) {

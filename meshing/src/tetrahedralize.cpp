@@ -297,11 +297,10 @@ class Mesher {
     std::vector<uint64_t> edges;
     for (auto c = tr_.finite_cells_begin(); c != tr_.finite_cells_end(); ++c) {
       if (c->subdomain_index() == 0) continue;
-      int ids[4];
       bool all_surface = true;
       for (int k = 0; k < 4 && all_surface; ++k) {
-        ids[k] = id(c->vertex(k));
-        all_surface = ids[k] >= 0 && on_surface_[static_cast<size_t>(ids[k])];
+        const int v = id(c->vertex(k));
+        all_surface = v >= 0 && on_surface_[static_cast<size_t>(v)];
       }
       if (!all_surface) continue;
       int faces[2], n = 0;
