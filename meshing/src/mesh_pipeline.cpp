@@ -1372,6 +1372,12 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // such a first attempt held, and the skinny retry after it took 45 s for 9 % of the
           // diagonal in, where the slab is within the bounds in 1.6 s; meshing version 43).
           const bool first_holds = holds(p.tets, p.tet_stats);  // (p.tets stays the first attempt's until a retry)
+          if (spdlog::should_log(spdlog::level::debug)) {
+            const TetQuality q = tet_quality(p.tets);
+            spdlog::debug("part {}: first attempt: {} tetrahedra, conforming {}, smallest dihedral angle {:.2f}°, {} "
+                          "component(s): {}", i, p.tets.T.rows(), p.tet_stats.conforming, q.min_dihedral, q.components,
+                          first_holds ? "holds" : "does not hold");
+          }
           if (stopped_at_ratio && (!first_holds || p.tet_stats.work_exceeded) && !abandoned &&
               mesh_thin_part(p, bounds, 3.0, nullptr)) {
             spdlog::debug("part {}: its boundary did not hold{}; meshed as the slab of its mid-surface", i,

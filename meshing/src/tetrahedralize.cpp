@@ -193,7 +193,13 @@ class Mesher {
     std::nth_element(len.begin(), len.begin() + static_cast<long>(len.size() / 2), len.end());
     min_split_ = std::min(L_, len.empty() ? L_ : len[len.size() / 2]) / 3.0;
     const bool split_bound = !len.empty() && L_ < len[len.size() / 2];  // RunResult::length_bound
-    const int max_vertices = std::max(64, opt_.max_tets / 3);
+    // The safety net (max_tets) in points, but never below twice the points the recovered
+    // boundary has: a small part of a large model gets max_tets by its share of the volume (1,000
+    // at least, so 333 points), and a boundary of more points than that had no refinement at all
+    // (trimesh's counter.unitsmm.STL: five screws, each 1,262 boundary faces and 1,313 points
+    // after recovery, kept cells of 0.23° for the exuder, which left 3.2-4.9°; meshing version 44).
+    max_vertices_ = std::max({64, opt_.max_tets / 3, 2 * static_cast<int>(P_.size())});
+    const int max_vertices = max_vertices_;
     // Refinement leans on the surface faces being faces of the triangulation; where they are not
     // (a failed recovery), it runs for a few rounds only, within a work bound
     // (TetrahedralizeOptions::unrecovered_refine_work). Where a refinement round loses them (its
@@ -372,6 +378,7 @@ class Mesher {
   long conflict_cells_ = 0;  // cells of the conflict zones refinement searched (its work)
   size_t start_points_ = 0;        // P_'s points before run() (same_start)
   double min_split_ = 0;           // quality does not split surface edges shorter than this
+  int max_vertices_ = 0;           // refinement stops beyond this many points (run())
 
   int count_inside() const {
     int n = 0;
@@ -1084,7 +1091,7 @@ class Mesher {
     for (const Bad& b : bad) {
       // (Within the round too: one round of a long rod's refinement searched 5.6 million cells
       // against a budget of 2 million, 1.8 s.)
-      if (static_cast<int>(P_.size()) > opt_.max_tets / 3 || over_run_bound() || over_budget()) break;
+      if (static_cast<int>(P_.size()) > max_vertices_ || over_run_bound() || over_budget()) break;
       Ch c;
       if (!tr_.is_cell(vh_[b.v[0]], vh_[b.v[1]], vh_[b.v[2]], vh_[b.v[3]], c)) { ++why_gone; continue; }
       const double R = (P_[b.v[0]] - b.x).norm();

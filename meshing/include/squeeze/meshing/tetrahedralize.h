@@ -41,6 +41,8 @@ struct TetrahedralizeOptions {
                                   // are left to the sliver moves and flips (squeeze mesh: the
                                   // inner deviation bound)
   int max_tets = 100000;          // a safety net: refinement stops when the mesh reaches this
+                                  // (in points: a third of it, but at least twice the points of the
+                                  // recovered boundary, so that a small part's own boundary is refined)
   double long_edge = 3.0;         // boundary edges longer than this × the boundary's median edge (and
                                   // than 1/20 of its bounding-box diagonal) are split at their
                                   // midpoints first (split_long_edges: the side of a cylinder of few
