@@ -199,7 +199,6 @@ class Mesher {
     // (trimesh's counter.unitsmm.STL: five screws, each 1,262 boundary faces and 1,313 points
     // after recovery, kept cells of 0.23° for the exuder, which left 3.2-4.9°; meshing version 44).
     max_vertices_ = std::max({64, opt_.max_tets / 3, 2 * static_cast<int>(P_.size())});
-    const int max_vertices = max_vertices_;
     // Refinement leans on the surface faces being faces of the triangulation; where they are not
     // (a failed recovery), it runs for a few rounds only, within a work bound
     // (TetrahedralizeOptions::unrecovered_refine_work). Where a refinement round loses them (its
@@ -209,7 +208,7 @@ class Mesher {
     // tetrahedra, still not conforming).
     for (int round = 0; round < (r.conforming ? 200 : 8); ++round) {
       if (progress) progress->update(round, "refinement round " + std::to_string(round + 1));
-      if (static_cast<int>(P_.size()) > max_vertices) break;
+      if (static_cast<int>(P_.size()) > max_vertices_) break;
       if (!refine_round()) break;
       if (over_budget()) {
         r.work_exceeded = true;
