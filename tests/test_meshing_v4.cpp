@@ -346,6 +346,27 @@ TEST(MeshingV4, SmallPartsBoundaryIsRefinedWhateverItsShareOfTheNet) {
   }
 }
 
+// Conformity recovery's cap (four points per point of the recovered boundary) is on recovery's
+// own splits: the points refinement adds do not count against it (meshing version 45). The plate
+// with 3 mm ribs (sqs::ribbed_plate) at 150 recovers its 332 points, then refinement splits its
+// boundary round after round; before, the tenth round's recovery found 1,533 points over the cap
+// of 1,528 and gave up, every attempt lost its boundary, and squeeze mesh went on to a remeshed
+// surface (12 s, 6,228 tetrahedra). Now the first attempt keeps it: exact, at 5 degrees or more.
+TEST(MeshingV4, RefinementPointsDoNotCountAgainstTheRecoveryCap) {
+  const SurfaceMesh s = sqs::ribbed_plate();
+  const double volume = sqt::enclosed_volume(s);
+  ASSERT_GT(volume, 0);
+  squeeze::meshing::TetrahedralizeOptions o;
+  o.target_tets = 150;
+  o.max_attempts = 1;
+  squeeze::meshing::TetrahedralizeStats st;
+  const squeeze::meshing::TetMesh m = squeeze::meshing::tetrahedralize(s, o, &st);
+  EXPECT_TRUE(st.conforming);
+  EXPECT_GT(st.boundary_splits, 1000);  // (refinement's splits: well over the cap's margin)
+  EXPECT_NEAR(tet_volume(m) / volume, 1.0, 1e-9);
+  EXPECT_GE(squeeze::meshing::tet_quality(m).min_dihedral, 5.0);
+}
+
 // TriangleBvh: a segment in a triangle's plane crosses nothing, turned any way. From each corner
 // of a 6 mm box's top face, 3 thicknesses straight down (along its side walls, which hold the
 // segment up to rounding): the first crossing, if any, is the bottom face, at a third of the way.
