@@ -40,6 +40,8 @@
 //  BM_TurnedPlate/<placement>/<flip>/<pumps>  two thin plates turned in space at 2000: flat cells
 //                             on the surface flipped outside (1, version 43) or refined (0), the
 //                             exuder's pumps per sliver 5 (version 43) or 20
+//  BM_RibbedPlate/<own>         the tests' plate with 3 mm ribs at 150: conformity recovery's cap
+//                             raised by refinement's points (1, version 45) or not (0)
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
 //                             of points the winding-number route's Mesh_3 oracle asks about: the
 //                             input's vertices moved along their normals by 0.5-8 times the
@@ -347,6 +349,22 @@ void BM_ThinPlatePipeline(benchmark::State& state) { plate(state, true); }
 void BM_ThinPlateWithoutPrisms(benchmark::State& state) { plate(state, false); }
 BENCHMARK(BM_ThinPlatePipeline)->Arg(150)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_ThinPlateWithoutPrisms)->Arg(150)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// The plate with 3 mm ribs of the tests (sqs::ribbed_plate) at 150 through the whole pipeline:
+// conformity recovery's cap raised by refinement's points (1, version 45) or counting every point
+// (0, before: the first attempts lose the boundary and retry 0 remeshes it).
+void BM_RibbedPlate(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh m = sqs::ribbed_plate();
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 150;
+  o.tetrahedralize.recovery_cap_on_own_splits = state.range(0) != 0;
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
+  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  state.counters["volume_ratio"] = r.volume_ratio.value_or(0.0);
+  state.counters["min_dihedral"] = r.quality.min_dihedral;
+  state.counters["conforming"] = r.tet_stats.conforming ? 1 : 0;
+}
+BENCHMARK(BM_RibbedPlate)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 // An open scan whose holes are wider than the bound (the bunny of tests/data, four holes of 2 % of
 // its diagonal in radius cut around seeded vertices: sqs::with_holes, as tests/test_meshing_v4.cpp

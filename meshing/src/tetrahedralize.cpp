@@ -215,7 +215,7 @@ class Mesher {
       // (they did until meshing version 45: a plate with 3 mm ribs at 150 lost its conformity in
       // the tenth round, at the cap the recovery of its first 332 points had set, and went on to
       // a remeshed boundary, 12 s in all; 1.2 s since).
-      conformity_cap_ += static_cast<int>(P_.size()) - points_before;
+      if (opt_.recovery_cap_on_own_splits) conformity_cap_ += static_cast<int>(P_.size()) - points_before;
       if (over_budget()) {
         r.work_exceeded = true;
         spdlog::debug("refinement stopped after round {}: {} conflict-zone cells searched (bound {:.4g})", round,

@@ -67,6 +67,11 @@ struct TetrahedralizeOptions {
                                   // for surface splits that make more of them: a plate turned in
                                   // space, coplanar only up to rounding; bench_mesh's A/B; meshing
                                   // version 43)
+  bool recovery_cap_on_own_splits = true;  // conformity recovery's cap (four points per point of
+                                  // the recovered boundary) is raised by the points each refinement
+                                  // round adds (false: it counts every point, as before meshing
+                                  // version 45: a plate with 3 mm ribs lost its boundary at the cap
+                                  // and was remeshed; bench_mesh's A/B)
   double max_refine_work = 0;     // cells of the conflict zones refinement may search in all attempts
                                   // (its work, a deterministic measure of its time: about 4 million
                                   // per second here); beyond it refinement stops and no further
