@@ -398,6 +398,76 @@ TEST(MeshingTriangleBvh, SegmentsInATrianglesPlaneCrossNothing) {
   EXPECT_EQ(crossed_middle, turns);
 }
 
+// ... and where the file keeps few digits: a wall written with 9 significant digits stands off
+// its plane by about 1e-9, over the determinant bound above for a long, thin wall triangle. From
+// the middle of each top edge of a 6 mm plate (its vertices rounded to 9 digits), 3 thicknesses
+// along the top face's inward normal: no crossing but the bottom face, at a third of the way.
+// Before meshing version 46 the wall was met at a random parameter (a star-shaped plate's slab
+// put its rim 0.14 mm from one side instead of half way).
+TEST(MeshingTriangleBvh, SegmentsAlongAWallOfFewDigitsCrossNothing) {
+  std::mt19937 rng(46);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> angle(0.1, 3.0);
+  auto nine_digits = [](double x) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.9g", x);
+    return std::stod(text);
+  };
+  int wrong = 0, crossed = 0;
+  const int turns = 200;
+  for (int k = 0; k < turns; ++k) {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(angle(rng), Vec3(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
+    const Vec3 hi(0.8, 0.4, 0.006);
+    const Vec3 shift(g(rng), g(rng), g(rng));
+    SurfaceMesh s = turned(box(Vec3::Zero(), hi), R, shift);
+    s.V = s.V.unaryExpr(nine_digits);
+    const squeeze::meshing::TriangleBvh bvh(s.V, s.F);
+    // The top face's corners, as the file has them.
+    auto vertex = [&](const Vec3& local) { return Vec3((R * local + shift).unaryExpr(nine_digits)); };
+    const Vec3 c00 = vertex(Vec3(0, 0, hi(2))), c10 = vertex(Vec3(hi(0), 0, hi(2))), c01 = vertex(Vec3(0, hi(1), hi(2))),
+               c11 = vertex(Vec3(hi(0), hi(1), hi(2)));
+    const Vec3 down = -(c10 - c00).cross(c01 - c00).normalized();
+    for (const auto& [p, q] : {std::pair{c00, c10}, std::pair{c10, c11}, std::pair{c11, c01}, std::pair{c01, c00}}) {
+      const Vec3 a = 0.5 * (p + q);
+      double t = -1;
+      if (bvh.first_crossing(a, a + 3 * hi(2) * down, 1e-4, &t)) {
+        ++crossed;
+        if (std::abs(t - 1.0 / 3.0) > 1e-6) ++wrong;
+      }
+    }
+  }
+  EXPECT_EQ(wrong, 0) << "of " << 4 * turns << " segments along side walls written with 9 digits";
+  EXPECT_GT(crossed, 0);
+}
+
+// A five-pointed star 0.4 m across and 2 mm thick, turned in space and written with 9 digits (a
+// plate, so exact: the 1 % of volume and 0.2 % of the diagonal). At 150 and 300 it is one
+// layer of prisms; before meshing version 46 the rays that set its rim's thickness met the side
+// walls (TriangleBvh, few digits), and the slab stood 0.86 mm out of one side and 1.36 mm in
+// from the other: 0.26 % of the diagonal in, 1.2 % of the volume lost.
+TEST(MeshingV4, StarPlateOfFewDigitsTurnedIsExact) {
+  std::vector<Eigen::Vector2d> P;
+  for (int k = 0; k < 10; ++k) {
+    const double r = k % 2 == 0 ? 0.2 : 0.08, a = 2 * M_PI * k / 10;
+    P.emplace_back(r * std::cos(a), r * std::sin(a));
+  }
+  SurfaceMesh s = turned(sqs::extruded(P, 0.002), Eigen::AngleAxisd(0.8, Vec3(0.3, 1, 0.2).normalized()).toRotationMatrix(),
+                         Vec3::Zero());
+  s.V = s.V.unaryExpr([](double x) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.9g", x);
+    return std::stod(text);
+  });
+  const double diag = bounding_box_diagonal(s.V);
+  for (int target : {150, 300}) {
+    SCOPED_TRACE("target " + std::to_string(target));
+    const MeshResult r = mesh(s, target);
+    EXPECT_EQ(r.thin_parts, 1);
+    expect_within(r, diag, 0.01, 0.002, 0.002, 1);
+    EXPECT_GE(r.quality.min_dihedral, 5.0);
+  }
+}
+
 // ... by the boundary route (no fallback to the convex shells), with dihedral angles of at least 5
 // degrees (the curtain at 300 once got a flat interior tetrahedron from Steiner points on its
 // mid-plane).

@@ -30,8 +30,9 @@ class TriangleBvh {
 
   /// Of the points where the segment a→b crosses a triangle (Möller–Trumbore; parameter t in
   /// [0, 1]), the parameter nearest to `hint`. Returns false when the segment crosses none. A
-  /// segment in a triangle's plane (up to rounding: the determinant under 1e-12 of |d| |e1| |e2|)
-  /// crosses nothing there (meshing version 42).
+  /// segment in a triangle's plane (up to rounding: the determinant under 1e-12 of |d| |e1| |e2|;
+  /// or up to a file's digits: both ends within 1e-5 |d| of the plane) crosses nothing there
+  /// (meshing versions 42 and 46).
   bool crossing_nearest(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double hint, double* t) const;
 
   /// The first crossing of the segment a→b at parameter t >= t_min (see crossing_nearest).
