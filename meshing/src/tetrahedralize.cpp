@@ -359,7 +359,8 @@ class Mesher {
   const double L_;  // interior edge length (INFINITY: quality refinement only)
   const double work_budget_;  // conflict-zone cells refinement may search (0: no bound)
   const FastWindingNumber& wn_;  // of the surface (the fallback classification)
-  int conformity_cap_ = 0;       // make_conforming gives up beyond this many points (raised by the points each refinement round adds)
+  int conformity_cap_ = 0;       // make_conforming gives up beyond this many points (raised by the
+                                 // points each refinement round adds)
   C3t3 c3t3_;
   Tr& tr_;
   std::vector<Vec3> P_;            // every vertex: the surface's, split points, Steiner points

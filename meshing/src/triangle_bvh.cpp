@@ -206,15 +206,18 @@ bool TriangleBvh::crossing(const Vec3& a, const Vec3& b, double hint, bool after
       // alone, and u, v and t are noise. Skipped where |det| is under 1e-12 of its bound
       // |d| |e1| |e2|: a ray along a rotated box's side wall met it there at a random t, and a thin
       // plate's slab lost half its thickness at the rim; meshing version 42.)
-      if (det * det <= 1e-24 * d2 * e1.squaredNorm() * e2.squaredNorm() || std::abs(det) < 1e-300) continue;
+      const double e12 = e1.squaredNorm() * e2.squaredNorm();
+      if (det * det <= 1e-24 * d2 * e12 || std::abs(det) < 1e-300) continue;
       // (Nor one within 1e-5 of its length of the plane at both ends: files keep few digits, and a
       // side wall written with 9 stands off perpendicular by about 1e-9, over the bound above for
       // a long, thin wall triangle; a star-shaped plate 2 mm thick turned in space put rim points
       // of its slab 0.14 mm from one side instead of 1 mm. Meshing version 46.)
-      if (det * det <= 1e-8 * d2 * e1.cross(e2).squaredNorm()) {
+      // (det = -d · (e1 × e2), and |e1 × e2| <= |e1| |e2|: the cross product only where it may pass.)
+      if (det * det <= 1e-8 * d2 * e12) {
         const Vec3 n = e1.cross(e2);
-        const double sa = n.dot(a - p0), sb = sa + n.dot(d), tol2 = 1e-10 * d2 * n.squaredNorm();
-        if (sa * sa <= tol2 && sb * sb <= tol2) continue;
+        const double n2 = n.squaredNorm();
+        const double sa = n.dot(a - p0), sb = sa + n.dot(d), tol2 = 1e-10 * d2 * n2;
+        if (det * det <= 1e-8 * d2 * n2 && sa * sa <= tol2 && sb * sb <= tol2) continue;
       }
       const double inv = 1.0 / det;
       const Vec3 s = a - p0;
