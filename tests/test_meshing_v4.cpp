@@ -141,6 +141,13 @@ SurfaceMesh turned(SurfaceMesh s, const Eigen::Matrix3d& R, const Vec3& shift) {
   return s;
 }
 
+/// x as a file that keeps 9 significant digits has it ("%.9g" and back).
+double nine_digits(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", x);
+  return std::stod(text);
+}
+
 /// Interior faces whose two tetrahedra lie on the same side of them (one of the two inverted over
 /// the other): 0 in a mesh that is a proper tetrahedralization.
 int folded_faces(const squeeze::meshing::TetMesh& m) {
@@ -408,11 +415,6 @@ TEST(MeshingTriangleBvh, SegmentsAlongAWallOfFewDigitsCrossNothing) {
   std::mt19937 rng(46);
   std::normal_distribution<double> g(0.0, 1.0);
   std::uniform_real_distribution<double> angle(0.1, 3.0);
-  auto nine_digits = [](double x) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.9g", x);
-    return std::stod(text);
-  };
   int wrong = 0, crossed = 0;
   const int turns = 200;
   for (int k = 0; k < turns; ++k) {
@@ -420,10 +422,10 @@ TEST(MeshingTriangleBvh, SegmentsAlongAWallOfFewDigitsCrossNothing) {
     const Vec3 hi(0.8, 0.4, 0.006);
     const Vec3 shift(g(rng), g(rng), g(rng));
     SurfaceMesh s = turned(box(Vec3::Zero(), hi), R, shift);
-    s.V = s.V.unaryExpr(nine_digits);
+    s.V = s.V.unaryExpr(&nine_digits);
     const squeeze::meshing::TriangleBvh bvh(s.V, s.F);
     // The top face's corners, as the file has them.
-    auto vertex = [&](const Vec3& local) { return Vec3((R * local + shift).unaryExpr(nine_digits)); };
+    auto vertex = [&](const Vec3& local) { return Vec3((R * local + shift).unaryExpr(&nine_digits)); };
     const Vec3 c00 = vertex(Vec3(0, 0, hi(2))), c10 = vertex(Vec3(hi(0), 0, hi(2))), c01 = vertex(Vec3(0, hi(1), hi(2))),
                c11 = vertex(Vec3(hi(0), hi(1), hi(2)));
     const Vec3 down = -(c10 - c00).cross(c01 - c00).normalized();
@@ -453,11 +455,7 @@ TEST(MeshingV4, StarPlateOfFewDigitsTurnedIsExact) {
   }
   SurfaceMesh s = turned(sqs::extruded(P, 0.002), Eigen::AngleAxisd(0.8, Vec3(0.3, 1, 0.2).normalized()).toRotationMatrix(),
                          Vec3::Zero());
-  s.V = s.V.unaryExpr([](double x) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.9g", x);
-    return std::stod(text);
-  });
+  s.V = s.V.unaryExpr(&nine_digits);
   const double diag = bounding_box_diagonal(s.V);
   for (int target : {150, 300}) {
     SCOPED_TRACE("target " + std::to_string(target));
@@ -2301,15 +2299,10 @@ TEST(MeshingV4, ManyPartModelWithLegsThroughItsBodyGivesOnePiecePerPart) {
 // as its winding-number solid (mesh_pipeline.cpp), a point already in the triangulation is not
 // added twice (tetrahedralize.cpp, add_point), and a few cones here come out one conforming piece of
 // their own shape within the bounds.
-SurfaceMesh cone(int n, bool nine_digits, double height = 0.2) {
+SurfaceMesh cone(int n, bool few_digits, double height = 0.2) {
   std::vector<Vec3> V;
   std::vector<std::array<int, 3>> F;
-  auto digits = [&](double x) {
-    if (!nine_digits) return x;
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.9g", x);
-    return std::stod(buf);
-  };
+  auto digits = [&](double x) { return few_digits ? nine_digits(x) : x; };
   for (int j = 0; j < n; ++j)
     V.emplace_back(digits(0.05 * std::cos(2 * M_PI * j / n)), digits(0.05 * std::sin(2 * M_PI * j / n)), 0);
   V.emplace_back(0, 0, height);  // apex n
