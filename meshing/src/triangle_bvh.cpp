@@ -14,12 +14,10 @@ using Vec3 = Eigen::Vector3d;
 namespace {
 
 double box_distance2(const Vec3& lo, const Vec3& hi, const Vec3& p) {
-  double d = 0;
-  for (int k = 0; k < 3; ++k) {
-    const double e = std::max({lo(k) - p(k), 0.0, p(k) - hi(k)});
-    d += e * e;
-  }
-  return d;
+  const double x = std::max(std::max(lo(0) - p(0), 0.0), p(0) - hi(0));
+  const double y = std::max(std::max(lo(1) - p(1), 0.0), p(1) - hi(1));
+  const double z = std::max(std::max(lo(2) - p(2), 0.0), p(2) - hi(2));
+  return x * x + y * y + z * z;
 }
 
 // Whether the segment a + t (b - a), t in [0, 1], meets the box (slab test).
@@ -51,6 +49,9 @@ TriangleBvh::TriangleBvh(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) :
     centroid[static_cast<size_t>(f)] = (V_.row(F_(f, 0)) + V_.row(F_(f, 1)) + V_.row(F_(f, 2))).transpose() / 3.0;
   nodes_.reserve(static_cast<size_t>(2 * n / 4 + 2));
   if (n > 0) build(0, n, centroid);
+  corner_.resize(static_cast<size_t>(n));
+  for (size_t i = 0; i < corner_.size(); ++i)
+    for (int k = 0; k < 3; ++k) corner_[i][static_cast<size_t>(k)] = V_.row(F_(order_[i], k)).transpose();
 }
 
 int TriangleBvh::build(int begin, int end, std::vector<Vec3>& centroid) {
@@ -102,18 +103,24 @@ double TriangleBvh::nearest(const Vec3& p, int* face, Vec3* closest, double boun
     if (face) *face = -1;
     return INFINITY;
   }
-  int stack[128];
+  // Each node with its box's squared distance from p, computed once (when pushed).
+  struct Entry {
+    int node;
+    double d2;
+  };
+  Entry stack[128];
   int top = 0;
-  stack[top++] = 0;
+  stack[top++] = {0, box_distance2(nodes_[0].lo, nodes_[0].hi, p)};
   while (top > 0) {
-    const Node& node = nodes_[static_cast<size_t>(stack[--top])];
-    if (box_distance2(node.lo, node.hi, p) > best2) continue;
+    const Entry e = stack[--top];
+    if (e.d2 > best2) continue;
+    const Node& node = nodes_[static_cast<size_t>(e.node)];
     if (node.left < 0) {
       for (int i = node.begin; i < node.end; ++i) {
-        const int f = order_[static_cast<size_t>(i)];
-        const Vec3 q = closest_point_on_triangle(p, V_.row(F_(f, 0)).transpose(), V_.row(F_(f, 1)).transpose(),
-                                                 V_.row(F_(f, 2)).transpose());
+        const auto& c = corner_[static_cast<size_t>(i)];
+        const Vec3 q = closest_point_on_triangle(p, c[0], c[1], c[2]);
         const double d2 = (q - p).squaredNorm();
+        const int f = order_[static_cast<size_t>(i)];
         if (d2 < best2 || (d2 == best2 && best_face >= 0 && f < best_face)) {
           best2 = d2;
           best_face = f;
@@ -125,13 +132,14 @@ double TriangleBvh::nearest(const Vec3& p, int* face, Vec3* closest, double boun
     const Node& l = nodes_[static_cast<size_t>(node.left)];
     const Node& r = nodes_[static_cast<size_t>(node.right)];
     const double dl = box_distance2(l.lo, l.hi, p), dr = box_distance2(r.lo, r.hi, p);
-    // Nearer child on top of the stack.
+    // Nearer child on top of the stack (a child already farther than the best is not pushed: it
+    // would be passed over when popped, best2 only shrinking).
     if (dl <= dr) {
-      stack[top++] = node.right;
-      stack[top++] = node.left;
+      if (dr <= best2) stack[top++] = {node.right, dr};
+      if (dl <= best2) stack[top++] = {node.left, dl};
     } else {
-      stack[top++] = node.left;
-      stack[top++] = node.right;
+      if (dl <= best2) stack[top++] = {node.left, dl};
+      if (dr <= best2) stack[top++] = {node.right, dr};
     }
   }
   if (face) *face = best_face;
@@ -144,28 +152,27 @@ bool TriangleBvh::any_within(const Vec3& p, double r) const {
   const double r2 = r * r;
   int stack[128];
   int top = 0;
+  if (box_distance2(nodes_[0].lo, nodes_[0].hi, p) > r2) return false;
   stack[top++] = 0;
   while (top > 0) {
     const Node& node = nodes_[static_cast<size_t>(stack[--top])];
-    if (box_distance2(node.lo, node.hi, p) > r2) continue;
     if (node.left < 0) {
       for (int i = node.begin; i < node.end; ++i) {
-        const int f = order_[static_cast<size_t>(i)];
-        const Vec3 q = closest_point_on_triangle(p, V_.row(F_(f, 0)).transpose(), V_.row(F_(f, 1)).transpose(),
-                                                 V_.row(F_(f, 2)).transpose());
-        if ((q - p).squaredNorm() <= r2) return true;
+        const auto& c = corner_[static_cast<size_t>(i)];
+        if ((closest_point_on_triangle(p, c[0], c[1], c[2]) - p).squaredNorm() <= r2) return true;
       }
       continue;
     }
     const Node& l = nodes_[static_cast<size_t>(node.left)];
     const Node& rt = nodes_[static_cast<size_t>(node.right)];
-    // Nearer child on top of the stack.
-    if (box_distance2(l.lo, l.hi, p) <= box_distance2(rt.lo, rt.hi, p)) {
-      stack[top++] = node.right;
-      stack[top++] = node.left;
+    // Only children within r, the nearer on top of the stack.
+    const double dl = box_distance2(l.lo, l.hi, p), dr = box_distance2(rt.lo, rt.hi, p);
+    if (dl <= dr) {
+      if (dr <= r2) stack[top++] = node.right;
+      if (dl <= r2) stack[top++] = node.left;
     } else {
-      stack[top++] = node.left;
-      stack[top++] = node.right;
+      if (dl <= r2) stack[top++] = node.left;
+      if (dr <= r2) stack[top++] = node.right;
     }
   }
   return false;
@@ -197,8 +204,8 @@ bool TriangleBvh::crossing(const Vec3& a, const Vec3& b, double hint, bool after
       continue;
     }
     for (int i = node.begin; i < node.end; ++i) {
-      const int f = order_[static_cast<size_t>(i)];
-      const Vec3 p0 = V_.row(F_(f, 0)).transpose(), p1 = V_.row(F_(f, 1)).transpose(), p2 = V_.row(F_(f, 2)).transpose();
+      const auto& c = corner_[static_cast<size_t>(i)];
+      const Vec3 &p0 = c[0], &p1 = c[1], &p2 = c[2];
       // Möller–Trumbore.
       const Vec3 e1 = p1 - p0, e2 = p2 - p0, h = d.cross(e2);
       const double det = e1.dot(h);

@@ -2,6 +2,7 @@
 // volume hierarchy for the distance measures of `squeeze mesh` (envelope bounds, deviations).
 #pragma once
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 namespace squeeze::meshing {
@@ -16,8 +17,8 @@ class TriangleBvh {
   ///   nothing)
   TriangleBvh(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F);
 
-  /// Distance from p to the nearest triangle (units), +infinity when there is none or all are
-  /// farther than `bound`.
+  /// Distance from p to the nearest triangle (units), +infinity when there is none or none is
+  /// nearer than `bound` (a triangle at exactly `bound` is not found).
   ///   face     optional; receives the index of that triangle (-1 if none)
   ///   closest  optional; receives the nearest point on it
   double nearest(const Eigen::Vector3d& p, int* face = nullptr, Eigen::Vector3d* closest = nullptr,
@@ -52,6 +53,8 @@ class TriangleBvh {
   Eigen::MatrixX3d V_;
   Eigen::MatrixX3i F_;
   std::vector<int> order_;
+  std::vector<std::array<Eigen::Vector3d, 3>> corner_;  // the corners of order_[i]'s triangle, in
+                                                        // order_'s order (a leaf's are contiguous)
   std::vector<Node> nodes_;
   int build(int begin, int end, std::vector<Eigen::Vector3d>& centroid);
   bool crossing(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double hint, bool after, double* t) const;
