@@ -42,6 +42,11 @@
 //                             exuder's pumps per sliver 5 (version 43) or 20
 //  BM_RibbedPlate/<own>         the tests' plate with 3 mm ribs at 150: conformity recovery's cap
 //                             raised by refinement's points (1, version 45) or not (0)
+//  BM_FewDigitRod/<keep>       a rod 2 m by 1 cm, turned, 100 m from the origin, 7 digits, at 1000:
+//                             a first attempt that holds kept unless the split boundary holds at
+//                             fewer tetrahedra (1, version 47) or replaced by it (0)
+//  BM_TriangleBvh/<query>      TriangleBvh's nearest() (0 unbounded, 1 within 1 % of the diagonal)
+//                             and any_within() (2) on the heart's 40,620 triangles: ns per query
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
 //                             of points the winding-number route's Mesh_3 oracle asks about: the
 //                             input's vertices moved along their normals by 0.5-8 times the
@@ -51,6 +56,7 @@
 #include <benchmark/benchmark.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -69,6 +75,7 @@
 #include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/tet_cleanup.h"
 #include "squeeze/meshing/tetrahedralize.h"
+#include "squeeze/meshing/triangle_bvh.h"
 #include "squeeze/meshing/winding_number.h"
 
 namespace {
@@ -366,6 +373,33 @@ void BM_RibbedPlate(benchmark::State& state) {
 }
 BENCHMARK(BM_RibbedPlate)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
+// A rod 2 m long and 1 cm across, turned 1.2 rad about (0.2, 0.3, 1), moved to (100, -50, 20) and
+// rounded to 7 significant digits (as a file written so has it), at 1000 through the whole
+// pipeline: a first attempt on its own faces that holds, its refinement stopped at its work bound,
+// is kept unless the split boundary holds at fewer tetrahedra (1, version 47:
+// MeshOptions::skinny_split_keeps_first_that_holds), or gives way to any split boundary (0, versions
+// 26-46).
+void BM_FewDigitRod(benchmark::State& state) {
+  squeeze::meshing::SurfaceMesh m = turned_box(2.0, 0.01, 0.01, 1.2, {0.2, 0.3, 1}, {100, -50, 20});
+  m.V = m.V.unaryExpr([](double x) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.7g", x);
+    return std::stod(text);
+  });
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 1000;
+  o.skinny_split_keeps_first_that_holds = state.range(0) != 0;
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
+  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  state.counters["tets"] = static_cast<double>(r.quality.tets);
+  state.counters["boundary_faces"] = static_cast<double>(r.boundary.F.rows());
+  state.counters["conforming"] = r.tet_stats.conforming ? 1 : 0;
+  state.counters["volume_ratio"] = r.volume_ratio.value_or(0.0);
+  state.counters["deviation_out"] = r.deviation_out / diag;
+  state.counters["min_dihedral"] = r.quality.min_dihedral;
+}
+BENCHMARK(BM_FewDigitRod)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
 // An open scan whose holes are wider than the bound (the bunny of tests/data, four holes of 2 % of
 // its diagonal in radius cut around seeded vertices: sqs::with_holes, as tests/test_meshing_v4.cpp
 // cuts them): both orders end at the same slab.
@@ -627,5 +661,51 @@ void BM_WindingNumber(benchmark::State& state) {
 // beta × 100: 125 is the winding-number route's (winding_tetrahedralize.h), 150 the default
 // (FastWindingNumber, the decomposition's); 200 and 400 were theirs until meshing version 19.
 BENCHMARK(BM_WindingNumber)->Arg(125)->Arg(150)->Arg(200)->Arg(400)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+// TriangleBvh on the heart's 40,620 triangles, at the kind of points the envelope's checks and the
+// deviation measures ask about: the input's vertices moved along their normals by 0.1-3 % of the
+// diagonal either way, and points spread over its bounding box. The argument is the query:
+// 0 nearest() without a bound (simplify's gap check), 1 nearest() within 1 % of the diagonal
+// (simplify's bound check), 2 any_within() 1 % (the one-sided Hausdorff distances).
+// Nanoseconds per query, and a checksum of the answers (the same across layouts of the tree).
+void BM_TriangleBvh(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh m = squeeze::meshing::load_surface(data("organs/heart.off"));
+  Eigen::MatrixX3d FN, N;
+  squeeze::meshing::area_weighted_normals(m.V, m.F, FN, N);
+  const Eigen::RowVector3d lo = m.V.colwise().minCoeff(), hi = m.V.colwise().maxCoeff();
+  const double diag = (hi - lo).norm();
+  std::vector<Eigen::Vector3d> q;
+  for (Eigen::Index v = 0; v < m.V.rows(); v += 2) {
+    if (!(N.row(v).norm() > 0)) continue;
+    const Eigen::RowVector3d n = N.row(v).normalized();
+    for (double k : {-0.03, -0.01, -0.001, 0.001, 0.01, 0.03}) q.push_back((m.V.row(v) + k * diag * n).transpose());
+  }
+  std::srand(1);
+  for (int i = 0; i < 20000; ++i) {
+    Eigen::Vector3d u;
+    for (int k = 0; k < 3; ++k) u(k) = lo(k) + (hi(k) - lo(k)) * (std::rand() / (RAND_MAX + 1.0));
+    q.push_back(u);
+  }
+  const squeeze::meshing::TriangleBvh bvh(m.V, m.F);
+  const int kind = static_cast<int>(state.range(0));
+  const double bound = 0.01 * diag;
+  double sum = 0, seconds = 0;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    sum = 0;
+    for (const auto& p : q) {
+      int f = -1;
+      if (kind == 0) sum += bvh.nearest(p, &f), sum += f;
+      else if (kind == 1) sum += std::min(bvh.nearest(p, &f, nullptr, bound), 1.0), sum += f;
+      else sum += bvh.any_within(p, bound);
+    }
+    benchmark::DoNotOptimize(sum);
+    seconds += seconds_since(t0);
+  }
+  state.counters["queries"] = static_cast<double>(q.size());
+  state.counters["ns_per_query"] = 1e9 * seconds / (static_cast<double>(state.iterations()) * static_cast<double>(q.size()));
+  state.counters["checksum"] = sum;
+}
+BENCHMARK(BM_TriangleBvh)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 BENCHMARK_MAIN();

@@ -20,6 +20,7 @@
 #include "squeeze/meshing/chord_volume.h"
 #include "squeeze/meshing/envelope.h"
 #include "squeeze/meshing/mesh_pipeline.h"
+#include "squeeze/meshing/point_triangle_distance.h"
 #include "squeeze/meshing/remesh.h"
 #include "squeeze/meshing/shell_tetrahedralize.h"
 #include "squeeze/meshing/split_long_edges.h"
@@ -141,12 +142,13 @@ SurfaceMesh turned(SurfaceMesh s, const Eigen::Matrix3d& R, const Vec3& shift) {
   return s;
 }
 
-/// x as a file that keeps 9 significant digits has it ("%.9g" and back).
-double nine_digits(double x) {
+/// x as a file that keeps `digits` significant digits has it ("%.*g" and back).
+double significant_digits(double x, int digits) {
   char text[32];
-  std::snprintf(text, sizeof text, "%.9g", x);
+  std::snprintf(text, sizeof text, "%.*g", digits, x);
   return std::stod(text);
 }
+double nine_digits(double x) { return significant_digits(x, 9); }
 
 /// Interior faces whose two tetrahedra lie on the same side of them (one of the two inverted over
 /// the other): 0 in a mesh that is a proper tetrahedralization.
@@ -464,6 +466,76 @@ TEST(MeshingV4, StarPlateOfFewDigitsTurnedIsExact) {
     expect_within(r, diag, 0.01, 0.002, 0.002, 1);
     EXPECT_GE(r.quality.min_dihedral, 5.0);
   }
+}
+
+// TriangleBvh against every triangle, on the real meshes of tests/data: nearest() gives the
+// smallest distance and, of the triangles at it, the lowest index; under a bound, that or
+// nothing; any_within() whether the smallest distance is within r (at most r). At points near the surface on
+// both sides (along each vertex's offset to its neighbour, scaled) and spread over the box.
+TEST(MeshingTriangleBvh, AgreesWithEveryTriangleOnTheDataMeshes) {
+  for (const char* name : {"bunny00.off", "ChineseDragon-10kv.off", "elephant.off", "sphere.off"}) {
+    SCOPED_TRACE(name);
+    const SurfaceMesh m = squeeze::meshing::load_surface(std::string(SQUEEZE_TEST_DATA) + "/" + name);
+    const squeeze::meshing::TriangleBvh bvh(m.V, m.F);
+    const Vec3 lo = m.V.colwise().minCoeff().transpose(), hi = m.V.colwise().maxCoeff().transpose();
+    const double diag = (hi - lo).norm();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<Vec3> points;
+    for (int i = 0; i < 150; ++i) {
+      const Eigen::Index f = static_cast<Eigen::Index>(rng() % static_cast<unsigned>(m.F.rows()));
+      const Vec3 a = m.V.row(m.F(f, 0)).transpose(), b = m.V.row(m.F(f, 1)).transpose(), c = m.V.row(m.F(f, 2)).transpose();
+      const Vec3 n = (b - a).cross(c - a).normalized();
+      points.push_back((a + b + c) / 3.0 + (unit(rng) - 0.5) * 0.04 * diag * n);
+      points.push_back(a);  // on a vertex: ties between the triangles around it
+      points.push_back(lo + Vec3(unit(rng), unit(rng), unit(rng)).cwiseProduct(hi - lo));
+    }
+    for (const Vec3& p : points) {
+      double best = INFINITY;
+      int best_face = -1;
+      for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+        const Vec3 q = squeeze::meshing::closest_point_on_triangle(p, m.V.row(m.F(f, 0)).transpose(),
+                                                                   m.V.row(m.F(f, 1)).transpose(), m.V.row(m.F(f, 2)).transpose());
+        const double d2 = (q - p).squaredNorm();
+        if (d2 < best) best = d2, best_face = static_cast<int>(f);
+      }
+      best = std::sqrt(best);
+      int face = -2;
+      Vec3 closest;
+      ASSERT_EQ(bvh.nearest(p, &face, &closest), best);
+      EXPECT_EQ(face, best_face);
+      EXPECT_NEAR((closest - p).norm(), best, 1e-12 * diag);
+      for (double r : {0.5 * best, 2.0 * best, 0.01 * diag}) {
+        const double bounded = bvh.nearest(p, &face, nullptr, r);
+        if (best < r) {
+          EXPECT_EQ(bounded, best);
+          EXPECT_EQ(face, best_face);
+        } else {
+          EXPECT_EQ(bounded, INFINITY);
+          EXPECT_EQ(face, -1);
+        }
+        EXPECT_EQ(bvh.any_within(p, r), best <= r) << "r " << r << ", nearest " << best;
+      }
+    }
+  }
+}
+
+// A rod 2 m long and 1 cm across, turned, 100 m from the origin, written with 7 digits (meshing
+// version 47): its faces are flat only to about 1e-5 m, a thousandth of its width, so refinement on
+// its own 12 faces stops at its work bound (MeshOptions::skinny_refine_work). That first attempt
+// holds all the same and is kept, the box's own faces. Before, the boundary split into rounder
+// triangles took its place: at 1000, this rod kept a simplified split boundary of 1,552 faces; the
+// same rod of another triangulation (a file written so) took one that was not conforming, and 11 s
+// of retries after it.
+TEST(MeshingV4, FewDigitRodFarFromTheOriginKeepsItsOwnFaces) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(1.2, Vec3(0.2, 0.3, 1).normalized()).toRotationMatrix();
+  SurfaceMesh s = turned(box({-1, -0.005, -0.005}, {1, 0.005, 0.005}), R, Vec3(100, -50, 20));
+  s.V = s.V.unaryExpr([](double x) { return significant_digits(x, 7); });
+  const double diag = bounding_box_diagonal(s.V);
+  const MeshResult r = mesh(s, 1000);
+  EXPECT_EQ(r.boundary.F.rows(), 12);
+  EXPECT_TRUE(r.tet_stats.conforming);
+  expect_within(r, diag, 0.01, 0.002, 0.002, 1);
 }
 
 // ... by the boundary route (no fallback to the convex shells), with dihedral angles of at least 5
