@@ -57,6 +57,7 @@ struct State {
   const TriangleBvh* target = nullptr;     // the soup the bounds are measured against, when not
                                            // the reference (simplify_envelope with a target)
   double out = 0, in = 0;          // bounds (units)
+  double near_reference = 0;       // 2 (out + in): check_point's first search of the reference
   double cos_fold = 0, cos_turn = 0;
   double min_angle = 0;            // radians
   double max_edge = INFINITY;      // no new edge longer (units)
@@ -186,8 +187,11 @@ struct Filter {
       int f;
       Vec3 q;
       if (s->target) {  // within `out` of the target (either side), within the gap of the reference
-        if (!(s->target->nearest(x, nullptr, nullptr, s->out * 1.0001 + 1e-300) <= s->out)) return false;
-        const double d = s->reference->nearest(x, &f, &q);
+        if (!s->target->any_within(x, s->out)) return false;
+        // (The nearest face of the reference looked for within twice the bounds first, where it
+        // usually is, the point being near the target and the reference too: the same face.)
+        double d = s->reference->nearest(x, &f, &q, s->near_reference);
+        if (f < 0) d = s->reference->nearest(x, &f, &q);
         return f < 0 || d <= s->face_gap[static_cast<size_t>(f)];
       }
       const double d = s->reference->nearest(x, &f, &q, s->out * 1.0001 + 1e-300);
@@ -402,6 +406,7 @@ SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surfa
   s.target = target.get();
   s.out = opt.max_outside;
   s.in = opt.max_inside;
+  s.near_reference = 2.0 * (opt.max_outside + opt.max_inside);
   s.cos_fold = std::cos(opt.min_fold_angle * M_PI / 180.0);
   s.cos_turn = std::cos(opt.max_normal_turn * M_PI / 180.0);
   s.min_angle = opt.min_triangle_angle * M_PI / 180.0;
