@@ -56,7 +56,6 @@
 #include <benchmark/benchmark.h>
 
 #include <chrono>
-#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -381,11 +380,7 @@ BENCHMARK(BM_RibbedPlate)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime
 // 26-46).
 void BM_FewDigitRod(benchmark::State& state) {
   squeeze::meshing::SurfaceMesh m = turned_box(2.0, 0.01, 0.01, 1.2, {0.2, 0.3, 1}, {100, -50, 20});
-  m.V = m.V.unaryExpr([](double x) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.7g", x);
-    return std::stod(text);
-  });
+  m.V = m.V.unaryExpr([](double x) { return sqs::significant_digits(x, 7); });
   squeeze::meshing::MeshOptions o;
   o.tetrahedralize.target_tets = 1000;
   o.skinny_split_keeps_first_that_holds = state.range(0) != 0;

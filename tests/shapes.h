@@ -6,12 +6,22 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/triangulate_polygon.h"
 
 namespace sqs {
+
+/// x as a file that keeps `digits` significant digits has it ("%.*g" and back): the rounding of
+/// text formats (OFF, OBJ, ASCII STL) and, at 7, about that of float32 binary STL.
+inline double significant_digits(double x, int digits) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.*g", digits, x);
+  return std::stod(text);
+}
 
 // The faces of a capped tube whose vertices are `rings` + 1 rings of `sides` each (ring j's vertex
 // i at j · sides + i, turning counter-clockwise about the direction from ring j to ring j + 1),

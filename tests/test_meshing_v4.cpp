@@ -142,13 +142,19 @@ SurfaceMesh turned(SurfaceMesh s, const Eigen::Matrix3d& R, const Vec3& shift) {
   return s;
 }
 
-/// x as a file that keeps `digits` significant digits has it ("%.*g" and back).
-double significant_digits(double x, int digits) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.*g", digits, x);
-  return std::stod(text);
-}
-double nine_digits(double x) { return significant_digits(x, 9); }
+/// x as a file that keeps 9 significant digits has it.
+double nine_digits(double x) { return sqs::significant_digits(x, 9); }
+
+/// Random placements of the turned-plate tests: a turn by 0.1-3 rad about an axis of normally
+/// distributed coordinates, then a shift of standard normal coordinates; the same sequence for a seed.
+struct RandomPlacements {
+  explicit RandomPlacements(unsigned seed) : rng(seed) {}
+  Eigen::Matrix3d turn() { return Eigen::AngleAxisd(angle(rng), Vec3(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix(); }
+  Vec3 shift() { return Vec3(g(rng), g(rng), g(rng)); }
+  std::mt19937 rng;
+  std::normal_distribution<double> g{0.0, 1.0};
+  std::uniform_real_distribution<double> angle{0.1, 3.0};
+};
 
 /// Interior faces whose two tetrahedra lie on the same side of them (one of the two inverted over
 /// the other): 0 in a mesh that is a proper tetrahedralization.
@@ -382,14 +388,12 @@ TEST(MeshingV4, RefinementPointsDoNotCountAgainstTheRecoveryCap) {
 // Through the middle of the top face, from above: crossed half way. Before meshing version 42 a
 // rounding-level determinant passed, and a side wall was met at a random parameter.
 TEST(MeshingTriangleBvh, SegmentsInATrianglesPlaneCrossNothing) {
-  std::mt19937 rng(42);
-  std::normal_distribution<double> g(0.0, 1.0);
-  std::uniform_real_distribution<double> angle(0.1, 3.0);
+  RandomPlacements placements(42);
   int wrong = 0, crossed_middle = 0;
   const int turns = 200;
   for (int k = 0; k < turns; ++k) {
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(angle(rng), Vec3(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
-    const Vec3 shift(g(rng), g(rng), g(rng));
+    const Eigen::Matrix3d R = placements.turn();
+    const Vec3 shift = placements.shift();
     const Vec3 hi(0.8, 0.4, 0.006);
     const SurfaceMesh s = turned(box(Vec3::Zero(), hi), R, shift);
     const squeeze::meshing::TriangleBvh bvh(s.V, s.F);
@@ -414,15 +418,13 @@ TEST(MeshingTriangleBvh, SegmentsInATrianglesPlaneCrossNothing) {
 // Before meshing version 46 the wall was met at a random parameter (a star-shaped plate's slab
 // put its rim 0.14 mm from one side instead of half way).
 TEST(MeshingTriangleBvh, SegmentsAlongAWallOfFewDigitsCrossNothing) {
-  std::mt19937 rng(46);
-  std::normal_distribution<double> g(0.0, 1.0);
-  std::uniform_real_distribution<double> angle(0.1, 3.0);
+  RandomPlacements placements(46);
   int wrong = 0, crossed = 0;
   const int turns = 200;
   for (int k = 0; k < turns; ++k) {
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(angle(rng), Vec3(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
+    const Eigen::Matrix3d R = placements.turn();
     const Vec3 hi(0.8, 0.4, 0.006);
-    const Vec3 shift(g(rng), g(rng), g(rng));
+    const Vec3 shift = placements.shift();
     SurfaceMesh s = turned(box(Vec3::Zero(), hi), R, shift);
     s.V = s.V.unaryExpr(&nine_digits);
     const squeeze::meshing::TriangleBvh bvh(s.V, s.F);
@@ -530,7 +532,7 @@ TEST(MeshingTriangleBvh, AgreesWithEveryTriangleOnTheDataMeshes) {
 TEST(MeshingV4, FewDigitRodFarFromTheOriginKeepsItsOwnFaces) {
   const Eigen::Matrix3d R = Eigen::AngleAxisd(1.2, Vec3(0.2, 0.3, 1).normalized()).toRotationMatrix();
   SurfaceMesh s = turned(box({-1, -0.005, -0.005}, {1, 0.005, 0.005}), R, Vec3(100, -50, 20));
-  s.V = s.V.unaryExpr([](double x) { return significant_digits(x, 7); });
+  s.V = s.V.unaryExpr([](double x) { return sqs::significant_digits(x, 7); });
   const double diag = bounding_box_diagonal(s.V);
   const MeshResult r = mesh(s, 1000);
   EXPECT_EQ(r.boundary.F.rows(), 12);

@@ -57,7 +57,6 @@ struct State {
   const TriangleBvh* target = nullptr;     // the soup the bounds are measured against, when not
                                            // the reference (simplify_envelope with a target)
   double out = 0, in = 0;          // bounds (units)
-  double near_reference = 0;       // 2 (out + in): check_point's first search of the reference
   double cos_fold = 0, cos_turn = 0;
   double min_angle = 0;            // radians
   double max_edge = INFINITY;      // no new edge longer (units)
@@ -190,7 +189,7 @@ struct Filter {
         if (!s->target->any_within(x, s->out)) return false;
         // (The nearest face of the reference looked for within twice the bounds first, where it
         // usually is, the point being near the target and the reference too: the same face.)
-        double d = s->reference->nearest(x, &f, &q, s->near_reference);
+        double d = s->reference->nearest(x, &f, &q, 2.0 * (s->out + s->in));
         if (f < 0) d = s->reference->nearest(x, &f, &q);
         return f < 0 || d <= s->face_gap[static_cast<size_t>(f)];
       }
@@ -406,7 +405,6 @@ SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surfa
   s.target = target.get();
   s.out = opt.max_outside;
   s.in = opt.max_inside;
-  s.near_reference = 2.0 * (opt.max_outside + opt.max_inside);
   s.cos_fold = std::cos(opt.min_fold_angle * M_PI / 180.0);
   s.cos_turn = std::cos(opt.max_normal_turn * M_PI / 180.0);
   s.min_angle = opt.min_triangle_angle * M_PI / 180.0;
