@@ -275,6 +275,15 @@ inline squeeze::meshing::SurfaceMesh extruded(const std::vector<Eigen::Vector2d>
   return s;
 }
 
+// A round plate as a CAD tessellation gives it: a regular polygon of `sides` corners on a circle of
+// `radius` about the z axis (the first at +x), extruded from z = 0 to `thickness` (extruded).
+inline squeeze::meshing::SurfaceMesh disc(double radius, double thickness, int sides) {
+  std::vector<Eigen::Vector2d> P;
+  for (int k = 0; k < sides; ++k)
+    P.emplace_back(radius * std::cos(2 * M_PI * k / sides), radius * std::sin(2 * M_PI * k / sides));
+  return extruded(P, thickness);
+}
+
 // A comb 3 cm deep: a spine 72 × 10 mm and 12 teeth 2 mm thick, 50 mm long, 4 mm apart
 // (scripts/gen_unseen_shapes.py --version24's comb.off). Thin walls that branch, closer to each
 // other than its tetrahedra are long.

@@ -548,9 +548,7 @@ TEST(MeshingV4, FewDigitRodFarFromTheOriginKeepsItsOwnFaces) {
 TEST(MeshingV4, RoundPlatesTurnedInSpaceComeOutWithinAPlatesBounds) {
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.9, Vec3(2, -1, 1).normalized()).toRotationMatrix();
   for (int sides : {32, 128}) {
-    std::vector<Eigen::Vector2d> P;
-    for (int k = 0; k < sides; ++k) P.emplace_back(0.2 * std::cos(2 * M_PI * k / sides), 0.2 * std::sin(2 * M_PI * k / sides));
-    const SurfaceMesh s = turned(sqs::extruded(P, 0.005), R, Vec3(1, 2, -3));
+    const SurfaceMesh s = turned(sqs::disc(0.2, 0.005, sides), R, Vec3(1, 2, -3));
     const double diag = bounding_box_diagonal(s.V);
     for (int target : {150, 300}) {
       SCOPED_TRACE(std::to_string(sides) + " sides at " + std::to_string(target));
@@ -565,9 +563,7 @@ TEST(MeshingV4, RoundPlatesTurnedInSpaceComeOutWithinAPlatesBounds) {
 // the diagonal out and in (MeshOptions::more_faces_where_over_target false gives that back).
 TEST(MeshingV4, ThinRoundPlateKeepsItsOutlineWhereItsThicknessSetsTheCount) {
   const Eigen::Matrix3d R = Eigen::AngleAxisd(1.1, Vec3(0.3, 1, 0.5).normalized()).toRotationMatrix();
-  std::vector<Eigen::Vector2d> P;
-  for (int k = 0; k < 48; ++k) P.emplace_back(0.05 * std::cos(2 * M_PI * k / 48), 0.05 * std::sin(2 * M_PI * k / 48));
-  const SurfaceMesh s = turned(sqs::extruded(P, 0.004), R, Vec3(0.8, 0.6, -0.3));
+  const SurfaceMesh s = turned(sqs::disc(0.05, 0.004, 48), R, Vec3(0.8, 0.6, -0.3));
   const double diag = bounding_box_diagonal(s.V);
   const MeshResult r = mesh(s, 150);
   expect_within(r, diag, 0.01, 0.0005, 0.0005, 1);
