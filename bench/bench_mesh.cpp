@@ -45,6 +45,12 @@
 //  BM_FewDigitRod/<keep>       a rod 2 m by 1 cm, turned, 100 m from the origin, 7 digits, at 1000:
 //                             a first attempt that holds kept unless the split boundary holds at
 //                             fewer tetrahedra (1, version 47) or replaced by it (0)
+//  BM_DenseScan/<proxy>        the corpus bunny Loop-subdivided once (301,632 faces, tests/shapes.h)
+//                             at the default target: meshed through its quadric-decimated proxy
+//                             (1, version 49) or as it is (0: dense_faces 0); the proxy's faces,
+//                             tetrahedra and both deviations (fractions of the diagonal) as counters
+//  BM_Decimate                decimate_quadric() alone on that bunny, within 0.045 % of its
+//                             diagonal (the pipeline's default bound): faces left, collapses
 //  BM_TriangleBvh/<query>      TriangleBvh's nearest() (0 unbounded, 1 within 1 % of the diagonal)
 //                             and any_within() (2) on the heart's 40,620 triangles: ns per query
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
@@ -69,6 +75,7 @@
 #include <Eigen/Geometry>
 
 #include "shapes.h"
+#include "squeeze/meshing/decimate.h"
 #include "squeeze/meshing/mesh_pipeline.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/surface_normals.h"
@@ -656,6 +663,34 @@ void BM_WindingNumber(benchmark::State& state) {
 // beta × 100: 125 is the winding-number route's (winding_tetrahedralize.h), 150 the default
 // (FastWindingNumber, the decomposition's); 200 and 400 were theirs until meshing version 19.
 BENCHMARK(BM_WindingNumber)->Arg(125)->Arg(150)->Arg(200)->Arg(400)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+// The corpus bunny Loop-subdivided once: 301,632 faces of a smooth surface, as a fine scan has.
+const squeeze::meshing::SurfaceMesh& dense_bunny() {
+  static const squeeze::meshing::SurfaceMesh m = sqs::loop_subdivided(squeeze::meshing::load_surface(data("bunny00.off")), 1);
+  return m;
+}
+
+void BM_DenseScan(benchmark::State& state) {
+  squeeze::meshing::MeshOptions o;
+  if (state.range(0) == 0) o.dense_faces = 0;
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, dense_bunny(), o);
+  const double diag = squeeze::meshing::bounding_box_diagonal(r.input.V);
+  state.counters["proxy_faces"] = r.proxy_faces;
+  state.counters["deviation_out"] = r.deviation_out / diag;
+  state.counters["deviation_in"] = r.deviation_in / diag;
+}
+BENCHMARK(BM_DenseScan)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+void BM_Decimate(benchmark::State& state) {
+  const squeeze::meshing::SurfaceMesh& m = dense_bunny();
+  squeeze::meshing::DecimateOptions o;
+  o.max_error = 0.1 * 0.45 * 0.01 * squeeze::meshing::bounding_box_diagonal(m.V);  // (MeshOptions' defaults)
+  squeeze::meshing::DecimateStats stats;
+  for (auto _ : state) benchmark::DoNotOptimize(squeeze::meshing::decimate_quadric(m, o, &stats).F.data());
+  state.counters["faces"] = stats.faces;
+  state.counters["collapses"] = stats.collapses;
+}
+BENCHMARK(BM_Decimate)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 // TriangleBvh on the heart's 40,620 triangles, at the kind of points the envelope's checks and the
 // deviation measures ask about: the input's vertices moved along their normals by 0.1-3 % of the

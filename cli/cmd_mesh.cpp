@@ -115,6 +115,12 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                   "this thick, the sheet in the middle, as a multiple of --max-deviation times the bounding-box "
                   "diagonal (the report's sheets.thickness)")
       ->capture_default_str();
+  cmd->add_option("--dense-faces", args->options.dense_faces,
+                  "Inputs of more triangles (a fine scan) are meshed through a proxy decimated by quadric error "
+                  "within a tenth of the inner bound of them, and measured against the input itself (the report's "
+                  "proxy; 0: never)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--tets-per-hull", args->options.tets_per_hull,
                   "The hull budget is at most target-tets / this (0: --max-hulls alone)")
       ->capture_default_str();

@@ -571,6 +571,34 @@ TEST(MeshingV4, ThinRoundPlateKeepsItsOutlineWhereItsThicknessSetsTheCount) {
   EXPECT_FALSE(r.target_exceeded_because.empty());
 }
 
+// An input of more triangles than MeshOptions::dense_faces is meshed through its decimated proxy
+// (version 49), and what the result says of its input is the input's: its faces, and deviations
+// measured against it within the bounds asked (here the corpus bunny, 75,408 faces, with the
+// threshold lowered to 50,000: the scans the default threshold takes are too slow to load here).
+TEST(MeshingV4, DenseInputIsMeshedThroughItsProxyAndMeasuredAgainstItself) {
+  const SurfaceMesh s = squeeze::meshing::load_surface(sqt::data("bunny00.off"));
+  const double diag = bounding_box_diagonal(s.V);
+  MeshOptions o;
+  o.tetrahedralize.target_tets = 300;
+  o.dense_faces = 50000;
+  const MeshResult r = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_GT(r.proxy_faces, 0);
+  EXPECT_LT(r.proxy_faces, s.F.rows());
+  EXPECT_NEAR(r.proxy_error, 0.1 * 0.45 * 0.01 * diag, 1e-12 * diag);
+  EXPECT_EQ(r.input.F.rows(), s.F.rows());
+  EXPECT_EQ(r.info.faces, s.F.rows());
+  EXPECT_EQ(r.input.V, s.V);
+  expect_within(r, diag, 0.02, 0.015, 0.005, 1);  // (the bounds: at 300 the proxy's mesh is
+                                                  // 0.455 % in, against the proxy too; the bunny's
+                                                  // own surface gives 0.449 %)
+  // The report says so.
+  const auto report = squeeze::meshing::mesh_report(r, "bunny00.off");
+  EXPECT_EQ(report["proxy"]["faces"].get<int>(), r.proxy_faces);
+  EXPECT_EQ(report["input"]["faces"].get<int>(), s.F.rows());
+  // Without the proxy, no proxy.
+  EXPECT_TRUE(squeeze::meshing::mesh_report(mesh(sqs::disc(0.05, 0.004, 12), 150), "disc")["proxy"].is_null());
+}
+
 // ... by the boundary route (no fallback to the convex shells), with dihedral angles of at least 5
 // degrees (the curtain at 300 once got a flat interior tetrahedron from Steiner points on its
 // mid-plane).
