@@ -2795,14 +2795,15 @@ MeshResult mesh_through_proxy(const SurfaceMesh& surface, const MeshOptions& opt
     throw;
   }
   arena_wait(analysing_arena, analysing);
-  // The proxy's result as the input's: its parts' volumes scaled by the two surfaces' signed
-  // volumes (the same parts); measured against the input.
+  // The proxy's result as the input's: a closed input's parts' volumes scaled by the two surfaces'
+  // signed volumes (the same parts; an open surface's signed volume depends on the origin, and an
+  // open input's winding-number volume is the proxy's, within its error); measured against the input.
   const auto t1 = std::chrono::steady_clock::now();
   const double proxy_volume = signed_volume(r.input);
   const double proxy_out = r.deviation_out, proxy_in = r.deviation_in;
   r.input = std::move(input);
   r.info = info;
-  if (proxy_volume != 0 && input_volume / proxy_volume > 0) r.input_volume *= input_volume / proxy_volume;
+  if (r.info.closed && proxy_volume != 0 && input_volume / proxy_volume > 0) r.input_volume *= input_volume / proxy_volume;
   measure(r, opt);
   spdlog::debug("dense input: the mesh lies {} out, {} in of the proxy; {} out, {} in of the input", percent(proxy_out / diag),
                 percent(proxy_in / diag), percent(r.deviation_out / diag), percent(r.deviation_in / diag));
