@@ -119,7 +119,6 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                   "Inputs of more triangles (a fine scan) are meshed through a proxy decimated by quadric error "
                   "within a tenth of the inner bound of them, and measured against the input itself (the report's "
                   "proxy; 0: never)")
-      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--tets-per-hull", args->options.tets_per_hull,
                   "The hull budget is at most target-tets / this (0: --max-hulls alone)")

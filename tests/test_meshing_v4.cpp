@@ -595,6 +595,9 @@ TEST(MeshingV4, DenseInputIsMeshedThroughItsProxyAndMeasuredAgainstItself) {
   const auto report = squeeze::meshing::mesh_report(r, "bunny00.off");
   EXPECT_EQ(report["proxy"]["faces"].get<int>(), r.proxy_faces);
   EXPECT_EQ(report["input"]["faces"].get<int>(), s.F.rows());
+  // A proxy's bound of the whole inner bound or more is refused.
+  o.dense_error = 1;
+  EXPECT_THROW(squeeze::meshing::mesh_surface(s, o), squeeze::InputError);
   // Without the proxy, no proxy.
   EXPECT_TRUE(squeeze::meshing::mesh_report(mesh(sqs::disc(0.05, 0.004, 12), 150), "disc")["proxy"].is_null());
 }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "squeeze/common/error.h"
+#include "squeeze/meshing/surface_analysis.h"
 
 namespace squeeze::meshing {
 namespace {
@@ -112,26 +113,16 @@ class Decimator {
       const Vec3 u = n / len;
       for (int v : t) q_[static_cast<size_t>(v)].add_plane(u, -u.dot(pos_[static_cast<size_t>(t[0])]));
     }
-    freeze_non_manifold();
+    freeze_non_manifold(s.F);
   }
 
   void run(DecimateStats* stats) {
     const double bound = opt_.max_error * opt_.max_error;
-    // Every edge once.
-    std::vector<std::uint64_t> edges;
-    edges.reserve(3 * F_.size());
-    for (const auto& t : F_)
-      for (int k = 0; k < 3; ++k) {
-        const int a = t[static_cast<size_t>(k)], b = t[static_cast<size_t>((k + 1) % 3)];
-        if (a != b) edges.push_back(key(std::min(a, b), std::max(a, b)));
-      }
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
     std::vector<Candidate> initial;
-    initial.reserve(edges.size());
-    for (std::uint64_t e : edges) {
+    initial.reserve(edges_.size());
+    for (const auto& [a, b] : edges_) {
       Candidate c;
-      if (candidate(static_cast<int>(e >> 32), static_cast<int>(e & 0xffffffffu), bound, &c)) initial.push_back(c);
+      if (candidate(a, b, bound, &c)) initial.push_back(c);
     }
     std::priority_queue<Candidate, std::vector<Candidate>, Later> heap(Later{}, std::move(initial));
     int collapses = 0;
@@ -162,7 +153,7 @@ class Decimator {
       }
       if (!made) {
         // Parked at both ends: tried again when the faces around either change.
-        if (parked_edges_.insert(key(std::min(c.u, c.w), std::max(c.u, c.w))).second) {
+        if (parked_edges_.insert(key(c.u, c.w)).second) {
           parked_[u].push_back(c.w);
           parked_[w].push_back(c.u);
         }
@@ -179,7 +170,7 @@ class Decimator {
       for (int x : ring) {
         for (int y : parked_[static_cast<size_t>(x)]) {
           Candidate n;
-          if (parked_edges_.erase(key(std::min(x, y), std::max(x, y))) && !vf_[static_cast<size_t>(y)].empty() &&
+          if (parked_edges_.erase(key(x, y)) && !vf_[static_cast<size_t>(y)].empty() &&
               candidate(x, y, bound, &n))
             heap.push(n);
         }
@@ -221,7 +212,11 @@ class Decimator {
   }
 
  private:
-  static std::uint64_t key(int a, int b) { return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b); }
+  // The edge (a, b) as one number, either way round.
+  static std::uint64_t key(int a, int b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
+  }
 
   Vec3 normal(int a, int b, int c) const {
     const Vec3& x = pos_[static_cast<size_t>(a)];
@@ -229,31 +224,15 @@ class Decimator {
   }
 
   // Vertices on edges of other than two faces, or of two that run along them the same way, and
-  // vertices whose faces do not make one fan around them.
-  void freeze_non_manifold() {
-    struct Half {
-      std::uint64_t edge;
-      bool forward;  // runs from the smaller index to the larger
-    };
-    std::vector<Half> halves;
-    halves.reserve(3 * F_.size());
-    for (const auto& t : F_) {
-      if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) continue;
-      for (int k = 0; k < 3; ++k) {
-        const int a = t[static_cast<size_t>(k)], b = t[static_cast<size_t>((k + 1) % 3)];
-        halves.push_back({key(std::min(a, b), std::max(a, b)), a < b});
-      }
-    }
-    std::sort(halves.begin(), halves.end(), [](const Half& x, const Half& y) { return x.edge < y.edge; });
-    for (size_t i = 0; i < halves.size();) {
-      size_t j = i;
-      while (j < halves.size() && halves[j].edge == halves[i].edge) ++j;
-      if (j - i != 2 || halves[i].forward == halves[i + 1].forward) {
-        frozen_[static_cast<size_t>(halves[i].edge >> 32)] = 1;
-        frozen_[static_cast<size_t>(halves[i].edge & 0xffffffffu)] = 1;
-      }
-      i = j;
-    }
+  // vertices whose faces do not make one fan around them; the edges, each once, in edges_.
+  void freeze_non_manifold(const Eigen::MatrixX3i& F) {
+    const std::vector<EdgeIncidence> e = edge_incidences(F);
+    for_each_edge(e, [&](size_t i, size_t j) {
+      if (e[i].a == e[i].b) return;  // (of a face with a repeated vertex: frozen already)
+      edges_.emplace_back(e[i].a, e[i].b);
+      if (j - i != 2 || e[i].forward == e[i + 1].forward)
+        frozen_[static_cast<size_t>(e[i].a)] = frozen_[static_cast<size_t>(e[i].b)] = 1;
+    });
     // Fans: around v, each face (v, x, y) in its own order takes x to y; one cycle through all.
     std::vector<std::pair<int, int>> step;
     for (size_t v = 0; v < pos_.size(); ++v) {
@@ -386,6 +365,7 @@ class Decimator {
   int faces_ = 0;
   std::vector<std::vector<int>> vf_;      // faces around each vertex (alive ones)
   std::vector<char> frozen_;
+  std::vector<std::pair<int, int>> edges_;  // every edge once (a < b), sorted
   std::vector<Quadric> q_;
   std::vector<unsigned> stamp_;
   std::vector<Eigen::Index> source_;      // per vertex: the input vertex at whose place it is (-1: none)

@@ -2816,6 +2816,7 @@ MeshResult mesh_through_proxy(const SurfaceMesh& surface, const MeshOptions& opt
 }  // namespace
 
 MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
+  if (opt.dense_faces < 0) throw InputError("--dense-faces must be at least 0 (0: never decimate)");
   MeshResult r = opt.dense_faces > 0 && surface.F.rows() > opt.dense_faces ? mesh_through_proxy(surface, opt, progress)
                                                                           : mesh_surface_placed(surface, opt, progress);
   r.deviation_exceeded_because = deviation_exceeded_because(r, opt);
