@@ -1302,6 +1302,88 @@ TEST(MeshingSurfaceIO, RoundTripsThroughAssimpFormats) {
   EXPECT_THROW(squeeze::meshing::save_surface(dir / "e.nosuchformat", s), InputError);
 }
 
+// PLY files of triangle strips (element tristrips, -1 restarting a strip: the igea of the common 3D
+// test models), which Debian's assimp 5.2 reads as one triangle: a 6 × 4 grid of unit squares, its
+// rows joined by repeated vertices (two degenerate triangles each, dropped), a restart between
+// rows 1 and 2 and a second strip item for row 3. Each format (ASCII, binary either way round)
+// gives the 48 triangles, every one facing +z (the strip's turned orientation kept), of area 24.
+TEST(MeshingSurfaceIO, PlyTriangleStripsAreReadAsTheirTriangles) {
+  TempDir dir("plystrips");
+  const int nx = 6, ny = 4;
+  auto id = [&](int i, int j) { return i * (nx + 1) + j; };  // row i (y), column j (x)
+  std::vector<std::vector<int>> items(2);
+  for (int i = 0; i < ny; ++i) {
+    std::vector<int>& strip = items[i < 3 ? 0 : 1];
+    if (i == 1 || i == 2) {  // join (row 1) or restart (row 2)
+      if (i == 1) strip.push_back(strip.back()), strip.push_back(id(i + 1, 0));
+      else strip.push_back(-1);
+    }
+    for (int j = 0; j <= nx; ++j) strip.push_back(id(i + 1, j)), strip.push_back(id(i, j));
+  }
+  const int nv = (nx + 1) * (ny + 1);
+  auto header = [&](const std::string& format) {
+    std::string h = "ply\nformat " + format + " 1.0\nelement vertex " + std::to_string(nv) +
+                    "\nproperty float x\nproperty float y\nproperty double z\nelement tristrips 2\n"
+                    "property list int int vertex_indices\nend_header\n";
+    return h;
+  };
+  std::string ascii = header("ascii");
+  for (int i = 0; i <= ny; ++i)
+    for (int j = 0; j <= nx; ++j) ascii += std::to_string(j) + " " + std::to_string(i) + " 0.5\n";
+  for (const auto& item : items) {
+    ascii += std::to_string(item.size());
+    for (int v : item) ascii += " " + std::to_string(v);
+    ascii += "\n";
+  }
+  auto binary = [&](bool big) {
+    std::string b = header(big ? "binary_big_endian" : "binary_little_endian");
+    auto put = [&](const void* p, size_t n) {
+      std::string bytes(static_cast<const char*>(p), n);
+      if (big) std::reverse(bytes.begin(), bytes.end());  // (this machine is little-endian)
+      b += bytes;
+    };
+    for (int i = 0; i <= ny; ++i)
+      for (int j = 0; j <= nx; ++j) {
+        const float x = static_cast<float>(j), y = static_cast<float>(i);
+        const double z = 0.5;
+        put(&x, 4), put(&y, 4), put(&z, 8);
+      }
+    for (const auto& item : items) {
+      const int n = static_cast<int>(item.size());
+      put(&n, 4);
+      for (int v : item) put(&v, 4);
+    }
+    return b;
+  };
+  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
+           {"ascii.ply", ascii}, {"little.ply", binary(false)}, {"big.ply", binary(true)}}) {
+    SCOPED_TRACE(name);
+    std::ofstream(dir / name, std::ios::binary) << text;
+    const SurfaceMesh s = squeeze::meshing::load_surface(dir / name);
+    ASSERT_EQ(s.F.rows(), 2 * nx * ny);
+    EXPECT_EQ(s.V.rows(), nv);
+    double area = 0;
+    for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
+      const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
+      const Eigen::Vector3d n = (b - a).cross(c - a);
+      EXPECT_GT(n.z(), 0.99) << "face " << f;
+      area += 0.5 * n.norm();
+      EXPECT_EQ(a.z(), 0.5);
+    }
+    EXPECT_NEAR(area, nx * ny, 1e-12);
+  }
+  // An index past the vertices names the strip.
+  std::string bad = ascii;
+  bad.replace(bad.rfind(" 21"), 3, " 99");
+  std::ofstream(dir / "bad.ply", std::ios::binary) << bad;
+  try {
+    squeeze::meshing::load_surface(dir / "bad.ply");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.ply: PLY tristrips 1: vertex index 99 out of range"), std::string::npos) << e.what();
+  }
+}
+
 TEST(MeshingSurfaceIO, OwnFormatsInEitherCaseAndTheMessageList) {
   TempDir dir("surfown");
   const SurfaceMesh s = read_off(data("elephant.off"));

@@ -14,7 +14,9 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstdint>
 #include <cstring>
+#include <functional>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -152,7 +154,12 @@ void read_obj_in_order(const fs::path& path, std::vector<std::array<double, 3>>&
 // the header describes it: ASCII, one item per line with one token per scalar and, for a list, a
 // non-negative whole count followed by that many tokens; binary, every list count read (in the
 // file's byte order) and its items found within the file. Throws InputError naming the line or item.
-void check_ply(const fs::path& path) {
+// Where `visit` is given it is called with every value in file order: (element index, item, property
+// index, position in the list or -1 for a scalar, value). Returns the elements' names with their
+// properties' names, in order.
+using PlyVisitor = std::function<void(size_t element, long long item, size_t property, long long at, double value)>;
+using PlyLayout = std::vector<std::pair<std::string, std::vector<std::string>>>;
+PlyLayout check_ply(const fs::path& path, const PlyVisitor& visit = nullptr) {
   const std::string name = path.string();
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(name + ": cannot open for reading");
@@ -162,6 +169,8 @@ void check_ply(const fs::path& path) {
     bool list = false;
     int count_size = 0;  // bytes of a list's count (binary)
     int size = 0;        // bytes of the scalar or of each list item (binary)
+    std::string type;    // of the scalar or of each list item
+    std::string name;
   };
   struct Element {
     std::string name;
@@ -218,14 +227,17 @@ void check_ply(const fs::path& path) {
       if (elements.empty()) bad("a property before any element");
       Property prop;
       prop.list = !f.empty() && f[0] == "list";
+      if (!f.empty()) prop.name = f.back();
       if (f.size() != (prop.list ? 4u : 2u))
         bad("a property line is 'property TYPE NAME' or 'property list COUNT_TYPE ITEM_TYPE NAME'");
       if (prop.list) {
         prop.count_size = size_of(f[1]);
         if (f[1].find("float") != std::string::npos || f[1] == "double") bad("a list count of type " + f[1]);
         prop.size = size_of(f[2]);
+        prop.type = f[2];
       } else {
         prop.size = size_of(f[0]);
+        prop.type = f[0];
       }
       elements.back().properties.push_back(prop);
     } else if (kw.empty()) {
@@ -242,13 +254,19 @@ void check_ply(const fs::path& path) {
   if (!ended) throw InputError(name + ": PLY header has no end_header line (truncated?)");
   for (const std::string& w : skipped) spdlog::warn("{}: {}", name, w);
   if (!format) throw InputError(name + ": PLY header has no format line");
+  PlyLayout names;
+  for (const Element& e : elements) {
+    names.emplace_back(e.name, std::vector<std::string>{});
+    for (const Property& prop : e.properties) names.back().second.push_back(prop.name);
+  }
 
   const auto truncated = [&](const Element& e, long long item, const std::string& what) {
     throw InputError(name + ": PLY " + e.name + " " + std::to_string(item) + ": " + what);
   };
   if (ascii) {
     long long lineno = lines;
-    for (const Element& e : elements)
+    for (size_t ei = 0; ei < elements.size(); ++ei) {
+      const Element& e = elements[ei];
       for (long long item = 0; item < e.count; ++item) {
         do {
           if (!std::getline(in, line))
@@ -259,9 +277,17 @@ void check_ply(const fs::path& path) {
         std::vector<std::string> tok;
         for (std::string t; ss >> t;) tok.push_back(t);
         size_t at = 0;
-        for (const Property& prop : e.properties) {
+        const auto value = [&](size_t pi, long long k) {
+          char* end = nullptr;
+          const double x = std::strtod(tok[at].c_str(), &end);
+          if (*end) truncated(e, item, "line " + std::to_string(lineno) + ": '" + tok[at] + "' is not a number");
+          visit(ei, item, pi, k, x);
+        };
+        for (size_t pi = 0; pi < e.properties.size(); ++pi) {
+          const Property& prop = e.properties[pi];
           if (at >= tok.size()) truncated(e, item, "line " + std::to_string(lineno) + " has too few values (corrupt or truncated?)");
           if (!prop.list) {
+            if (visit) value(pi, -1);
             ++at;
             continue;
           }
@@ -269,10 +295,13 @@ void check_ply(const fs::path& path) {
           const double n = std::strtod(tok[at].c_str(), &end);
           if (*end || !(n >= 0) || n != std::floor(n) || n > static_cast<double>(tok.size() - at - 1))
             truncated(e, item, "line " + std::to_string(lineno) + ": list count '" + tok[at] + "' is not the number of values after it (corrupt or truncated?)");
-          at += 1 + static_cast<size_t>(n);
+          ++at;
+          for (long long k = 0; k < static_cast<long long>(n); ++k, ++at)
+            if (visit) value(pi, k);
         }
       }
-    return;
+    }
+    return names;
   }
   // Binary: the body in memory (the file was read whole by assimp anyway).
   const std::streamoff header_end = in.tellg();
@@ -290,11 +319,35 @@ void check_ply(const fs::path& path) {
     }
     return v;
   };
-  for (const Element& e : elements)
+  // A scalar of `type` at pos, in the file's byte order.
+  const auto value_at = [&](size_t pos, const std::string& type, int bytes) -> double {
+    unsigned char b[8];
+    for (int k = 0; k < bytes; ++k) b[k] = body[pos + static_cast<size_t>(big_endian ? bytes - 1 - k : k)];  // little-endian in b
+    unsigned long long u = 0;
+    for (int k = bytes - 1; k >= 0; --k) u = (u << 8) | b[k];
+    if (type == "float" || type == "float32") {
+      float f;
+      const auto u32 = static_cast<std::uint32_t>(u);
+      std::memcpy(&f, &u32, 4);
+      return f;
+    }
+    if (type == "double" || type == "float64") {
+      double d;
+      std::memcpy(&d, &u, 8);
+      return d;
+    }
+    const bool is_signed = type == "char" || type == "short" || type == "int" || type.compare(0, 3, "int") == 0;
+    if (is_signed && bytes < 8 && (u >> (8 * bytes - 1)) & 1u) return static_cast<double>(static_cast<long long>(u) - (1LL << (8 * bytes)));
+    return static_cast<double>(u);
+  };
+  for (size_t ei = 0; ei < elements.size(); ++ei) {
+    const Element& e = elements[ei];
     for (long long item = 0; item < e.count; ++item)
-      for (const Property& prop : e.properties) {
+      for (size_t pi = 0; pi < e.properties.size(); ++pi) {
+        const Property& prop = e.properties[pi];
         if (!prop.list) {
           if (body.size() - at < static_cast<size_t>(prop.size)) truncated(e, item, "past the end of the file (truncated?)");
+          if (visit) visit(ei, item, pi, -1, value_at(at, prop.type, prop.size));
           at += static_cast<size_t>(prop.size);
           continue;
         }
@@ -304,8 +357,87 @@ void check_ply(const fs::path& path) {
         at += static_cast<size_t>(prop.count_size);
         if (n > (body.size() - at) / static_cast<size_t>(prop.size))
           truncated(e, item, "list of " + std::to_string(n) + " values past the end of the file (corrupt or truncated?)");
+        if (visit)
+          for (unsigned long long k = 0; k < n; ++k)
+            visit(ei, item, pi, static_cast<long long>(k), value_at(at + k * static_cast<size_t>(prop.size), prop.type, prop.size));
         at += static_cast<size_t>(n) * static_cast<size_t>(prop.size);
       }
+  }
+  return names;
+}
+
+// A PLY file whose triangles come as strips (an element `tristrips` with a list `vertex_indices`, -1
+// restarting a strip: the Stanford and VCG exporters' igea, for one), which Debian's assimp 5.2 reads
+// as one triangle. Read here: the `vertex` element's x, y, z; each strip's triangle k made of its
+// items k, k+1, k+2, every other one turned to keep the strip's orientation (the first as written),
+// those with a repeated vertex (joins between strips) dropped; a `face` element too, if any, each
+// polygon as a fan. Throws InputError naming the strip or face with an index out of range.
+void read_ply_with_strips(const fs::path& path, const PlyLayout& layout, std::vector<std::array<double, 3>>& pts,
+                          std::vector<std::array<int, 3>>& tris) {
+  const std::string name = path.string();
+  const auto element = [&](const std::string& e) -> long {
+    for (size_t i = 0; i < layout.size(); ++i)
+      if (layout[i].first == e) return static_cast<long>(i);
+    return -1;
+  };
+  const auto property = [&](long e, std::initializer_list<const char*> names) -> long {
+    if (e < 0) return -1;
+    const auto& props = layout[static_cast<size_t>(e)].second;
+    for (const char* n : names)
+      for (size_t i = 0; i < props.size(); ++i)
+        if (props[i] == n) return static_cast<long>(i);
+    return -1;
+  };
+  const long ev = element("vertex"), es = element("tristrips"), ef = element("face");
+  const long px = property(ev, {"x"}), py = property(ev, {"y"}), pz = property(ev, {"z"});
+  const long ps = property(es, {"vertex_indices", "vertex_index"}), pf = property(ef, {"vertex_indices", "vertex_index"});
+  if (px < 0 || py < 0 || pz < 0) throw InputError(name + ": PLY has no vertex element with x, y and z");
+  if (ps < 0) throw InputError(name + ": PLY tristrips element has no list vertex_indices");
+  std::vector<std::pair<long long, long long>> strip;  // (index, strip item) in file order; -1 restarts
+  std::vector<std::vector<long long>> faces;
+  check_ply(path, [&](size_t e, long long item, size_t prop, long long at, double x) {
+    const long ei = static_cast<long>(e), pi = static_cast<long>(prop);
+    if (ei == ev && at < 0) {
+      if (static_cast<size_t>(item) >= pts.size()) pts.resize(static_cast<size_t>(item) + 1);
+      const int k = pi == px ? 0 : pi == py ? 1 : pi == pz ? 2 : -1;
+      if (k >= 0) pts[static_cast<size_t>(item)][static_cast<size_t>(k)] = x;
+    } else if (ei == es && pi == ps && at >= 0) {
+      if (at == 0 && !strip.empty()) strip.emplace_back(-1, item);  // (a new strip item restarts)
+      strip.emplace_back(static_cast<long long>(x), item);
+    } else if (ei == ef && pi == pf && at >= 0) {
+      if (at == 0) faces.emplace_back();
+      faces.back().push_back(static_cast<long long>(x));
+    }
+  });
+  const auto n = static_cast<long long>(pts.size());
+  const auto in_range = [&](long long v, const std::string& where) {
+    if (v < 0 || v >= n)
+      throw InputError(name + ": PLY " + where + ": vertex index " + std::to_string(v) + " out of range (" +
+                       std::to_string(n) + " vertices)");
+    return static_cast<int>(v);
+  };
+  std::array<long long, 2> last{-1, -1};
+  int k = 0;  // triangles of the current strip so far
+  for (const auto& [v, item] : strip) {
+    if (v == -1) {
+      last = {-1, -1};
+      k = 0;
+      continue;
+    }
+    const int c = in_range(v, "tristrips " + std::to_string(item));
+    if (last[0] >= 0 && last[1] >= 0) {
+      const int a = static_cast<int>(last[0]), b = static_cast<int>(last[1]);
+      if (a != b && b != c && c != a) tris.push_back(k % 2 == 0 ? std::array<int, 3>{a, b, c} : std::array<int, 3>{b, a, c});
+      ++k;
+    }
+    last = {last[1], c};
+  }
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const auto& poly = faces[f];
+    for (size_t i = 1; i + 1 < poly.size(); ++i)
+      tris.push_back({in_range(poly[0], "face " + std::to_string(f)), in_range(poly[i], "face " + std::to_string(f)),
+                      in_range(poly[i + 1], "face " + std::to_string(f))});
+  }
 }
 
 // OFF in file order and full double precision (assimp parses OFF in single precision): header
@@ -600,7 +732,9 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
   if (own && own->read && (own->read_always || options.keep_order)) {
     own->read(path, pts, tris);
   } else {
-    if (lower(path.extension().string()) == ".ply") check_ply(path);
+    PlyLayout ply;
+    if (lower(path.extension().string()) == ".ply") ply = check_ply(path);
+    const bool strips = std::any_of(ply.begin(), ply.end(), [](const auto& e) { return e.first == "tristrips"; });
     // Only aiProcess_ValidateDataStructure: indices past the vertex list (a truncated or corrupt
     // file) are reported as an error. No assimp triangulation: collect() splits polygons as fans and
     // drops points and lines itself, because Debian's assimp 5.2 aborts the process (ai_assert) in
@@ -608,7 +742,9 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
     // fuzz_surface; tests/fuzz/fuzz_surface/ keeps the input). Welding is ours too (below).
     const unsigned flags = aiProcess_ValidateDataStructure |
                            (options.keep_order || options.merge_coincident ? 0u : aiProcess_JoinIdenticalVertices);
-    if (options.assimp_in_child) {
+    if (strips) {
+      read_ply_with_strips(path, ply, pts, tris);
+    } else if (options.assimp_in_child) {
       read_with_assimp_in_child(name, flags, pts, tris);
     } else {
       Assimp::Importer importer;
