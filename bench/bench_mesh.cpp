@@ -66,6 +66,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <random>
 #include <memory>
 #include <string>
 #include <unistd.h>
@@ -670,27 +671,44 @@ const squeeze::meshing::SurfaceMesh& dense_bunny() {
   return m;
 }
 
+// The same with Gaussian noise of 0.01 % of the diagonal on every vertex (seeded), as a scanner's.
+const squeeze::meshing::SurfaceMesh& noisy_dense_bunny() {
+  static const squeeze::meshing::SurfaceMesh m = [] {
+    squeeze::meshing::SurfaceMesh n = dense_bunny();
+    std::mt19937 rng(1);
+    std::normal_distribution<double> noise(0.0, 1e-4 * squeeze::meshing::bounding_box_diagonal(n.V));
+    for (Eigen::Index i = 0; i < n.V.size(); ++i) n.V.data()[i] += noise(rng);
+    return n;
+  }();
+  return m;
+}
+
+// 1: the dense bunny through its proxy; 0: the input itself (dense_faces 0); 2: the noisy one
+// through its proxy.
 void BM_DenseScan(benchmark::State& state) {
   squeeze::meshing::MeshOptions o;
   if (state.range(0) == 0) o.dense_faces = 0;
-  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, dense_bunny(), o);
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, state.range(0) == 2 ? noisy_dense_bunny() : dense_bunny(), o);
   const double diag = squeeze::meshing::bounding_box_diagonal(r.input.V);
   state.counters["proxy_faces"] = r.proxy_faces;
   state.counters["deviation_out"] = r.deviation_out / diag;
   state.counters["deviation_in"] = r.deviation_in / diag;
 }
-BENCHMARK(BM_DenseScan)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_DenseScan)->Arg(1)->Arg(0)->Arg(2)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
+// Arguments: the dense bunny (0) or the noisy one (1); planes checked one by one (1, the default
+// since meshing version 50) or the quadric's root alone (0, version 49).
 void BM_Decimate(benchmark::State& state) {
-  const squeeze::meshing::SurfaceMesh& m = dense_bunny();
+  const squeeze::meshing::SurfaceMesh& m = state.range(0) == 1 ? noisy_dense_bunny() : dense_bunny();
   squeeze::meshing::DecimateOptions o;
+  o.plane_by_plane = state.range(1) == 1;
   o.max_error = 0.1 * 0.45 * 0.01 * squeeze::meshing::bounding_box_diagonal(m.V);  // (MeshOptions' defaults)
   squeeze::meshing::DecimateStats stats;
   for (auto _ : state) benchmark::DoNotOptimize(squeeze::meshing::decimate_quadric(m, o, &stats).F.data());
   state.counters["faces"] = stats.faces;
   state.counters["collapses"] = stats.collapses;
 }
-BENCHMARK(BM_Decimate)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK(BM_Decimate)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 // TriangleBvh on the heart's 40,620 triangles, at the kind of points the envelope's checks and the
 // deviation measures ask about: the input's vertices moved along their normals by 0.1-3 % of the

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <random>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -143,10 +144,12 @@ TEST(Decimate, KeepsItsBoundTopologyAndBordersOnTheCorpus) {
     const SurfaceMesh out = decimate_quadric(input, o, &stats);
     EXPECT_LT(out.F.rows(), 0.8 * static_cast<double>(input.F.rows()));  // (these are coarse meshes already)
     EXPECT_LE(stats.max_error, o.max_error);
-    // Both ways within the bound (the quadric bounds distances to the planes of the faces a vertex
-    // took in; the surfaces themselves are measured here, at the vertices).
+    // The result's vertices within the bound of the input (each lies within it of the planes of the
+    // faces it took in; the surfaces themselves are measured here, at the vertices). The input's
+    // vertices may lie farther from the result, under chords across curved or sharp regions: up to
+    // 2.76 times the bound (the left lung's, since meshing version 50; 1.3 times at most elsewhere).
     EXPECT_LE(farthest_vertex(out, input), o.max_error);
-    EXPECT_LE(farthest_vertex(input, out), 2.0 * o.max_error);
+    EXPECT_LE(farthest_vertex(input, out), 3.0 * o.max_error);
     const auto a = squeeze::meshing::analyse_surface(input), b = squeeze::meshing::analyse_surface(out);
     EXPECT_EQ(b.components, a.components);
     EXPECT_EQ(b.boundary_edges, a.boundary_edges);
@@ -158,6 +161,33 @@ TEST(Decimate, KeepsItsBoundTopologyAndBordersOnTheCorpus) {
       EXPECT_NEAR(signed_volume(out) / signed_volume(input), 1.0, 0.01);
     }
   }
+}
+
+// A scan's noise fills the quadric's sum of squares long before any one plane is near the bound: a
+// unit cube split into 12,288 triangles, every vertex moved by Gaussian noise of 1e-4, decimated
+// within 1e-3. Checked plane by plane (the default) it keeps under a third of the faces the
+// quadric's root alone keeps (version 49), and its vertices are as near the input.
+TEST(Decimate, NoisyScanPlaneByPlaneKeepsFewerFacesWithinTheBound) {
+  SurfaceMesh input = subdivided(box(1.0, 1.0, 1.0), 5);
+  ASSERT_EQ(input.F.rows(), 12288);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 1e-4);
+  for (Eigen::Index i = 0; i < input.V.size(); ++i) input.V.data()[i] += noise(rng);
+  DecimateOptions o;
+  o.max_error = 1e-3;
+  DecimateStats by_plane, by_root;
+  const SurfaceMesh a = decimate_quadric(input, o, &by_plane);
+  o.plane_by_plane = false;
+  const SurfaceMesh b = decimate_quadric(input, o, &by_root);
+  EXPECT_LT(3 * a.F.rows(), b.F.rows()) << a.F.rows() << " against " << b.F.rows();
+  for (const auto* r : {&a, &b}) {
+    EXPECT_LE(farthest_vertex(*r, input), o.max_error);
+    EXPECT_LE(farthest_vertex(input, *r), 3.0 * o.max_error);
+    EXPECT_NEAR(signed_volume(*r), signed_volume(input), 1e-2 * signed_volume(input));
+    EXPECT_TRUE(squeeze::meshing::is_oriented_two_manifold(r->F, static_cast<int>(r->V.rows())));
+  }
+  EXPECT_LE(by_plane.max_error, o.max_error);
+  EXPECT_LE(by_root.max_error, o.max_error);
 }
 
 TEST(Decimate, SameInputSameResult) {

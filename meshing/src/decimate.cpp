@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <queue>
 #include <string>
 #include <unordered_set>
@@ -91,6 +92,10 @@ class Decimator {
     vf_.resize(pos_.size());
     frozen_.assign(pos_.size(), 0);
     q_.resize(pos_.size());
+    plane_.assign(F_.size(), Eigen::Vector4d::Zero());
+    planes_of_.resize(pos_.size());
+    max_error_ = opt.max_error;
+    bound_ = opt.max_error * opt.max_error;
     stamp_.assign(pos_.size(), 0);
     parked_.resize(pos_.size());
     source_.resize(pos_.size());
@@ -111,13 +116,18 @@ class Decimator {
         continue;
       }
       const Vec3 u = n / len;
-      for (int v : t) q_[static_cast<size_t>(v)].add_plane(u, -u.dot(pos_[static_cast<size_t>(t[0])]));
+      const double d = -u.dot(pos_[static_cast<size_t>(t[0])]);
+      plane_[f] << u, d;
+      for (int v : t) {
+        q_[static_cast<size_t>(v)].add_plane(u, d);
+        planes_of_[static_cast<size_t>(v)].push_back(static_cast<int>(f));  // (in increasing order)
+      }
     }
     freeze_non_manifold(s.F);
   }
 
   void run(DecimateStats* stats) {
-    const double bound = opt_.max_error * opt_.max_error;
+    const double bound = bound_;
     std::vector<Candidate> initial;
     initial.reserve(edges_.size());
     for (const auto& [a, b] : edges_) {
@@ -134,18 +144,15 @@ class Decimator {
       const size_t u = static_cast<size_t>(c.u), w = static_cast<size_t>(c.w);
       if (vf_[u].empty() || vf_[w].empty() || stamp_[u] != c.su || stamp_[w] != c.sw) continue;  // stale
       Vec3 p;
-      if (!candidate(c.u, c.w, bound, nullptr, &p)) continue;
-      double cost = c.cost;
+      double error = 0;
+      if (!candidate(c.u, c.w, bound, nullptr, &p, &error)) continue;
       bool made = collapse(c.u, c.w, p);
       // Where the quadric's placement fails the checks, the edge's ends within the bound: a flat
       // region's midpoints often make slivers where an end does not.
       if (!made && !frozen_[u]) {
-        Quadric q = q_[u];
-        q += q_[w];
         for (const size_t end : {u, w}) {
           const Vec3 e = pos_[end];
-          cost = q.at(e);
-          if (cost <= bound && collapse(c.u, c.w, e)) {
+          if (within(u, w, e, &error) && collapse(c.u, c.w, e)) {
             made = true;
             break;
           }
@@ -160,7 +167,7 @@ class Decimator {
         continue;
       }
       ++collapses;
-      worst = std::max(worst, cost);
+      worst = std::max(worst, error);
       neighbours(c.u, ring);
       for (int x : ring) {
         Candidate n;
@@ -179,7 +186,7 @@ class Decimator {
     }
     if (stats) {
       stats->collapses = collapses;
-      stats->max_error = std::sqrt(worst);
+      stats->max_error = worst;
       stats->frozen_vertices = static_cast<int>(std::count(frozen_.begin(), frozen_.end(), 1));
     }
   }
@@ -264,9 +271,38 @@ class Decimator {
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
 
-  // The collapse of edge (a, b), where its cost is within `bound` (squared units); its placement in
-  // *at where asked.
-  bool candidate(int a, int b, double bound, Candidate* c, Vec3* at = nullptr) const {
+  // Whether p lies within max_error of the plane of every input face that u and w took in: where
+  // their summed quadric is within max_error² there the root bounds every distance; else the
+  // planes one by one. The largest distance (or that root) in *error.
+  bool within(size_t u, size_t w, const Vec3& p, double* error) const {
+    Quadric q = q_[u];
+    q += q_[w];
+    const double cost = q.at(p);
+    if (cost <= bound_) {
+      *error = std::sqrt(cost);
+      return true;
+    }
+    return opt_.plane_by_plane && planes_within(u, w, p, error);
+  }
+
+  // Whether p lies within max_error of the plane of every input face that u and w took in, checked
+  // one by one; the largest distance in *error.
+  bool planes_within(size_t u, size_t w, const Vec3& p, double* error) const {
+    double worst = 0;
+    for (const size_t v : {u, w})
+      for (const int f : planes_of_[v]) {
+        const Eigen::Vector4d& h = plane_[static_cast<size_t>(f)];
+        const double d = std::abs(h.head<3>().dot(p) + h[3]);
+        if (d > max_error_) return false;
+        worst = std::max(worst, d);
+      }
+    *error = worst;
+    return true;
+  }
+
+  // The collapse of edge (a, b), where its placement lies within the bound (within()); its
+  // placement in *at where asked. Its cost, the queue's order, is the summed quadric there.
+  bool candidate(int a, int b, double bound, Candidate* c, Vec3* at = nullptr, double* error = nullptr) const {
     const size_t ia = static_cast<size_t>(a), ib = static_cast<size_t>(b);
     if (frozen_[ia] && frozen_[ib]) return false;
     int u = std::min(a, b), w = std::max(a, b);
@@ -280,9 +316,11 @@ class Decimator {
       p = minimiser_near(q, m, (pos_[iu] - pos_[iw]).norm());
     }
     const double cost = q.at(p);
-    if (!(cost <= bound)) return false;
+    double e = std::sqrt(cost);
+    if (!(cost <= bound) && !(opt_.plane_by_plane && planes_within(iu, iw, p, &e))) return false;
     if (c) *c = {cost, u, w, stamp_[iu], stamp_[iw]};
     if (at) *at = p;
+    if (error) *error = e;
     return true;
   }
 
@@ -333,6 +371,12 @@ class Decimator {
     source_[iu] = p == pos_[iu] ? source_[iu] : p == pos_[iw] ? source_[iw] : -1;
     pos_[iu] = p;
     q_[iu] += q_[iw];
+    merged_.clear();
+    std::set_union(planes_of_[iu].begin(), planes_of_[iu].end(), planes_of_[iw].begin(), planes_of_[iw].end(),
+                   std::back_inserter(merged_));
+    planes_of_[iu].swap(merged_);
+    planes_of_[iw].clear();
+    planes_of_[iw].shrink_to_fit();
     for (int f : shared) {
       face_alive_[static_cast<size_t>(f)] = 0;
       --faces_;
@@ -367,12 +411,15 @@ class Decimator {
   std::vector<char> frozen_;
   std::vector<std::pair<int, int>> edges_;  // every edge once (a < b), sorted
   std::vector<Quadric> q_;
+  double max_error_ = 0, bound_ = 0;      // units, and its square
+  std::vector<Eigen::Vector4d> plane_;    // per input face: unit normal and offset about centre_ (0: no area)
+  std::vector<std::vector<int>> planes_of_;  // per vertex: the input faces it took in, in increasing order
   std::vector<unsigned> stamp_;
   std::vector<Eigen::Index> source_;      // per vertex: the input vertex at whose place it is (-1: none)
   std::vector<std::vector<int>> parked_;  // per vertex: the other ends of its edges whose collapse
                                           // failed the checks, until the faces around it change
   std::unordered_set<std::uint64_t> parked_edges_;  // those edges, each once
-  std::vector<int> ring_u_, ring_w_;      // scratch
+  std::vector<int> ring_u_, ring_w_, merged_;  // scratch
 };
 
 }  // namespace

@@ -11,6 +11,9 @@ struct DecimateOptions {
                                  // input face it took in (0: only collapses of no error, coplanar)
   int target_faces = 0;          // stop at this many faces (0: as far as max_error allows)
   double max_normal_turn = 60.0; // degrees: no collapse turns a face's normal further
+  bool plane_by_plane = true;    // where the root of the summed quadric is over max_error, check the
+                                 // planes one by one (false: the root alone, as in meshing version 49:
+                                 // faster per collapse, far fewer collapses on a noisy scan)
 };
 
 /// What decimate_quadric() did.
@@ -18,19 +21,22 @@ struct DecimateStats {
   int faces = 0;             // faces of the result
   int collapses = 0;         // edge collapses made
   int frozen_vertices = 0;   // input vertices kept where they are (see decimate_quadric)
-  double max_error = 0;      // units: the largest error (square root of the quadric) of a collapse made
+  double max_error = 0;      // units: the largest error of a collapse made (at most the bound: the
+                             // largest plane distance, or the root of the quadric where that was within)
 };
 
 /// Decimates `surface` by edge collapses, cheapest first, with quadric error metrics (M. Garland,
 /// P. Heckbert, "Surface simplification using quadric error metrics", SIGGRAPH 1997,
 /// doi:10.1145/258734.258849). Each vertex carries the sum of the squared-distance quadrics of the
-/// planes of the input faces around it, one per face, unweighted: the square root of the sum at a
-/// point bounds the point's distance from every one of those planes. A collapse merges the two
-/// quadrics and places the vertex at their minimiser nearest the edge's midpoint (small
-/// eigenvalues cut, as Lindstrom and Turk's placement does where the optimum is not unique: a flat
-/// region keeps its vertices in its plane), else at an end of the edge; cheapest first. It is made
-/// when
-///   * the merged quadric there is at most max_error²;
+/// planes of the input faces around it, one per face, unweighted, and the list of those faces. A
+/// collapse merges the two quadrics and lists and places the vertex at the quadric's minimiser
+/// nearest the edge's midpoint (small eigenvalues cut, as Lindstrom and Turk's placement does where
+/// the optimum is not unique: a flat region keeps its vertices in its plane), else at an end of the
+/// edge; cheapest (the quadric there) first. It is made when
+///   * the point lies within max_error of the plane of every input face the two ends took in: the
+///     square root of the merged quadric bounds those distances, and where it is over max_error
+///     they are checked one by one (a scan's noise fills the sum of squares long before any one
+///     plane is near the bound; meshing version 50);
 ///   * the link condition holds (the two ends share exactly the edge's two opposite vertices as
 ///     neighbours: no handle closed, no component collapsed) and each opposite vertex keeps three
 ///     neighbours;
