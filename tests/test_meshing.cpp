@@ -1382,6 +1382,19 @@ TEST(MeshingSurfaceIO, PlyTriangleStripsAreReadAsTheirTriangles) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.ply: PLY tristrips 1: vertex index 99 out of range"), std::string::npos) << e.what();
   }
+  // So does an index that is not a whole number (NaN, a fraction).
+  for (const char* v : {"nan", "2.5"}) {
+    std::string odd = ascii;
+    odd.replace(odd.rfind(" 21"), 3, std::string(" ") + v);
+    std::ofstream(dir / "odd.ply", std::ios::binary) << odd;
+    try {
+      squeeze::meshing::load_surface(dir / "odd.ply");
+      ADD_FAILURE() << "no error for " << v;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("odd.ply: PLY tristrips 1: "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("is not a vertex index"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(MeshingSurfaceIO, OwnFormatsInEitherCaseAndTheMessageList) {

@@ -397,6 +397,9 @@ void read_ply_with_strips(const fs::path& path, const PlyLayout& layout, std::ve
   std::vector<std::vector<long long>> faces;
   check_ply(path, [&](size_t e, long long item, size_t prop, long long at, double x) {
     const long ei = static_cast<long>(e), pi = static_cast<long>(prop);
+    if (at >= 0 && ((ei == es && pi == ps) || (ei == ef && pi == pf)) && !(std::abs(x) < 4e18 && x == std::floor(x)))
+      throw InputError(name + ": PLY " + layout[e].first + " " + std::to_string(item) + ": '" + std::to_string(x) +
+                       "' is not a vertex index");
     if (ei == ev && at < 0) {
       if (static_cast<size_t>(item) >= pts.size()) pts.resize(static_cast<size_t>(item) + 1);
       const int k = pi == px ? 0 : pi == py ? 1 : pi == pz ? 2 : -1;
