@@ -94,7 +94,6 @@ class Decimator {
     q_.resize(pos_.size());
     plane_.assign(F_.size(), Eigen::Vector4d::Zero());
     planes_of_.resize(pos_.size());
-    max_error_ = opt.max_error;
     bound_ = opt.max_error * opt.max_error;
     stamp_.assign(pos_.size(), 0);
     parked_.resize(pos_.size());
@@ -127,12 +126,11 @@ class Decimator {
   }
 
   void run(DecimateStats* stats) {
-    const double bound = bound_;
     std::vector<Candidate> initial;
     initial.reserve(edges_.size());
     for (const auto& [a, b] : edges_) {
       Candidate c;
-      if (candidate(a, b, bound, &c)) initial.push_back(c);
+      if (candidate(a, b, &c)) initial.push_back(c);
     }
     std::priority_queue<Candidate, std::vector<Candidate>, Later> heap(Later{}, std::move(initial));
     int collapses = 0;
@@ -145,14 +143,16 @@ class Decimator {
       if (vf_[u].empty() || vf_[w].empty() || stamp_[u] != c.su || stamp_[w] != c.sw) continue;  // stale
       Vec3 p;
       double error = 0;
-      if (!candidate(c.u, c.w, bound, nullptr, &p, &error)) continue;
+      if (!candidate(c.u, c.w, nullptr, &p, &error)) continue;
       bool made = collapse(c.u, c.w, p);
       // Where the quadric's placement fails the checks, the edge's ends within the bound: a flat
       // region's midpoints often make slivers where an end does not.
       if (!made && !frozen_[u]) {
+        Quadric q = q_[u];
+        q += q_[w];
         for (const size_t end : {u, w}) {
           const Vec3 e = pos_[end];
-          if (within(u, w, e, &error) && collapse(c.u, c.w, e)) {
+          if (within(u, w, e, q.at(e), &error) && collapse(c.u, c.w, e)) {
             made = true;
             break;
           }
@@ -171,14 +171,14 @@ class Decimator {
       neighbours(c.u, ring);
       for (int x : ring) {
         Candidate n;
-        if (candidate(c.u, x, bound, &n)) heap.push(n);
+        if (candidate(c.u, x, &n)) heap.push(n);
       }
       ring.push_back(c.u);
       for (int x : ring) {
         for (int y : parked_[static_cast<size_t>(x)]) {
           Candidate n;
           if (parked_edges_.erase(key(x, y)) && !vf_[static_cast<size_t>(y)].empty() &&
-              candidate(x, y, bound, &n))
+              candidate(x, y, &n))
             heap.push(n);
         }
         parked_[static_cast<size_t>(x)].clear();
@@ -271,29 +271,22 @@ class Decimator {
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
 
-  // Whether p lies within max_error of the plane of every input face that u and w took in: where
-  // their summed quadric is within max_error² there the root bounds every distance; else the
-  // planes one by one. The largest distance (or that root) in *error.
-  bool within(size_t u, size_t w, const Vec3& p, double* error) const {
-    Quadric q = q_[u];
-    q += q_[w];
-    const double cost = q.at(p);
+  // Whether p lies within max_error of the plane of every input face that u and w took in, given
+  // their summed quadric's value there (cost): where that is within max_error² its root bounds
+  // every distance; else (plane_by_plane) the planes are checked one by one. The largest distance
+  // (or that root) in *error.
+  bool within(size_t u, size_t w, const Vec3& p, double cost, double* error) const {
     if (cost <= bound_) {
       *error = std::sqrt(cost);
       return true;
     }
-    return opt_.plane_by_plane && planes_within(u, w, p, error);
-  }
-
-  // Whether p lies within max_error of the plane of every input face that u and w took in, checked
-  // one by one; the largest distance in *error.
-  bool planes_within(size_t u, size_t w, const Vec3& p, double* error) const {
+    if (!opt_.plane_by_plane) return false;
     double worst = 0;
     for (const size_t v : {u, w})
       for (const int f : planes_of_[v]) {
         const Eigen::Vector4d& h = plane_[static_cast<size_t>(f)];
         const double d = std::abs(h.head<3>().dot(p) + h[3]);
-        if (d > max_error_) return false;
+        if (d > opt_.max_error) return false;
         worst = std::max(worst, d);
       }
     *error = worst;
@@ -302,7 +295,7 @@ class Decimator {
 
   // The collapse of edge (a, b), where its placement lies within the bound (within()); its
   // placement in *at where asked. Its cost, the queue's order, is the summed quadric there.
-  bool candidate(int a, int b, double bound, Candidate* c, Vec3* at = nullptr, double* error = nullptr) const {
+  bool candidate(int a, int b, Candidate* c, Vec3* at = nullptr, double* error = nullptr) const {
     const size_t ia = static_cast<size_t>(a), ib = static_cast<size_t>(b);
     if (frozen_[ia] && frozen_[ib]) return false;
     int u = std::min(a, b), w = std::max(a, b);
@@ -316,8 +309,8 @@ class Decimator {
       p = minimiser_near(q, m, (pos_[iu] - pos_[iw]).norm());
     }
     const double cost = q.at(p);
-    double e = std::sqrt(cost);
-    if (!(cost <= bound) && !(opt_.plane_by_plane && planes_within(iu, iw, p, &e))) return false;
+    double e = 0;
+    if (!within(iu, iw, p, cost, &e)) return false;
     if (c) *c = {cost, u, w, stamp_[iu], stamp_[iw]};
     if (at) *at = p;
     if (error) *error = e;
@@ -411,7 +404,7 @@ class Decimator {
   std::vector<char> frozen_;
   std::vector<std::pair<int, int>> edges_;  // every edge once (a < b), sorted
   std::vector<Quadric> q_;
-  double max_error_ = 0, bound_ = 0;      // units, and its square
+  double bound_ = 0;                      // max_error² (squared units)
   std::vector<Eigen::Vector4d> plane_;    // per input face: unit normal and offset about centre_ (0: no area)
   std::vector<std::vector<int>> planes_of_;  // per vertex: the input faces it took in, in increasing order
   std::vector<unsigned> stamp_;

@@ -2760,12 +2760,14 @@ namespace {
 // the envelope's edge collapses, about 25 µs each) is decimated by quadric error within
 // dense_error of the inner bound (decimate_quadric: its vertices within that of the planes of the
 // input faces they took in; topology, borders and seams kept) and the proxy meshed. The result's
-// input, analysis, volume and measures are the input's: within the bounds plus the proxy's error
-// (a tenth of the inner bound: 0.495 % of the diagonal in, at most, by default), as the triangle
-// inequality has it. The proxy is meshed with the bounds as asked: reduced by its error, the
-// bunny took 2,334 tetrahedra at the default where its own surface takes 1,691 (with the bounds as
-// asked, 1,677, within them against the input); and where a route keeps its bound only to 1.5
-// times (the winding-number route), meshing again with reduced bounds doubled the seconds.
+// input, analysis, volume and measures are the input's: measured against it, not assumed. (The
+// proxy's vertices lie within its error, a tenth of the inner bound, of the input's planes; the
+// input's vertices can lie farther from the proxy, under chords: 1.73 times that on a many-part
+// scan, docs/meshing.md, "Version 50".) The proxy is meshed with the bounds as asked: reduced by
+// its error, the bunny took 2,334 tetrahedra at the default where its own surface takes 1,691
+// (with the bounds as asked, 1,677, within them against the input); and where a route keeps its
+// bound only to 1.5 times (the winding-number route), meshing again with reduced bounds doubled
+// the seconds.
 MeshResult mesh_through_proxy(const SurfaceMesh& surface, const MeshOptions& opt, Progress* progress) {
   if (!(opt.dense_error >= 0 && opt.dense_error < 1)) throw InputError("MeshOptions::dense_error must be in [0, 1)");
   // (Bad inputs and options: the usual errors, from the usual route.)

@@ -20,6 +20,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <unordered_map>
@@ -154,12 +155,13 @@ void read_obj_in_order(const fs::path& path, std::vector<std::array<double, 3>>&
 // the header describes it: ASCII, one item per line with one token per scalar and, for a list, a
 // non-negative whole count followed by that many tokens; binary, every list count read (in the
 // file's byte order) and its items found within the file. Throws InputError naming the line or item.
-// Where `visit` is given it is called with every value in file order: (element index, item, property
-// index, position in the list or -1 for a scalar, value). Returns the elements' names with their
-// properties' names, in order.
+// Once the header is read, `visitor_for` (where given) is asked, with the elements' names and their
+// properties' names in order, for a visitor; one that it returns is called with every value of the
+// body in file order: (element index, item, property index, position in the list or -1 for a
+// scalar, value).
 using PlyVisitor = std::function<void(size_t element, long long item, size_t property, long long at, double value)>;
 using PlyLayout = std::vector<std::pair<std::string, std::vector<std::string>>>;
-PlyLayout check_ply(const fs::path& path, const PlyVisitor& visit = nullptr) {
+void check_ply(const fs::path& path, const std::function<PlyVisitor(const PlyLayout&)>& visitor_for = nullptr) {
   const std::string name = path.string();
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(name + ": cannot open for reading");
@@ -254,10 +256,14 @@ PlyLayout check_ply(const fs::path& path, const PlyVisitor& visit = nullptr) {
   if (!ended) throw InputError(name + ": PLY header has no end_header line (truncated?)");
   for (const std::string& w : skipped) spdlog::warn("{}: {}", name, w);
   if (!format) throw InputError(name + ": PLY header has no format line");
-  PlyLayout names;
-  for (const Element& e : elements) {
-    names.emplace_back(e.name, std::vector<std::string>{});
-    for (const Property& prop : e.properties) names.back().second.push_back(prop.name);
+  PlyVisitor visit;
+  if (visitor_for) {
+    PlyLayout layout;
+    for (const Element& e : elements) {
+      layout.emplace_back(e.name, std::vector<std::string>{});
+      for (const Property& prop : e.properties) layout.back().second.push_back(prop.name);
+    }
+    visit = visitor_for(layout);
   }
 
   const auto truncated = [&](const Element& e, long long item, const std::string& what) {
@@ -301,7 +307,7 @@ PlyLayout check_ply(const fs::path& path, const PlyVisitor& visit = nullptr) {
         }
       }
     }
-    return names;
+    return;
   }
   // Binary: the body in memory (the file was read whole by assimp anyway).
   const std::streamoff header_end = in.tellg();
@@ -336,7 +342,7 @@ PlyLayout check_ply(const fs::path& path, const PlyVisitor& visit = nullptr) {
       std::memcpy(&d, &u, 8);
       return d;
     }
-    const bool is_signed = type == "char" || type == "short" || type == "int" || type.compare(0, 3, "int") == 0;
+    const bool is_signed = type == "char" || type == "short" || type.compare(0, 3, "int") == 0;  // (int, int8-int32)
     if (is_signed && bytes < 8 && (u >> (8 * bytes - 1)) & 1u) return static_cast<double>(static_cast<long long>(u) - (1LL << (8 * bytes)));
     return static_cast<double>(u);
   };
@@ -363,85 +369,99 @@ PlyLayout check_ply(const fs::path& path, const PlyVisitor& visit = nullptr) {
         at += static_cast<size_t>(n) * static_cast<size_t>(prop.size);
       }
   }
-  return names;
 }
 
 // A PLY file whose triangles come as strips (an element `tristrips` with a list `vertex_indices`, -1
 // restarting a strip: the Stanford and VCG exporters' igea, for one), which Debian's assimp 5.2 reads
-// as one triangle. Read here: the `vertex` element's x, y, z; each strip's triangle k made of its
-// items k, k+1, k+2, every other one turned to keep the strip's orientation (the first as written),
-// those with a repeated vertex (joins between strips) dropped; a `face` element too, if any, each
-// polygon as a fan. Throws InputError naming the strip or face with an index out of range.
-void read_ply_with_strips(const fs::path& path, const PlyLayout& layout, std::vector<std::array<double, 3>>& pts,
-                          std::vector<std::array<int, 3>>& tris) {
-  const std::string name = path.string();
-  const auto element = [&](const std::string& e) -> long {
-    for (size_t i = 0; i < layout.size(); ++i)
-      if (layout[i].first == e) return static_cast<long>(i);
-    return -1;
-  };
-  const auto property = [&](long e, std::initializer_list<const char*> names) -> long {
-    if (e < 0) return -1;
-    const auto& props = layout[static_cast<size_t>(e)].second;
-    for (const char* n : names)
-      for (size_t i = 0; i < props.size(); ++i)
-        if (props[i] == n) return static_cast<long>(i);
-    return -1;
-  };
-  const long ev = element("vertex"), es = element("tristrips"), ef = element("face");
-  const long px = property(ev, {"x"}), py = property(ev, {"y"}), pz = property(ev, {"z"});
-  const long ps = property(es, {"vertex_indices", "vertex_index"}), pf = property(ef, {"vertex_indices", "vertex_index"});
-  if (px < 0 || py < 0 || pz < 0) throw InputError(name + ": PLY has no vertex element with x, y and z");
-  if (ps < 0) throw InputError(name + ": PLY tristrips element has no list vertex_indices");
-  std::vector<std::pair<long long, long long>> strip;  // (index, strip item) in file order; -1 restarts
-  std::vector<std::vector<long long>> faces;
-  check_ply(path, [&](size_t e, long long item, size_t prop, long long at, double x) {
+// as one triangle. Read here, from check_ply's walk of the body (take()): the `vertex` element's x,
+// y, z; each strip's triangle k made of its items k, k+1, k+2, every other one turned to keep the
+// strip's orientation (the first as written), those with a repeated vertex (joins between strips)
+// dropped; a `face` element too, if any, each polygon as a fan. Throws InputError naming the strip
+// or face with an index that is not a whole number, or out of range.
+class PlyStrips {
+ public:
+  PlyStrips(std::string name, const PlyLayout& layout) : name_(std::move(name)) {
+    const auto element = [&](const std::string& e) -> long {
+      for (size_t i = 0; i < layout.size(); ++i)
+        if (layout[i].first == e) return static_cast<long>(i);
+      return -1;
+    };
+    const auto property = [&](long e, std::initializer_list<const char*> names) -> long {
+      if (e < 0) return -1;
+      const auto& props = layout[static_cast<size_t>(e)].second;
+      for (const char* n : names)
+        for (size_t i = 0; i < props.size(); ++i)
+          if (props[i] == n) return static_cast<long>(i);
+      return -1;
+    };
+    ev_ = element("vertex"), es_ = element("tristrips"), ef_ = element("face");
+    px_ = property(ev_, {"x"}), py_ = property(ev_, {"y"}), pz_ = property(ev_, {"z"});
+    ps_ = property(es_, {"vertex_indices", "vertex_index"}), pf_ = property(ef_, {"vertex_indices", "vertex_index"});
+    if (px_ < 0 || py_ < 0 || pz_ < 0) throw InputError(name_ + ": PLY has no vertex element with x, y and z");
+    if (ps_ < 0) throw InputError(name_ + ": PLY tristrips element has no list vertex_indices");
+  }
+
+  // One value of the body (check_ply's visitor).
+  void take(size_t e, long long item, size_t prop, long long at, double x) {
     const long ei = static_cast<long>(e), pi = static_cast<long>(prop);
-    if (at >= 0 && ((ei == es && pi == ps) || (ei == ef && pi == pf)) && !(std::abs(x) < 4e18 && x == std::floor(x)))
-      throw InputError(name + ": PLY " + layout[e].first + " " + std::to_string(item) + ": '" + std::to_string(x) +
-                       "' is not a vertex index");
-    if (ei == ev && at < 0) {
-      if (static_cast<size_t>(item) >= pts.size()) pts.resize(static_cast<size_t>(item) + 1);
-      const int k = pi == px ? 0 : pi == py ? 1 : pi == pz ? 2 : -1;
-      if (k >= 0) pts[static_cast<size_t>(item)][static_cast<size_t>(k)] = x;
-    } else if (ei == es && pi == ps && at >= 0) {
-      if (at == 0 && !strip.empty()) strip.emplace_back(-1, item);  // (a new strip item restarts)
-      strip.emplace_back(static_cast<long long>(x), item);
-    } else if (ei == ef && pi == pf && at >= 0) {
-      if (at == 0) faces.emplace_back();
-      faces.back().push_back(static_cast<long long>(x));
+    const bool strip = ei == es_ && pi == ps_ && at >= 0, face = ei == ef_ && pi == pf_ && at >= 0;
+    if ((strip || face) && !(std::abs(x) < 4e18 && x == std::floor(x)))
+      throw InputError(name_ + ": PLY " + (strip ? "tristrips " : "face ") + std::to_string(item) + ": '" +
+                       std::to_string(x) + "' is not a vertex index");
+    if (ei == ev_ && at < 0) {
+      if (static_cast<size_t>(item) >= pts_.size()) pts_.resize(static_cast<size_t>(item) + 1);
+      const int k = pi == px_ ? 0 : pi == py_ ? 1 : pi == pz_ ? 2 : -1;
+      if (k >= 0) pts_[static_cast<size_t>(item)][static_cast<size_t>(k)] = x;
+    } else if (strip) {
+      if (at == 0 && !strip_.empty()) strip_.emplace_back(-1, item);  // (a new strip item restarts)
+      strip_.emplace_back(static_cast<long long>(x), item);
+    } else if (face) {
+      if (at == 0) faces_.emplace_back();
+      faces_.back().push_back(static_cast<long long>(x));
     }
-  });
-  const auto n = static_cast<long long>(pts.size());
-  const auto in_range = [&](long long v, const std::string& where) {
-    if (v < 0 || v >= n)
-      throw InputError(name + ": PLY " + where + ": vertex index " + std::to_string(v) + " out of range (" +
-                       std::to_string(n) + " vertices)");
-    return static_cast<int>(v);
-  };
-  std::array<long long, 2> last{-1, -1};
-  int k = 0;  // triangles of the current strip so far
-  for (const auto& [v, item] : strip) {
-    if (v == -1) {
-      last = {-1, -1};
-      k = 0;
-      continue;
-    }
-    const int c = in_range(v, "tristrips " + std::to_string(item));
-    if (last[0] >= 0 && last[1] >= 0) {
-      const int a = static_cast<int>(last[0]), b = static_cast<int>(last[1]);
-      if (a != b && b != c && c != a) tris.push_back(k % 2 == 0 ? std::array<int, 3>{a, b, c} : std::array<int, 3>{b, a, c});
-      ++k;
-    }
-    last = {last[1], c};
   }
-  for (size_t f = 0; f < faces.size(); ++f) {
-    const auto& poly = faces[f];
-    for (size_t i = 1; i + 1 < poly.size(); ++i)
-      tris.push_back({in_range(poly[0], "face " + std::to_string(f)), in_range(poly[i], "face " + std::to_string(f)),
-                      in_range(poly[i + 1], "face " + std::to_string(f))});
+
+  // The points and triangles, once the body is read.
+  void triangles(std::vector<std::array<double, 3>>& pts, std::vector<std::array<int, 3>>& tris) {
+    const auto n = static_cast<long long>(pts_.size());
+    const auto in_range = [&](long long v, const std::string& where) {
+      if (v < 0 || v >= n)
+        throw InputError(name_ + ": PLY " + where + ": vertex index " + std::to_string(v) + " out of range (" +
+                         std::to_string(n) + " vertices)");
+      return static_cast<int>(v);
+    };
+    std::array<long long, 2> last{-1, -1};
+    int k = 0;  // triangles of the current strip so far
+    for (const auto& [v, item] : strip_) {
+      if (v == -1) {
+        last = {-1, -1};
+        k = 0;
+        continue;
+      }
+      const int c = in_range(v, "tristrips " + std::to_string(item));
+      if (last[0] >= 0 && last[1] >= 0) {
+        const int a = static_cast<int>(last[0]), b = static_cast<int>(last[1]);
+        if (a != b && b != c && c != a) tris.push_back(k % 2 == 0 ? std::array<int, 3>{a, b, c} : std::array<int, 3>{b, a, c});
+        ++k;
+      }
+      last = {last[1], c};
+    }
+    for (size_t f = 0; f < faces_.size(); ++f) {
+      const auto& poly = faces_[f];
+      const std::string where = "face " + std::to_string(f);
+      for (size_t i = 1; i + 1 < poly.size(); ++i)
+        tris.push_back({in_range(poly[0], where), in_range(poly[i], where), in_range(poly[i + 1], where)});
+    }
+    pts = std::move(pts_);
   }
-}
+
+ private:
+  std::string name_;
+  long ev_, es_, ef_, px_, py_, pz_, ps_, pf_;  // elements' and properties' indices (-1: none)
+  std::vector<std::array<double, 3>> pts_;
+  std::vector<std::pair<long long, long long>> strip_;  // (index, strip item) in file order; -1 restarts
+  std::vector<std::vector<long long>> faces_;
+};
 
 // OFF in file order and full double precision (assimp parses OFF in single precision): header
 // OFF, COFF, NOFF or CNOFF (extra per-vertex columns ignored), '#' comments, polygons as fans.
@@ -735,9 +755,14 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
   if (own && own->read && (own->read_always || options.keep_order)) {
     own->read(path, pts, tris);
   } else {
-    PlyLayout ply;
-    if (lower(path.extension().string()) == ".ply") ply = check_ply(path);
-    const bool strips = std::any_of(ply.begin(), ply.end(), [](const auto& e) { return e.first == "tristrips"; });
+    // (A PLY of triangle strips is read by PlyStrips, in the same walk of its body as the check.)
+    std::optional<PlyStrips> strips;
+    if (lower(path.extension().string()) == ".ply")
+      check_ply(path, [&](const PlyLayout& layout) -> PlyVisitor {
+        if (std::none_of(layout.begin(), layout.end(), [](const auto& e) { return e.first == "tristrips"; })) return nullptr;
+        strips.emplace(name, layout);
+        return [&](size_t e, long long item, size_t prop, long long at, double x) { strips->take(e, item, prop, at, x); };
+      });
     // Only aiProcess_ValidateDataStructure: indices past the vertex list (a truncated or corrupt
     // file) are reported as an error. No assimp triangulation: collect() splits polygons as fans and
     // drops points and lines itself, because Debian's assimp 5.2 aborts the process (ai_assert) in
@@ -746,7 +771,7 @@ SurfaceMesh load_surface(const fs::path& path, const LoadOptions& options) {
     const unsigned flags = aiProcess_ValidateDataStructure |
                            (options.keep_order || options.merge_coincident ? 0u : aiProcess_JoinIdenticalVertices);
     if (strips) {
-      read_ply_with_strips(path, ply, pts, tris);
+      strips->triangles(pts, tris);
     } else if (options.assimp_in_child) {
       read_with_assimp_in_child(name, flags, pts, tris);
     } else {
