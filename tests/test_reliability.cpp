@@ -85,6 +85,24 @@ std::vector<Fault> faults() {
          return std::vector<std::string>{"mesh", write(d, "bad.ply", kPlyHeader + body), "-o", "out.mesh"};
        },
        {"bad.ply"}, {"out of range"}},
+      // A PLY of triangle strips (read by squeeze itself, not assimp): an index past the vertices,
+      // and a strips element without its list of indices.
+      {"ply_strip_index_past_vertices",
+       [](const fs::path& d) {
+         std::string ply = std::string(kPlyHeader).substr(0, std::string(kPlyHeader).find("element face")) +
+                           "element tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+                           "0 0 0\n1 0 0\n0 1 0\n0 0 1\n6 0 2 1 3 9 2\n";
+         return std::vector<std::string>{"mesh", write(d, "strips.ply", ply), "-o", "out.mesh"};
+       },
+       {"strips.ply", "tristrips 0"}, {"out of range"}},
+      {"ply_strips_without_indices",
+       [](const fs::path& d) {
+         std::string ply = std::string(kPlyHeader).substr(0, std::string(kPlyHeader).find("element face")) +
+                           "element tristrips 1\nproperty list int int corners\nend_header\n"
+                           "0 0 0\n1 0 0\n0 1 0\n0 0 1\n4 0 2 1 3\n";
+         return std::vector<std::string>{"mesh", write(d, "strips.ply", ply), "-o", "out.mesh"};
+       },
+       {"strips.ply", "vertex_indices"}, {"no list"}},
       {"ply_header_without_end",
        [](const fs::path& d) {
          return std::vector<std::string>{"mesh", write(d, "cut.ply", std::string(kPlyHeader).substr(0, 150)), "-o", "out.mesh"};
