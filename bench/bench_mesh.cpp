@@ -51,6 +51,9 @@
 //                             tetrahedra and both deviations (fractions of the diagonal) as counters
 //  BM_Decimate                decimate_quadric() alone on that bunny, within 0.045 % of its
 //                             diagonal (the pipeline's default bound): faces left, collapses
+//  BM_SimplifyEnvelope/<no_local_crossings>  simplify_envelope() on the corpus bunny toward 1,000
+//                             faces within the default bounds, with (1) or without (0) the test for
+//                             faces crossing around each collapse: ms, faces, collapses
 //  BM_TriangleBvh/<query>      TriangleBvh's nearest() (0 unbounded, 1 within 1 % of the diagonal)
 //                             and any_within() (2) on the heart's 40,620 triangles: ns per query
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
@@ -77,6 +80,7 @@
 
 #include "shapes.h"
 #include "squeeze/meshing/decimate.h"
+#include "squeeze/meshing/envelope.h"
 #include "squeeze/meshing/mesh_pipeline.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/surface_normals.h"
@@ -709,6 +713,25 @@ void BM_Decimate(benchmark::State& state) {
   state.counters["collapses"] = stats.collapses;
 }
 BENCHMARK(BM_Decimate)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+// simplify_envelope() on the corpus bunny (75,408 faces) within the pipeline's default bounds (1 %
+// of the diagonal out, 0.45 % in) toward 1,000 faces, with the test for crossing faces around each
+// collapse (1, no_local_crossings, the default since meshing version 51) or without (0): the cost of
+// that test; faces left and collapses as counters.
+void BM_SimplifyEnvelope(benchmark::State& state) {
+  static const squeeze::meshing::SurfaceMesh m = squeeze::meshing::load_surface(data("bunny00.off"));
+  const double diag = squeeze::meshing::bounding_box_diagonal(m.V);
+  squeeze::meshing::EnvelopeOptions e;
+  e.max_outside = 0.01 * diag;
+  e.max_inside = 0.0045 * diag;
+  e.target_faces = 1000;
+  e.no_local_crossings = state.range(0) == 1;
+  squeeze::meshing::EnvelopeStats stats;
+  for (auto _ : state) benchmark::DoNotOptimize(squeeze::meshing::simplify_envelope(m, e, &stats).F.data());
+  state.counters["faces"] = stats.faces;
+  state.counters["collapses"] = stats.collapses;
+}
+BENCHMARK(BM_SimplifyEnvelope)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 // TriangleBvh on the heart's 40,620 triangles, at the kind of points the envelope's checks and the
 // deviation measures ask about: the input's vertices moved along their normals by 0.1-3 % of the

@@ -398,4 +398,60 @@ inline squeeze::meshing::SurfaceMesh loop_subdivided(squeeze::meshing::SurfaceMe
   return m;
 }
 
+// A sphere 0.2 m across (64 sides, 40 rings, poles on z) with 20 spikes up to 2.5 times its radius,
+// in the directions numpy's default_rng(7) gave (scripts/gen_unseen_shapes.py --version24's
+// urchin.off): two spikes nearly touch, and at 150 tetrahedra its first boundary loses conformity.
+inline squeeze::meshing::SurfaceMesh urchin() {
+  static const double D[20][3] = {
+      {0.0030339313066555392, 0.73679711026063899, -0.67610710214610104},
+      {-0.63239849773720447, -0.32285622772920797, -0.7041562300201516},
+      {0.042087685075105526, 0.93786462319696129, -0.34443950894263081},
+      {-0.7153653745955425, 0.56475458044325777, 0.41146645634624829},
+      {0.11251663010909582, -0.99315917734094716, -0.031222690664738276},
+      {0.43976845263432429, -0.85019478722324882, -0.28943484905247102},
+      {-0.64570609613284791, -0.43796150884443757, -0.62550248136005104},
+      {-0.17846471749248885, -0.96215657823282341, 0.20592489789637089},
+      {0.061992342737848004, -0.073927954423627609, -0.99533492202203544},
+      {-0.97481011189947842, -0.087766540784509711, 0.20504214214947925},
+      {-0.81474807533272076, -0.25438825162287537, -0.52102993309202872},
+      {-0.51867344382340297, 0.68030985186826376, -0.51783816402748095},
+      {-0.0306782249992451, 0.83425857851190321, -0.55051927367731146},
+      {-0.65880774084479821, 0.65150727386110541, 0.37617899025469737},
+      {-0.66902397409745762, 0.041581484220584095, 0.74207674957032421},
+      {-0.87221018984564613, 0.48448108833370052, 0.067286401125449327},
+      {-0.28704108651191951, 0.8951336557592916, 0.34109112122871621},
+      {-0.89981101199004743, 0.055908566403668356, 0.43268276474125184},
+      {-0.26527803812113765, 0.95963055590001634, -0.093470630005504068},
+      {0.38710553501139028, 0.83456289712431064, -0.39198734100353627}};
+  const int nu = 64, nv = 40;
+  squeeze::meshing::SurfaceMesh m;
+  m.V.resize(2 + (nv - 1) * nu, 3);
+  m.V.row(0) << 0, 0, 1;
+  for (int k = 1; k < nv; ++k)
+    for (int j = 0; j < nu; ++j) {
+      const double th = M_PI * k / nv, a = 2 * M_PI * j / nu;
+      m.V.row(1 + (k - 1) * nu + j) << std::sin(th) * std::cos(a), std::sin(th) * std::sin(a), std::cos(th);
+    }
+  m.V.row(m.V.rows() - 1) << 0, 0, -1;
+  const int n = static_cast<int>(m.V.rows());
+  auto idx = [&](int k, int j) { return 1 + (k - 1) * nu + j % nu; };
+  std::vector<Eigen::RowVector3i> F;
+  for (int j = 0; j < nu; ++j) F.emplace_back(0, idx(1, j), idx(1, j + 1));
+  for (int k = 1; k < nv - 1; ++k)
+    for (int j = 0; j < nu; ++j) {
+      F.emplace_back(idx(k, j), idx(k + 1, j), idx(k + 1, j + 1));
+      F.emplace_back(idx(k, j), idx(k + 1, j + 1), idx(k, j + 1));
+    }
+  for (int j = 0; j < nu; ++j) F.emplace_back(n - 1, idx(nv - 1, j + 1), idx(nv - 1, j));
+  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t f = 0; f < F.size(); ++f) m.F.row(static_cast<Eigen::Index>(f)) = F[f];
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v) {
+    const Eigen::Vector3d N = m.V.row(v).transpose().normalized();
+    double s = 0;
+    for (const auto& d : D) s = std::max(s, std::max(0.0, (N.dot(Eigen::Vector3d(d[0], d[1], d[2])) - 0.97) / 0.03));
+    m.V.row(v) = (0.1 * (1 + 1.5 * s * s)) * N.transpose();
+  }
+  return m;
+}
+
 }  // namespace sqs

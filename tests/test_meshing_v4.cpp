@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -32,6 +33,7 @@
 #include "squeeze/meshing/tetrahedralize.h"
 #include "squeeze/meshing/surface_analysis.h"
 #include "squeeze/meshing/triangle_bvh.h"
+#include "squeeze/meshing/triangle_intersection.h"
 #include "squeeze/meshing/winding_number.h"
 #include "squeeze/meshing/winding_tetrahedralize.h"
 
@@ -2977,4 +2979,101 @@ TEST(MeshingV4, ExuderStopsAtItsPumpBoundTheSameWayEachRun) {
   squeeze::meshing::tetrahedralize(
       squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/tests/data/elephant.off"), o, &e);
   EXPECT_EQ(e.exuder_pump_bounds, 0);
+}
+
+// triangles_cross: two faces of one surface meet only at the corners and edge they share, or they
+// cross. Each case also with the triangles swapped and their corners turned (the same answer).
+TEST(TriangleIntersection, CrossingTouchingAndSharedCornersAreToldApart) {
+  using squeeze::meshing::triangles_cross;
+  using T = std::array<Vec3, 3>;
+  using I = std::array<std::int64_t, 3>;
+  auto check = [](const T& a, const I& ia, const T& b, const I& ib, bool expected, const char* what) {
+    for (int turn = 0; turn < 3; ++turn) {
+      const T a2{a[static_cast<size_t>(turn)], a[static_cast<size_t>((turn + 1) % 3)], a[static_cast<size_t>((turn + 2) % 3)]};
+      const I ia2{ia[static_cast<size_t>(turn)], ia[static_cast<size_t>((turn + 1) % 3)], ia[static_cast<size_t>((turn + 2) % 3)]};
+      EXPECT_EQ(triangles_cross(a2, ia2, b, ib), expected) << what << ", turned " << turn;
+      EXPECT_EQ(triangles_cross(b, ib, a2, ia2), expected) << what << ", swapped, turned " << turn;
+    }
+  };
+  const T flat{Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0)};
+  const I flat_ids{0, 1, 2};
+  // No corner shared.
+  check(flat, flat_ids, {Vec3(0.2, 0.2, -1), Vec3(0.3, 0.3, 1), Vec3(3, 3, 0.5)}, {3, 4, 5}, true, "pierced");
+  check(flat, flat_ids, {Vec3(0, 0, 1), Vec3(2, 0, 1), Vec3(0, 2, 1)}, {3, 4, 5}, false, "parallel, apart");
+  check(flat, flat_ids, {Vec3(0.5, 0.5, 0), Vec3(3, 0.5, 0), Vec3(0.5, 3, 0)}, {3, 4, 5}, true, "one plane, overlapping");
+  // The same point under two ids is two corners: they touch, and that is a crossing.
+  check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(-1, 0, 1), Vec3(0, -1, 1)}, {3, 4, 5}, true, "a corner on a corner, not shared");
+  // One corner shared.
+  check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(-1, 0, 1), Vec3(0, -1, 1)}, {0, 4, 5}, false, "a fan's neighbour, bent");
+  check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(1, 1, -1)}, {0, 4, 5}, true, "its opposite edge through the other");
+  check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(0.5, 0.5, 1), Vec3(1, 0.2, 1)}, {0, 4, 5}, false, "above it, from the corner");
+  check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(-1, 0, 0), Vec3(0, -1, 0)}, {0, 4, 5}, false, "one plane, side by side");
+  check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(0.5, 0.1, 0), Vec3(-1, -3, 0)}, {0, 4, 5}, true, "one plane, an edge into its angle");
+  check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(0.2, 0.4, 0), Vec3(0.4, 0.2, 0)}, {0, 4, 5}, true, "one plane, inside it");
+  // An edge shared: not tested (the fold test's), whatever the angle.
+  check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, -1, 0)}, {0, 1, 5}, false, "an edge, flat");
+  check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0.5, 0.5, 0)}, {0, 1, 5}, false, "an edge, folded onto it");
+}
+
+// simplify_envelope (no_local_crossings) leaves no two faces that cross: over every pair of faces
+// that share a corner (triangles_cross) and every pair that do not (does_self_intersect), on the
+// urchin of the tests and the sphere of tests/data, simplified toward a few targets.
+TEST(Envelope, SimplifiedFacesCrossNoOtherFace) {
+  for (const auto& [name, s] : {std::pair<std::string, SurfaceMesh>{"urchin", sqs::urchin()},
+                                {"sphere", squeeze::meshing::load_surface(std::string(SQUEEZE_TEST_DATA) + "/sphere.off")}}) {
+    const double diag = bounding_box_diagonal(s.V);
+    for (int target : {40, 150, 600}) {
+      squeeze::meshing::EnvelopeOptions e;
+      e.max_outside = 0.01 * diag;
+      e.max_inside = 0.0045 * diag;
+      e.target_faces = target;
+      const SurfaceMesh b = squeeze::meshing::simplify_envelope(s, e);
+      ASSERT_GT(b.F.rows(), 0) << name;
+      EXPECT_FALSE(squeeze::meshing::does_self_intersect(b)) << name << " at " << target;
+      std::vector<std::vector<int>> around(static_cast<size_t>(b.V.rows()));
+      for (int f = 0; f < b.F.rows(); ++f)
+        for (int k = 0; k < 3; ++k) around[static_cast<size_t>(b.F(f, k))].push_back(f);
+      int crossing = 0, pairs = 0;
+      for (const auto& faces : around)
+        for (size_t i = 0; i < faces.size(); ++i)
+          for (size_t j = i + 1; j < faces.size(); ++j) {
+            std::array<Vec3, 3> x, y;
+            std::array<std::int64_t, 3> ix, iy;
+            for (int k = 0; k < 3; ++k) {
+              ix[static_cast<size_t>(k)] = b.F(faces[i], k), iy[static_cast<size_t>(k)] = b.F(faces[j], k);
+              x[static_cast<size_t>(k)] = b.V.row(b.F(faces[i], k)).transpose();
+              y[static_cast<size_t>(k)] = b.V.row(b.F(faces[j], k)).transpose();
+            }
+            ++pairs;
+            crossing += squeeze::meshing::triangles_cross(x, ix, y, iy);
+          }
+      EXPECT_GT(pairs, b.F.rows()) << name;
+      EXPECT_EQ(crossing, 0) << name << " at " << target;
+    }
+  }
+}
+
+// Where a part's first boundary loses conformity (recovery gave up) and it has over
+// solid_first_faces faces, its winding-number solid is tried before retries 1 and 3 (meshing version
+// 51): the urchin at 150 (4,992 faces) holds no retry, and its solid is the same mesh either way.
+TEST(MeshingV4, SolidFirstWhereTheFirstBoundaryLostConformityIsTheSameMeshWithFewerRetries) {
+  const SurfaceMesh s = sqs::urchin();
+  ASSERT_EQ(s.F.rows(), 4992);
+  MeshOptions o;
+  o.tetrahedralize.target_tets = 150;
+  o.solid_first_faces = 0;  // (version 50: after every retry)
+  const MeshResult last = squeeze::meshing::mesh_surface(s, o);
+  o.solid_first_faces = 4000;
+  const MeshResult first = squeeze::meshing::mesh_surface(s, o);
+  ASSERT_EQ(last.parts_by_winding_number, 1) << "no boundary attempt held: the case this is about";
+  EXPECT_EQ(first.parts_by_winding_number, 1);
+  EXPECT_LT(first.boundary_retries, last.boundary_retries);
+  EXPECT_TRUE(first.tets.T == last.tets.T && first.tets.V == last.tets.V) << "the same solid";
+  const double diag = bounding_box_diagonal(s.V);
+  EXPECT_LE(first.deviation_out, 0.015 * diag);
+  EXPECT_LE(first.deviation_in, 0.005 * diag);
+  EXPECT_GE(first.quality.min_dihedral, 5.0);
+  o.solid_first_faces = 5000;  // over its faces: as version 50
+  const MeshResult over = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_EQ(over.boundary_retries, last.boundary_retries);
 }

@@ -34,6 +34,7 @@
 #include "squeeze/common/progress.h"
 #include "squeeze/meshing/point_triangle_distance.h"
 #include "squeeze/meshing/surface_normals.h"
+#include "squeeze/meshing/triangle_intersection.h"
 #include "squeeze/meshing/triangle_bvh.h"
 
 namespace squeeze::meshing {
@@ -60,6 +61,8 @@ struct State {
   double cos_fold = 0, cos_turn = 0;
   double min_angle = 0;            // radians
   double max_edge = INFINITY;      // no new edge longer (units)
+  bool no_crossings = false;       // EnvelopeOptions::no_local_crossings
+  std::vector<FD> around;          // faces around the link, outside the region (scratch)
   std::vector<Vec3> samples;       // points of the reference surface
   std::vector<std::vector<int>> assigned;  // samples answerable to each face (by face index)
   std::vector<FD> sample_face;     // ... and the face each sample is answerable to
@@ -103,6 +106,76 @@ double min_angle(const Vec3* q) {
   return m;
 }
 
+// A face a collapse would make: its corners (the new point's handle is the null vertex).
+struct Tri {
+  Vec3 a, b, c, n;
+  FD f;
+  Vec3 centre;    // of a ball holding the triangle
+  double radius;
+  std::array<VD, 3> v;
+};
+
+// Whether a new face crosses a face around a vertex of the collapse's link (not one of the
+// region's, which the collapse removes or replaces) or another new face.
+template <typename Profile>
+bool crosses_near(const Mesh& m, const Profile& profile, const std::vector<Tri>& tris, const std::vector<FD>& region,
+                  std::vector<FD>& around) {
+  around.clear();
+  for (VD w : profile.link()) faces_around(m, w, around);
+  around.erase(std::remove_if(around.begin(), around.end(),
+                              [&](FD f) { return std::find(region.begin(), region.end(), f) != region.end(); }),
+               around.end());
+  auto box = [](const Vec3& a, const Vec3& b, const Vec3& c) {
+    return std::array<Vec3, 2>{a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c)};
+  };
+  auto overlap = [](const std::array<Vec3, 2>& x, const std::array<Vec3, 2>& y) {
+    return (x[0].array() <= y[1].array()).all() && (y[0].array() <= x[1].array()).all();
+  };
+  // (Before the exact test: the corners of one triangle that it does not share, all on one side of
+  // the other's plane by over a billionth of its size, cannot reach it.)
+  auto apart = [](const Vec3& n, const Vec3& o, double size, const Vec3* x, const std::array<VD, 3>& xv,
+                  const std::array<VD, 3>& shared_with) {
+    const double eps = 1e-9 * size;
+    int above = 0, below = 0, count = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (std::find(shared_with.begin(), shared_with.end(), xv[static_cast<size_t>(k)]) != shared_with.end()) continue;
+      const double d = n.dot(x[k] - o);
+      above += d > eps, below += d < -eps, ++count;
+    }
+    return above == count || below == count;
+  };
+  // (Corner ids: the vertices' indices; the new point's, the null vertex's, is in every new face.)
+  auto ids = [](const std::array<VD, 3>& v) {
+    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(v[0].idx()), static_cast<std::int64_t>(v[1].idx()),
+                                       static_cast<std::int64_t>(v[2].idx())};
+  };
+  std::vector<std::array<Vec3, 2>> tbox;
+  for (const Tri& t : tris) tbox.push_back(box(t.a, t.b, t.c));
+  auto cross = [&](size_t i, const std::array<Vec3, 3>& x, const Vec3& xn, double xsize, const std::array<VD, 3>& w) {
+    const Tri& t = tris[i];
+    const Vec3 tc[3] = {t.a, t.b, t.c};
+    if (apart(t.n, t.a, t.radius, x.data(), w, t.v) || apart(xn, x[0], xsize, tc, t.v, w)) return false;
+    return triangles_cross({t.a, t.b, t.c}, ids(t.v), x, ids(w));
+  };
+  for (FD g : around) {
+    std::array<Vec3, 3> x;
+    std::array<VD, 3> w;
+    size_t k = 0;
+    for (VD u : CGAL::vertices_around_face(m.halfedge(g), m)) w[k] = u, x[k++] = vec(m.point(u));
+    const Vec3 n = (x[1] - x[0]).cross(x[2] - x[0]);
+    if (!(n.norm() > 0)) continue;  // (no area: no crossing to speak of)
+    const auto gbox = box(x[0], x[1], x[2]);
+    const double xsize = (gbox[1] - gbox[0]).norm();
+    for (size_t i = 0; i < tris.size(); ++i)
+      if (overlap(tbox[i], gbox) && cross(i, x, n.normalized(), xsize, w)) return true;
+  }
+  for (size_t i = 0; i < tris.size(); ++i)
+    for (size_t j = i + 1; j < tris.size(); ++j)
+      if (overlap(tbox[i], tbox[j]) && cross(i, {tris[j].a, tris[j].b, tris[j].c}, tris[j].n, tris[j].radius, tris[j].v))
+        return true;
+  return false;
+}
+
 struct Filter {
   State* s;
 
@@ -117,19 +190,16 @@ struct Filter {
     faces_around(m, v0, region);
     faces_around(m, v1, region);
     // The new faces: the region's faces that do not hold both v0 and v1, with p for v0 or v1.
-    struct Tri {
-      Vec3 a, b, c, n;
-      FD f;
-      Vec3 centre;    // of a ball holding the triangle
-      double radius;
-    };
     std::vector<Tri> tris;
     for (FD f : region) {
       Vec3 q[3], old[3];
+      std::array<VD, 3> vd;
       int k = 0, hits = 0;
       for (VD v : CGAL::vertices_around_face(m.halfedge(f), m)) {
         old[k] = vec(m.point(v));
-        q[k] = (v == v0 || v == v1) ? (++hits, p) : old[k];
+        const bool moved = v == v0 || v == v1;
+        q[k] = moved ? (++hits, p) : old[k];
+        vd[static_cast<size_t>(k)] = moved ? Mesh::null_vertex() : v;
         ++k;
       }
       if (hits == 2) continue;  // removed by the collapse
@@ -144,7 +214,7 @@ struct Filter {
       if (angle < s->min_angle && angle < min_angle(old)) return boost::none;
       const Vec3 centre = (q[0] + q[1] + q[2]) / 3.0;
       const double radius = std::max({(q[0] - centre).norm(), (q[1] - centre).norm(), (q[2] - centre).norm()});
-      tris.push_back({q[0], q[1], q[2], n / ln, f, centre, radius});
+      tris.push_back({q[0], q[1], q[2], n / ln, f, centre, radius, vd});
     }
     if (tris.empty()) return boost::none;
     // Folds: new faces sharing an edge, and each new face with its neighbours outside the region.
@@ -259,18 +329,20 @@ struct Filter {
     if (later.size() < 48) {
       for (const Vec3& x : later)
         if (!check_point(x)) return boost::none;
-      return op;
-    }
-    // (Isolated: a thread waiting here takes no other task, another part's meshing, and so no
-    // thread-local state, CGAL's random generator, changes under it.)
-    std::atomic<bool> fails{false};
-    tbb::this_task_arena::isolate([&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, later.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t i = range.begin(); i != range.end() && !fails.load(std::memory_order_relaxed); ++i)
-          if (!check_point(later[i])) fails = true;
+    } else {
+      // (Isolated: a thread waiting here takes no other task, another part's meshing, and so no
+      // thread-local state, CGAL's random generator, changes under it.)
+      std::atomic<bool> fails{false};
+      tbb::this_task_arena::isolate([&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, later.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
+          for (size_t i = range.begin(); i != range.end() && !fails.load(std::memory_order_relaxed); ++i)
+            if (!check_point(later[i])) fails = true;
+        });
       });
-    });
-    if (fails) return boost::none;
+      if (fails) return boost::none;
+    }
+    // (Last: only the collapses every bound allows.)
+    if (s->no_crossings && crosses_near(m, profile, tris, region, s->around)) return boost::none;
     return op;
   }
 };
@@ -409,6 +481,7 @@ SurfaceMesh simplify(const SurfaceMesh& surface, const SurfaceMesh* target_surfa
   s.cos_turn = std::cos(opt.max_normal_turn * M_PI / 180.0);
   s.min_angle = opt.min_triangle_angle * M_PI / 180.0;
   if (opt.max_edge > 0) s.max_edge = opt.max_edge;
+  s.no_crossings = opt.no_local_crossings;
   s.progress = progress;
   s.assigned.resize(m.number_of_faces());
   // Local gaps: from each vertex along its normal, inwards (the thickness) and outwards (to another

@@ -25,6 +25,9 @@ struct EnvelopeOptions {
   double short_edge = 0.25;   // then edges shorter than this share of the median edge are collapsed,
                               // shortest first, within the same bounds (0: not)
   double max_edge = 0.0;      // units: no collapse makes an edge longer than this (0: no bound)
+  bool no_local_crossings = true;  // nor makes a face that crosses a face around the collapse's link
+                              // (the faces its new faces' corners touch) or another new face (false:
+                              // meshing version 50 and before, folds checked between neighbours only)
 };
 
 /// What simplify_envelope() did.
@@ -48,7 +51,11 @@ struct EnvelopeStats {
 ///     Visualization 1996) lies within max_inside of the new faces where it is outside them, within
 ///     max_outside where it is inside;
 ///   * no new face turns its normal by more than max_normal_turn nor folds against a neighbour
-///     sharper than min_fold_angle.
+///     sharper than min_fold_angle;
+///   * (no_local_crossings) no new face intersects a face around a vertex of the collapse's link,
+///     other than at the corners and edge they share, nor another new face (exact predicates):
+///     a fold across a small bump is no sharp fold between neighbours, yet its faces cross (a scanned
+///     bust of 99,938 faces simplified to 1,506 kept one face through a fan of three).
 /// It stops at target_faces or when no collapse is acceptable. Deterministic.
 /// Throws InputError when `surface` is not a closed 2-manifold.
 SurfaceMesh simplify_envelope(const SurfaceMesh& surface, const EnvelopeOptions& options, EnvelopeStats* stats = nullptr,
