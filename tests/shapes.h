@@ -400,7 +400,8 @@ inline squeeze::meshing::SurfaceMesh loop_subdivided(squeeze::meshing::SurfaceMe
 
 // A sphere 0.2 m across (64 sides, 40 rings, poles on z) with 20 spikes up to 2.5 times its radius,
 // in the directions numpy's default_rng(7) gave (scripts/gen_unseen_shapes.py --version24's
-// urchin.off): two spikes nearly touch, and at 150 tetrahedra its first boundary loses conformity.
+// urchin.off, its 9 significant digits too): two spikes nearly touch, and at 150 tetrahedra its
+// first boundary loses conformity.
 inline squeeze::meshing::SurfaceMesh urchin() {
   static const double D[20][3] = {
       {0.0030339313066555392, 0.73679711026063899, -0.67610710214610104},
@@ -450,6 +451,7 @@ inline squeeze::meshing::SurfaceMesh urchin() {
     double s = 0;
     for (const auto& d : D) s = std::max(s, std::max(0.0, (N.dot(Eigen::Vector3d(d[0], d[1], d[2])) - 0.97) / 0.03));
     m.V.row(v) = (0.1 * (1 + 1.5 * s * s)) * N.transpose();
+    for (int k = 0; k < 3; ++k) m.V(v, k) = significant_digits(m.V(v, k), 9);  // (as the file has them)
   }
   return m;
 }

@@ -3077,3 +3077,33 @@ TEST(MeshingV4, SolidFirstWhereTheFirstBoundaryLostConformityIsTheSameMeshWithFe
   const MeshResult over = squeeze::meshing::mesh_surface(s, o);
   EXPECT_EQ(over.boundary_retries, last.boundary_retries);
 }
+
+// A result whose input lies over inner_retry_deviation (0.5) of max_deviation outside it is meshed
+// again with the inner bound 0.85 times as large (meshing version 51): the urchin at 1000 lay
+// 0.502 % of the diagonal in (the envelope's samples, spaced by the inner bound, missed a spike's
+// side); meshed again, within 0.5 %, at its other bounds.
+TEST(MeshingV4, InputOverTheInnerBoundOutsideIsMeshedAgainTighter) {
+  const SurfaceMesh s = sqs::urchin();
+  const double diag = bounding_box_diagonal(s.V);
+  MeshOptions o;
+  o.tetrahedralize.target_tets = 1000;
+  o.inner_retry_deviation = 0;  // (not meshed again: version 50)
+  const MeshResult once = squeeze::meshing::mesh_surface(s, o);
+  ASSERT_GT(once.deviation_in, 0.005 * diag) << "the case this is about";
+  o.inner_retry_deviation = 0.5;
+  const MeshResult r = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_LE(r.deviation_in, 0.005 * diag);
+  EXPECT_LT(r.deviation_in, once.deviation_in);
+  EXPECT_LE(r.deviation_out, 0.015 * diag);
+  EXPECT_GE(r.quality.min_dihedral, 5.0);
+  EXPECT_EQ(r.quality.components, 1);
+  ASSERT_TRUE(r.volume_ratio.has_value());
+  EXPECT_NEAR(*r.volume_ratio, 1.0, 0.05);
+  double staged = 0;
+  for (const auto& stage : r.seconds) staged += stage.second;
+  bool not_kept = false;
+  for (const auto& stage : r.seconds) not_kept = not_kept || stage.first == "tries not kept";
+  EXPECT_TRUE(not_kept) << "the first meshing's seconds are counted";
+  o.inner_retry_deviation = -1;
+  EXPECT_THROW(squeeze::meshing::mesh_surface(s, o), squeeze::InputError);
+}
