@@ -2982,7 +2982,7 @@ TEST(MeshingV4, ExuderStopsAtItsPumpBoundTheSameWayEachRun) {
 }
 
 // triangles_cross: two faces of one surface meet only at the corners and edge they share, or they
-// cross. Each case also with the triangles swapped and their corners turned (the same answer).
+// cross; a degenerate one crosses nothing. Each case also with the triangles swapped and their corners turned (the same answer).
 TEST(TriangleIntersection, CrossingTouchingAndSharedCornersAreToldApart) {
   using squeeze::meshing::triangles_cross;
   using T = std::array<Vec3, 3>;
@@ -3013,6 +3013,8 @@ TEST(TriangleIntersection, CrossingTouchingAndSharedCornersAreToldApart) {
   // An edge shared: not tested (the fold test's), whatever the angle.
   check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, -1, 0)}, {0, 1, 5}, false, "an edge, flat");
   check(flat, flat_ids, {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0.5, 0.5, 0)}, {0, 1, 5}, false, "an edge, folded onto it");
+  // A degenerate triangle (three corners on a line) crosses nothing.
+  check(flat, flat_ids, {Vec3(0.2, 0.2, -1), Vec3(0.2, 0.2, 0), Vec3(0.2, 0.2, 1)}, {3, 4, 5}, false, "degenerate");
 }
 
 // simplify_envelope (no_local_crossings) leaves no two faces that cross: over every pair of faces

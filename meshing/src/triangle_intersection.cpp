@@ -27,6 +27,7 @@ bool triangles_cross(const std::array<Eigen::Vector3d, 3>& a, const std::array<s
   if (shared >= 2) return false;
   const std::array<Point, 3> p{point(a[0]), point(a[1]), point(a[2])}, q{point(b[0]), point(b[1]), point(b[2])};
   const K::Triangle_3 tp(p[0], p[1], p[2]), tq(q[0], q[1], q[2]);
+  if (tp.is_degenerate() || tq.is_degenerate()) return false;  // (CGAL's tests need triangles)
   if (shared == 0) return CGAL::do_intersect(tp, tq);
   const Point &c = p[static_cast<size_t>(sa)], &p1 = p[static_cast<size_t>((sa + 1) % 3)], &p2 = p[static_cast<size_t>((sa + 2) % 3)];
   const Point &q1 = q[static_cast<size_t>((sb + 1) % 3)], &q2 = q[static_cast<size_t>((sb + 2) % 3)];

@@ -11,7 +11,8 @@ namespace squeeze::meshing {
 /// anywhere but at the corners and the edge they share: the test a simplification needs to keep a
 /// surface free of self-intersections (does_self_intersect() tests only faces that share no
 /// vertex).
-///   a, b    corners (units); both triangles non-degenerate (precondition)
+///   a, b    corners (units); a degenerate triangle (its corners on one line, exactly) crosses
+///           nothing: false
 ///   ia, ib  corner ids: equal ids name the same corner (a vertex both faces hold)
 /// Two triangles that share an edge (two ids) are not tested: false (their dihedral angle is the
 /// fold test's). Sharing no corner: CGAL's exact triangle–triangle test. Sharing one corner c:
