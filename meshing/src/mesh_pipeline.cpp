@@ -2905,9 +2905,13 @@ MeshResult mesh_surface(const SurfaceMesh& surface, const MeshOptions& opt, Prog
   // Input points over inner_retry_deviation × max_deviation outside the mesh: the envelope's samples
   // of the input are spaced by the inner bound, so points between them can lie past it (an urchin of
   // 20 spikes at 1000: 0.502 % of the diagonal, the inner bound 0.45 %). Meshed again with the inner
-  // bound 0.85 times as large, kept where nearer and no worse otherwise (meshing version 51).
+  // bound 0.85 times as large, kept where nearer and no worse otherwise (meshing version 51). Only
+  // the routes whose boundary the envelope simplifies within that bound: Mesh_3's own tetrahedra
+  // (--winding) and the convex shells would come out the same.
   const double diag = bounding_box_diagonal(surface.V);
-  if (opt.inner_retry_deviation > 0 && r.deviation_in > opt.inner_retry_deviation * opt.max_deviation * diag) {
+  const bool enveloped = r.method == "boundary" || r.method == "winding_number_boundary" ||
+                         r.method == "capped_boundary" || r.method == "alpha_wrap";
+  if (opt.inner_retry_deviation > 0 && enveloped && r.deviation_in > opt.inner_retry_deviation * opt.max_deviation * diag) {
     MeshOptions o = opt;
     o.inner_deviation *= 0.85;
     spdlog::info("input points lie {:.3g} % of the diagonal outside the mesh: meshing again with the inner bound at "
