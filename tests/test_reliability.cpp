@@ -58,6 +58,14 @@ const char* kPlyHeader =
     "element face 4\nproperty list uchar int vertex_indices\nend_header\n";
 const char* kPlyBody = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
 
+// The same four vertices with their triangles as one `tristrips` item (read by squeeze itself, not
+// assimp): the strips' list property (its header line's last word) and the item's line.
+std::string strips_ply(const std::string& list_property, const std::string& item) {
+  const std::string header = kPlyHeader, body = kPlyBody;
+  return header.substr(0, header.find("element face")) + "element tristrips 1\nproperty list int int " + list_property +
+         "\nend_header\n" + body.substr(0, body.find("3 0 2 1")) + item + "\n";
+}
+
 std::string binary_ply(size_t cut) {
   std::string b =
       "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
@@ -89,17 +97,13 @@ std::vector<Fault> faults() {
       // and a strips element without its list of indices.
       {"ply_strip_index_past_vertices",
        [](const fs::path& d) {
-         std::string ply = std::string(kPlyHeader).substr(0, std::string(kPlyHeader).find("element face")) +
-                           "element tristrips 1\nproperty list int int vertex_indices\nend_header\n"
-                           "0 0 0\n1 0 0\n0 1 0\n0 0 1\n6 0 2 1 3 9 2\n";
+         const std::string ply = strips_ply("vertex_indices", "6 0 2 1 3 9 2");
          return std::vector<std::string>{"mesh", write(d, "strips.ply", ply), "-o", "out.mesh"};
        },
        {"strips.ply", "tristrips 0"}, {"out of range"}},
       {"ply_strips_without_indices",
        [](const fs::path& d) {
-         std::string ply = std::string(kPlyHeader).substr(0, std::string(kPlyHeader).find("element face")) +
-                           "element tristrips 1\nproperty list int int corners\nend_header\n"
-                           "0 0 0\n1 0 0\n0 1 0\n0 0 1\n4 0 2 1 3\n";
+         const std::string ply = strips_ply("corners", "4 0 2 1 3");
          return std::vector<std::string>{"mesh", write(d, "strips.ply", ply), "-o", "out.mesh"};
        },
        {"strips.ply", "vertex_indices"}, {"no list"}},
