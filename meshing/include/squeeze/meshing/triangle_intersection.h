@@ -19,7 +19,10 @@ namespace squeeze::meshing {
 /// they meet elsewhere where the edge of one opposite c crosses the other, or, both in one plane,
 /// where an edge of one from c points strictly into the other's angle at c (a meeting along a line
 /// through c in two planes ends on an opposite edge). Exact predicates (CGAL's
-/// Exact_predicates_inexact_constructions_kernel); no constructions.
+/// Exact_predicates_inexact_constructions_kernel); no constructions; throws nothing.
+/// Source: the triangle–triangle test is CGAL's do_intersect (P. Guigue, O. Devillers, "Fast and
+/// robust triangle-triangle overlap test using orientation predicates", Journal of Graphics Tools
+/// 8(1), 2003); the shared-corner cases are this function's own.
 bool triangles_cross(const std::array<Eigen::Vector3d, 3>& a, const std::array<std::int64_t, 3>& ia,
                      const std::array<Eigen::Vector3d, 3>& b, const std::array<std::int64_t, 3>& ib);
 
