@@ -51,6 +51,8 @@
 //                             tetrahedra and both deviations (fractions of the diagonal) as counters
 //  BM_Decimate                decimate_quadric() alone on that bunny, within 0.045 % of its
 //                             diagonal (the pipeline's default bound): faces left, collapses
+//  BM_SolidFirst/<first>       the tests' urchin at 150: its winding-number solid before retries 1
+//                             and 3 (1) or after every retry (0): seconds, retries, tetrahedra
 //  BM_SimplifyEnvelope/<no_local_crossings>  simplify_envelope() on the corpus bunny toward 1,000
 //                             faces within the default bounds, with (1) or without (0) the test for
 //                             faces crossing around each collapse: ms, faces, collapses
@@ -699,6 +701,19 @@ void BM_DenseScan(benchmark::State& state) {
   state.counters["deviation_in"] = r.deviation_in / diag;
 }
 BENCHMARK(BM_DenseScan)->Arg(1)->Arg(0)->Arg(2)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// The urchin of the tests (4,992 faces) at 150, whose first boundary loses conformity and whose
+// retries do not hold: its winding-number solid tried before retries 1 and 3 (1: solid_first_faces
+// under its faces) or after every retry (0: version 50's order). The same mesh either way
+// (MeshingV4.SolidFirstWhere...); the boundary retries made as a counter.
+void BM_SolidFirst(benchmark::State& state) {
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 150;
+  o.solid_first_faces = state.range(0) == 1 ? 4000 : 0;
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, sqs::urchin(), o);
+  state.counters["retries"] = r.boundary_retries;
+}
+BENCHMARK(BM_SolidFirst)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 // Arguments: the dense bunny (0) or the noisy one (1); planes checked one by one (1, the default
 // since meshing version 50) or the quadric's root alone (0, version 49).
