@@ -53,6 +53,8 @@
 //                             diagonal (the pipeline's default bound): faces left, collapses
 //  BM_SolidFirst/<first>       the tests' urchin at 150: its winding-number solid before retries 1
 //                             and 3 (1) or after every retry (0): seconds, retries, tetrahedra
+//  BM_ContractSlivers/<contract> the tests' urchin of 24 spikes at 1000: the slivers' edges
+//                             contracted (1) or not (0): seconds, retries, tetrahedra, contractions
 //  BM_SimplifyEnvelope/<no_local_crossings>  simplify_envelope() on the corpus bunny toward 1,000
 //                             faces within the default bounds, with (1) or without (0) the test for
 //                             faces crossing around each collapse: ms, faces, collapses
@@ -714,6 +716,20 @@ void BM_SolidFirst(benchmark::State& state) {
   state.counters["retries"] = r.boundary_retries;
 }
 BENCHMARK(BM_SolidFirst)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// The tests' urchin of 24 spikes (seed 23) at 1000, whose remeshed boundary (retry 0) is conforming
+// with interior slivers across a spike's tip: their edges contracted (1: contract_max_length 0.25,
+// meshing version 52) or not (0: version 51, every retry and then its winding-number solid). The
+// boundary retries, tetrahedra and contractions as counters.
+void BM_ContractSlivers(benchmark::State& state) {
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 1000;
+  o.tetrahedralize.contract_max_length = state.range(0) == 1 ? 0.25 : 0.0;
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, sqs::urchin23(), o);
+  state.counters["retries"] = r.boundary_retries;
+  state.counters["contractions"] = r.tet_stats.contractions;
+}
+BENCHMARK(BM_ContractSlivers)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 // Arguments: the dense bunny (0) or the noisy one (1); planes checked one by one (1, the default
 // since meshing version 50) or the quadric's root alone (0, version 49).

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <csignal>
+#include <map>
 #include <random>
 #include <set>
 
@@ -525,6 +526,136 @@ TEST(MeshingQuality, FlipSliversAtOnceMakesTheFlipsOfOneCallPerFlip) {
     EXPECT_NEAR(squeeze::meshing::tet_volumes(at_once).sum(), squeeze::meshing::tet_volumes(mesh).sum(),
                 1e-12 * squeeze::meshing::tet_volumes(mesh).sum());
     EXPECT_GT(squeeze::meshing::tet_volumes(at_once).minCoeff(), 0);
+  }
+}
+
+// contract_sliver_edges: a vertex of a real tetrahedralization moved to 3 % of the way from a
+// neighbour makes slivers around their edge, and contracting that edge leaves fewer (what is
+// left is the quality of the edge's collapse: the vertex's other tetrahedra at its neighbour). On the sphere
+// of tests/data (about 3,000 tetrahedra, all at 5° and more): an interior vertex goes into an
+// interior neighbour, the boundary and volume stay; an interior edge between two boundary vertices
+// is never contracted. On a box (flat faces): a vertex inside a face, moved along a boundary edge
+// toward a neighbour inside the same face, goes into it; the boundary loses the two faces on the
+// edge and stays a closed 2-manifold of genus 0, the volume stays.
+TEST(MeshingQuality, ContractSliverEdgesTakesTheEdgeOfAVertexPushedOntoItsNeighbour) {
+  const double floor = 5.0;
+  struct Edges {
+    std::set<int> on_boundary;
+    std::set<std::pair<int, int>> boundary, all;
+  };
+  auto edges_of = [](const TetMesh& m) {
+    Edges e;
+    for (const auto& f : boundary_set(m))
+      for (int k = 0; k < 3; ++k) {
+        e.on_boundary.insert(f[k]);
+        e.boundary.insert({std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])});
+      }
+    for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) e.all.insert({std::min(m.T(t, a), m.T(t, b)), std::max(m.T(t, a), m.T(t, b))});
+    return e;
+  };
+  // m with vertex v moved to 3 % of the way from u, where that makes slivers and inverts nothing.
+  auto pushed = [&](const TetMesh& mesh, int u, int v, TetMesh& m) {
+    m = mesh;
+    m.V.row(v) = m.V.row(u) + 0.03 * (mesh.V.row(v) - mesh.V.row(u));
+    return squeeze::meshing::tet_volumes(m).minCoeff() > 0 && squeeze::meshing::tet_quality(m).min_dihedral < floor;
+  };
+  // Contracts m's slivers (edges no longer than (u, v)); checks fewer are below the floor and the
+  // worst is no worse, none turned over, one end of (u, v) gone, the volume kept.
+  auto mend = [&](TetMesh& m, int u, int v, double volume) {
+    const double length = (m.V.row(v) - m.V.row(u)).norm();
+    auto below = [&](const TetMesh& x) {
+      int n = 0;
+      for (Eigen::Index t = 0; t < x.T.rows(); ++t) {
+        const auto a = squeeze::meshing::dihedral_angles(x.V.row(x.T(t, 0)), x.V.row(x.T(t, 1)), x.V.row(x.T(t, 2)),
+                                                         x.V.row(x.T(t, 3)));
+        n += *std::min_element(a.begin(), a.end()) < floor;
+      }
+      return n;
+    };
+    const double worst = squeeze::meshing::tet_quality(m).min_dihedral;
+    const int slivers = below(m);
+    EXPECT_GE(squeeze::meshing::contract_sliver_edges(m, floor, 1.01 * length), 1);
+    EXPECT_GE(squeeze::meshing::tet_quality(m).min_dihedral, worst);
+    EXPECT_LT(below(m), slivers);
+    EXPECT_GT(squeeze::meshing::tet_volumes(m).minCoeff(), 0);
+    bool u_used = false, v_used = false;
+    for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
+      u_used = u_used || (m.T.row(t).array() == u).any();
+      v_used = v_used || (m.T.row(t).array() == v).any();
+    }
+    EXPECT_TRUE(u_used != v_used) << "one end of the edge is gone";
+    EXPECT_NEAR(squeeze::meshing::tet_volumes(m).sum(), volume, 1e-9 * volume);
+  };
+  squeeze::meshing::TetrahedralizeOptions o;
+  o.target_tets = 3000;
+  o.max_attempts = 1;
+  {
+    const TetMesh mesh = squeeze::meshing::tetrahedralize(squeeze::meshing::load_surface(data("sphere.off")), o);
+    ASSERT_GE(squeeze::meshing::tet_quality(mesh).min_dihedral, floor);
+    const Edges e = edges_of(mesh);
+    const auto boundary = boundary_set(mesh);
+    const double volume = squeeze::meshing::tet_volumes(mesh).sum();
+    int interior = 0, crossing = 0;
+    for (const auto& [u, v] : e.all) {
+      const bool ub = e.on_boundary.count(u), vb = e.on_boundary.count(v);
+      TetMesh m;
+      if (!ub && !vb && interior < 5 && pushed(mesh, u, v, m)) {
+        SCOPED_TRACE("interior edge " + std::to_string(u) + " " + std::to_string(v));
+        ++interior;
+        mend(m, u, v, volume);
+        EXPECT_EQ(boundary_set(m), boundary);
+      } else if (ub && vb && !e.boundary.count({u, v}) && crossing < 3 && pushed(mesh, u, v, m)) {
+        // Both ends on the boundary, the edge through the inside: contracting it would pinch the
+        // boundary (and the slivers' other edges are longer than the bound).
+        SCOPED_TRACE("crossing edge " + std::to_string(u) + " " + std::to_string(v));
+        ++crossing;
+        const Eigen::MatrixX4i T = m.T;
+        EXPECT_EQ(squeeze::meshing::contract_sliver_edges(m, floor, 1.01 * (m.V.row(v) - m.V.row(u)).norm()), 0);
+        EXPECT_TRUE(m.T == T);
+      }
+    }
+    EXPECT_EQ(interior, 5);
+    EXPECT_EQ(crossing, 3);
+  }
+  {
+    const TetMesh mesh = squeeze::meshing::tetrahedralize(box({0, 0, 0}, {1, 0.8, 0.6}), o);
+    ASSERT_GE(squeeze::meshing::tet_quality(mesh).min_dihedral, floor);
+    const Edges e = edges_of(mesh);
+    const auto boundary = boundary_set(mesh);
+    const double volume = squeeze::meshing::tet_volumes(mesh).sum();
+    ASSERT_NEAR(volume, 0.48, 1e-12);
+    // The face plane a vertex lies inside (axis × 2 + side), −1 if none or on an edge of the box.
+    const Eigen::RowVector3d hi(1, 0.8, 0.6);
+    auto face = [&](int v) {
+      int f = -1, n = 0;
+      for (int a = 0; a < 3; ++a) {
+        if (mesh.V(v, a) == 0) f = 2 * a, ++n;
+        if (mesh.V(v, a) == hi(a)) f = 2 * a + 1, ++n;
+      }
+      return n == 1 ? f : -1;
+    };
+    int flat = 0;
+    for (const auto& [u, v] : e.boundary) {
+      TetMesh m;
+      if (flat >= 5 || face(u) < 0 || face(u) != face(v) || !pushed(mesh, u, v, m)) continue;
+      SCOPED_TRACE("boundary edge " + std::to_string(u) + " " + std::to_string(v));
+      ++flat;
+      mend(m, u, v, volume);
+      const auto after = boundary_set(m);
+      EXPECT_EQ(after.size(), boundary.size() - 2) << "the two faces on the edge go";
+      std::map<std::pair<int, int>, int> count;
+      std::set<int> corners;
+      for (const auto& f : after)
+        for (int k = 0; k < 3; ++k) {
+          ++count[{std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])}];
+          corners.insert(f[k]);
+        }
+      for (const auto& [edge, n] : count) EXPECT_EQ(n, 2);
+      EXPECT_EQ(static_cast<long>(corners.size()) - static_cast<long>(count.size()) + static_cast<long>(after.size()), 2);
+    }
+    EXPECT_EQ(flat, 5);
   }
 }
 

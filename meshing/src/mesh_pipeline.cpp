@@ -1579,8 +1579,9 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               TetMesh m = tetrahedralize_part(b, &st, t.max_tets, 2);  // (two edge lengths, as the retries below)
               ++p.retries;
               held = holds(m, st);
-              spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): simplified to {} faces, {} tetrahedra, conforming {}, holds {}",
-                            i, h, b.F.rows(), m.T.rows(), st.conforming, held);
+              spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): simplified to {} faces, {} tetrahedra, conforming {}, "
+                            "smallest dihedral angle {:.2f}°, holds {}",
+                            i, h, b.F.rows(), m.T.rows(), st.conforming, tet_quality(m).min_dihedral, held);
               if (held || better(m, st, p.tets, p.tet_stats)) {
                 adopt(m, st, b, es);
                 p.remeshed = true;
@@ -1846,6 +1847,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
         s.peeled += p.tet_stats.peeled;
         s.relocated += p.tet_stats.relocated;
         s.flips += p.tet_stats.flips;
+        s.contractions += p.tet_stats.contractions;
         s.exuder_nan_stops += p.exuder_nan_stops;
         s.exuder_pump_bounds += p.exuder_pump_bounds;
         s.conforming = s.conforming && p.tet_stats.conforming;
@@ -3054,6 +3056,7 @@ nlohmann::json mesh_report(const MeshResult& r, const std::string& input_name) {
         {"peeled_slivers", r.method == "convex_shells" ? r.shell_stats.peeled_slivers : r.tet_stats.peeled},
         {"relocated_sliver_vertices", r.tet_stats.relocated},  // 0 unless tetrahedralize() meshed it
         {"flipped_slivers", r.tet_stats.flips},
+        {"contracted_sliver_edges", r.tet_stats.contractions},
         {"exuder_nan_stops", r.tet_stats.exuder_nan_stops},
         {"exuder_pump_bounds", r.tet_stats.exuder_pump_bounds}}},
       {"winding_number",  // Mesh_3 of the winding-number solid: its tetrahedra, or its boundary's surface

@@ -2,6 +2,8 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
+#include <iterator>
 #include <cmath>
 #include <set>
 #include <vector>
@@ -474,6 +476,192 @@ int flip_slivers(TetMesh& m, double min_degrees, int max_flips) {
     ++flips;
   }
   return flips;
+}
+
+int contract_sliver_edges(TetMesh& m, double min_degrees, double max_length, int max_contractions) {
+  const int nv = static_cast<int>(m.V.rows());
+  std::vector<char> dead(static_cast<size_t>(m.T.rows()), 0);  // tetrahedra a contraction removed
+  std::vector<std::set<int>> around(static_cast<size_t>(nv));   // vertex → live tetrahedra
+  for (int t = 0; t < m.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k) around[static_cast<size_t>(m.T(t, k))].insert(t);
+  // The boundary faces, kept up to date (a contraction of a boundary edge changes those at its
+  // ends): sorted vertex triples.
+  auto sorted3 = [](int a, int b, int c) {
+    std::array<int, 3> f{a, b, c};
+    std::sort(f.begin(), f.end());
+    return f;
+  };
+  std::vector<std::set<std::array<int, 3>>> boundary(static_cast<size_t>(nv));  // at each vertex
+  {
+    const Eigen::MatrixX3i B = boundary_faces(m.T);
+    for (Eigen::Index f = 0; f < B.rows(); ++f)
+      for (int k = 0; k < 3; ++k) boundary[static_cast<size_t>(B(f, k))].insert(sorted3(B(f, 0), B(f, 1), B(f, 2)));
+  }
+  auto quality = [&](const Eigen::Vector4i& t) {
+    if (!(tet_volume(m.V.row(t(0)), m.V.row(t(1)), m.V.row(t(2)), m.V.row(t(3))) > 0)) return -1.0;
+    const auto a = dihedral_angles(m.V.row(t(0)), m.V.row(t(1)), m.V.row(t(2)), m.V.row(t(3)));
+    return *std::min_element(a.begin(), a.end());
+  };
+  auto has = [&](int t, int v) { return (m.T.row(t).array() == v).any(); };
+  // Each tetrahedron's quality, measured once and again where a contraction changes its row.
+  std::vector<double> q(static_cast<size_t>(m.T.rows()));
+  for (int t = 0; t < m.T.rows(); ++t) q[static_cast<size_t>(t)] = quality(m.T.row(t).transpose());
+  constexpr int kOmega = -1;  // the vertex joined to every boundary face (closing the complex)
+  // The link of vertex v in the closed complex: its vertices and edges (pairs, smaller first).
+  auto link = [&](int v, std::set<int>& LV, std::set<std::pair<int, int>>& LE) {
+    auto edge = [&](int a, int b) { LE.insert({std::min(a, b), std::max(a, b)}); };
+    for (int t : around[static_cast<size_t>(v)]) {
+      int o[3], n = 0;
+      for (int k = 0; k < 4; ++k)
+        if (m.T(t, k) != v) o[n++] = m.T(t, k);
+      for (int x : o) LV.insert(x);
+      edge(o[0], o[1]), edge(o[1], o[2]), edge(o[0], o[2]);
+    }
+    if (!boundary[static_cast<size_t>(v)].empty()) {
+      LV.insert(kOmega);
+      for (const auto& f : boundary[static_cast<size_t>(v)]) {
+        for (int x : f)
+          if (x != v) edge(x, kOmega);
+      }
+    }
+  };
+  // Contracts r into k (r's tetrahedra take k; those holding both go) where the link condition
+  // holds (Dey, Edelsbrunner, Guha, Nekhayev, "Topology preserving edge contraction", 1999), no
+  // tetrahedron inverts, and the worst of the changed tetrahedra is better than the worst before.
+  auto contract = [&](int k, int r) {
+    const bool kb = !boundary[static_cast<size_t>(k)].empty(), rb = !boundary[static_cast<size_t>(r)].empty();
+    std::vector<int> both, moved;
+    for (int t : around[static_cast<size_t>(r)]) (has(t, k) ? both : moved).push_back(t);
+    bool edge_on_boundary = false;
+    std::vector<int> wings;  // third vertices of the boundary faces on edge (k, r)
+    for (const auto& f : boundary[static_cast<size_t>(r)])
+      if (f[0] == k || f[1] == k || f[2] == k) {
+        edge_on_boundary = true;
+        for (int x : f)
+          if (x != k && x != r) wings.push_back(x);
+      }
+    // The boundary stays where it is, but for a boundary edge contracted to one of its ends.
+    if (rb && !(kb && edge_on_boundary)) return false;
+    if (kb && rb && !edge_on_boundary) return false;
+    // Link condition: Lk(k) ∩ Lk(r) = Lk(kr).
+    std::set<int> VK, VR, VKR;
+    std::set<std::pair<int, int>> EK, ER, EKR;
+    link(k, VK, EK);
+    link(r, VR, ER);
+    for (int t : both) {
+      int o[2], n = 0;
+      for (int j = 0; j < 4; ++j)
+        if (m.T(t, j) != k && m.T(t, j) != r) o[n++] = m.T(t, j);
+      VKR.insert(o[0]), VKR.insert(o[1]);
+      EKR.insert({std::min(o[0], o[1]), std::max(o[0], o[1])});
+    }
+    if (edge_on_boundary) {
+      VKR.insert(kOmega);
+      for (int w : wings) VKR.insert(w), EKR.insert({kOmega, w});
+    }
+    std::set<int> VI;
+    std::set_intersection(VK.begin(), VK.end(), VR.begin(), VR.end(), std::inserter(VI, VI.begin()));
+    std::set<std::pair<int, int>> EI;
+    std::set_intersection(EK.begin(), EK.end(), ER.begin(), ER.end(), std::inserter(EI, EI.begin()));
+    if (VI != VKR || EI != EKR) return false;
+    // Quality: the worst changed tetrahedron better than the worst of those before (the removed
+    // ones included), and fewer below the floor.
+    double before = INFINITY, after = INFINITY;
+    int below_before = 0, below_after = 0;
+    for (int t : both) {
+      const double qt = q[static_cast<size_t>(t)];
+      before = std::min(before, qt), below_before += qt < min_degrees;
+    }
+    std::vector<Eigen::Vector4i> rows;
+    std::vector<double> after_q;
+    for (int t : moved) {
+      const double qt = q[static_cast<size_t>(t)];
+      before = std::min(before, qt), below_before += qt < min_degrees;
+      Eigen::Vector4i row = m.T.row(t).transpose();
+      for (int j = 0; j < 4; ++j)
+        if (row(j) == r) row(j) = k;
+      const double qn = quality(row);
+      if (!(qn > 0)) return false;
+      after = std::min(after, qn), below_after += qn < min_degrees;
+      rows.push_back(row);
+      after_q.push_back(qn);
+    }
+    if (!(after > before + 1e-9 && below_after < below_before)) return false;
+    // Made: the boundary faces at r move to k (those on the edge go), then the rows.
+    if (rb) {
+      const std::vector<std::array<int, 3>> at_r(boundary[static_cast<size_t>(r)].begin(),
+                                                 boundary[static_cast<size_t>(r)].end());
+      for (const auto& f : at_r) {
+        for (int x : f) boundary[static_cast<size_t>(x)].erase(f);
+        if (f[0] == k || f[1] == k || f[2] == k) continue;
+        std::array<int, 3> g = f;
+        for (int& x : g)
+          if (x == r) x = k;
+        g = sorted3(g[0], g[1], g[2]);
+        for (int x : g) boundary[static_cast<size_t>(x)].insert(g);
+      }
+    }
+    for (int t : both) {
+      dead[static_cast<size_t>(t)] = 1;
+      for (int j = 0; j < 4; ++j) around[static_cast<size_t>(m.T(t, j))].erase(t);
+    }
+    for (size_t i = 0; i < moved.size(); ++i) {
+      m.T.row(moved[i]) = rows[i].transpose();
+      q[static_cast<size_t>(moved[i])] = after_q[i];
+      around[static_cast<size_t>(r)].erase(moved[i]);
+      around[static_cast<size_t>(k)].insert(moved[i]);
+    }
+    return true;
+  };
+  int made = 0;
+  // A sliver none of whose edges contracted is tried again only once a contraction changed a
+  // tetrahedron within one vertex of it (as flip_slivers does).
+  std::vector<char> stuck(static_cast<size_t>(m.T.rows()), 0);
+  for (bool progress = true; progress && made < max_contractions;) {
+    progress = false;
+    // The slivers, worst first (ties by row).
+    std::vector<std::pair<double, int>> bad;
+    for (int t = 0; t < m.T.rows(); ++t)
+      if (!dead[static_cast<size_t>(t)] && !stuck[static_cast<size_t>(t)] && q[static_cast<size_t>(t)] < min_degrees)
+        bad.emplace_back(q[static_cast<size_t>(t)], t);
+    std::sort(bad.begin(), bad.end());
+    for (const auto& [qt, t] : bad) {
+      if (dead[static_cast<size_t>(t)] || stuck[static_cast<size_t>(t)]) continue;
+      // Its edges, shortest first; each contracted toward either end.
+      std::array<std::pair<double, std::pair<int, int>>, 6> edges;
+      int n = 0;
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b)
+          edges[static_cast<size_t>(n++)] = {(m.V.row(m.T(t, a)) - m.V.row(m.T(t, b))).norm(), {m.T(t, a), m.T(t, b)}};
+      std::sort(edges.begin(), edges.end());
+      bool contracted = false;
+      for (const auto& [len, e] : edges) {
+        if (!(len <= max_length)) break;
+        int kept = -1;
+        if (contract(e.first, e.second))
+          kept = e.first;
+        else if (contract(e.second, e.first))
+          kept = e.second;
+        if (kept < 0) continue;
+        ++made;
+        progress = contracted = true;
+        // The slivers within one vertex of the kept end's tetrahedra are tried again.
+        for (int s : around[static_cast<size_t>(kept)])
+          for (int j = 0; j < 4; ++j)
+            for (int u : around[static_cast<size_t>(m.T(s, j))]) stuck[static_cast<size_t>(u)] = 0;
+        break;
+      }
+      if (!contracted) stuck[static_cast<size_t>(t)] = 1;
+      if (made >= max_contractions) break;
+    }
+  }
+  if (made > 0) {
+    std::vector<int> keep;
+    for (int t = 0; t < m.T.rows(); ++t)
+      if (!dead[static_cast<size_t>(t)]) keep.push_back(t);
+    keep_tets(m, keep);
+  }
+  return made;
 }
 
 }  // namespace squeeze::meshing

@@ -77,6 +77,27 @@ int relocate_sliver_vertices(TetMesh& mesh, double min_degrees, int passes = 3);
 /// Throws nothing; returns how many flips were made.
 int flip_slivers(TetMesh& mesh, double min_degrees, int max_flips = 1000);
 
+/// Contracts short edges of the tetrahedra with a dihedral angle below `min_degrees`, worst
+/// first: of a sliver's edges at most `max_length` long, shortest first, the first whose
+/// contraction to one of its ends (the tetrahedra around the edge removed, the other end's
+/// tetrahedra taking the kept end) keeps the mesh a manifold (the link condition of Dey,
+/// Edelsbrunner, Guha and Nekhayev, "Topology preserving edge contraction", 1999, on the mesh
+/// closed by a vertex joined to its boundary), inverts no tetrahedron and raises the smallest
+/// dihedral angle of the tetrahedra it changes, with fewer of them below the floor. An interior
+/// vertex goes into any neighbour; a boundary vertex only along a boundary edge, into its other
+/// end (the boundary moves by at most that edge's length; an interior edge between two boundary
+/// vertices is never contracted). For the interior slivers across a thin spike whose four
+/// vertices all lie on the boundary, where neither relocate_sliver_vertices nor flip_slivers
+/// reaches (meshing version 52). Source: edge contraction as in Klingner and Shewchuk,
+/// "Aggressive tetrahedral mesh improvement", IMR 2007; greedy and deterministic here.
+///   mesh              V #V by 3 (unchanged; vertices left unused: remove_unused_vertices drops
+///                     them), T #T by 4 positively oriented, label #T or empty (modified in place)
+///   min_degrees       dihedral-angle threshold (degrees)
+///   max_length        units: longer edges are not contracted
+///   max_contractions  at most this many
+/// Throws nothing; returns how many edges were contracted.
+int contract_sliver_edges(TetMesh& mesh, double min_degrees, double max_length, int max_contractions = 1000);
+
 /// Moves boundary vertices outward (along their area-weighted normals) until the points P lie
 /// inside the mesh or within `tolerance` of it: every point farther out pushes the three vertices of
 /// its nearest boundary face by a share of its distance. A move is halved, then dropped, where a

@@ -40,6 +40,11 @@ struct TetrahedralizeOptions {
                                   // boundary by at most this (peel_boundary_slivers); thicker ones
                                   // are left to the sliver moves and flips (squeeze mesh: the
                                   // inner deviation bound)
+  double contract_max_length = 0.25;  // the slivers left after the moves and flips (four boundary
+                                  // vertices across a thin spike) have their edges contracted
+                                  // (contract_sliver_edges) before the last peeling, edges at most
+                                  // this × the interior edge length and peel_max_height long (the
+                                  // boundary moves by as much at most); 0: never (meshing version 52)
   int max_tets = 100000;          // a safety net: refinement stops when the mesh reaches this
                                   // (in points: a third of it, but at least twice the points of the
                                   // recovered boundary, so that a small part's own boundary is refined)
@@ -110,6 +115,7 @@ struct TetrahedralizeStats {
                                  // (TetrahedralizeOptions::flip_flat_surface_cells)
   int flips = 0;                 // 2-3 and 3-2 flips of interior slivers under min_dihedral at the
                                  // end (tet_cleanup.h: flip_slivers; boundary and volume unchanged)
+  int contractions = 0;          // sliver edges contracted at the very end (contract_sliver_edges)
   bool conforming = true;        // every boundary triangle (after splits) is a face of the mesh
   bool recovered = true;         // ... already before refinement, in the run kept (not so: its
                                  // refinement was bounded by unrecovered_refine_work, its
@@ -139,7 +145,9 @@ struct TetrahedralizeStats {
 /// its faces within 20° of their mean normal; by 5–20 % of the sliver's shortest edge), so such a
 /// vertex can leave the surface by that much where the surface curves; the flips change no vertex.
 /// (Before them, boundary slivers at most peel_max_height thick are peeled off; after them, the
-/// boundary slivers still below min_dihedral are, whatever their height.)
+/// boundary slivers still below min_dihedral are, whatever their height; before that, the slivers
+/// still left have their short edges contracted, contract_sliver_edges and contract_max_length,
+/// with the moves and flips again between rounds of contractions.)
 /// Tetrahedra come out positively oriented, vertices without tetrahedron dropped; label
 /// is empty. Deterministic (no threads, fixed seeds).
 /// Throws InputError if the surface has no face or target_tets < 1; returns an empty mesh when no
