@@ -1159,6 +1159,29 @@ TEST(MeshingV4, SacrumPartFallsBackToItsWindingNumberSolidWithinTheBounds) {
   }
 }
 
+// A part whose first boundary lost conformity and whose mean thickness (twice its volume over its
+// area) is at least solid_first_thickness (0.5) of its first attempt's edge length takes its
+// winding-number solid before retries 1 and 3 (meshing version 53): the sacrum at 1000 (10,818
+// faces, under solid_first_faces; 0.64 of its edge length thick) went through retries 1, 3 and 4,
+// none conforming, before the same solid. The comb's thin teeth keep the retries first
+// (BranchingThinWallsAreExact).
+TEST(MeshingV4, ThickPartWhoseBoundaryLostConformityTakesItsSolidBeforeTheRetries) {
+  const SurfaceMesh s =
+      squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/scenes/assets/sacrum_coccyx.off");
+  MeshOptions o;
+  o.tetrahedralize.target_tets = 1000;
+  o.solid_first_thickness = 0;  // (version 52)
+  const MeshResult before = squeeze::meshing::mesh_surface(s, o);
+  ASSERT_EQ(before.parts_by_winding_number, 1) << "the case this is about";
+  o.solid_first_thickness = 0.5;
+  const MeshResult r = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_EQ(r.parts_by_winding_number, 1);
+  EXPECT_LT(r.boundary_retries, before.boundary_retries);
+  EXPECT_TRUE(r.tets.T == before.tets.T && r.tets.V == before.tets.V) << "the same solid";
+  o.solid_first_thickness = -1;
+  EXPECT_THROW(squeeze::meshing::mesh_surface(s, o), squeeze::InputError);
+}
+
 /// A closed hemispherical shell: outer radius R, wall `thickness`, nu segments around, nv rings
 /// from the pole to the rim (both sheets), the rim closed by a band of quads; outward triangles.
 SurfaceMesh hemispherical_shell(double R, double thickness, int nu, int nv) {
@@ -3092,7 +3115,9 @@ TEST(MeshingV4, SliversAcrossASpikeTipAreContractedAndTheBoundaryHolds) {
   MeshOptions o;
   o.tetrahedralize.target_tets = 1000;
   o.tetrahedralize.contract_max_length = 0;  // (version 51)
+  o.solid_first_thickness = 0;               // (version 52: its solid after every retry, not before them)
   const MeshResult before = squeeze::meshing::mesh_surface(s, o);
+  o.solid_first_thickness = MeshOptions{}.solid_first_thickness;
   ASSERT_EQ(before.parts_by_winding_number, 1) << "no boundary attempt held: the case this is about";
   EXPECT_EQ(before.tet_stats.contractions, 0);
   o.tetrahedralize.contract_max_length = 0.25;
