@@ -1582,7 +1582,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               held = holds(m, st);
               spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): simplified to {} faces, {} tetrahedra, conforming {}, "
                             "smallest dihedral angle {:.2f}°, holds {}",
-                            i, h, b.F.rows(), m.T.rows(), st.conforming, tet_quality(m).min_dihedral, held);
+                            i, h, b.F.rows(), m.T.rows(), st.conforming,
+                            spdlog::should_log(spdlog::level::debug) ? tet_quality(m).min_dihedral : 0.0, held);
               if (held || better(m, st, p.tets, p.tet_stats)) {
                 adopt(m, st, b, es);
                 p.remeshed = true;
