@@ -1267,7 +1267,11 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // (skinny_split_length): used where its own is too much work to refine or does not hold.
           const double skinny = opt.split_skinny && !p.target && p.offset == 0 ? skinny_split_length(p.surface) : 0.0;
           if (skinny > 0) spdlog::debug("part {}: mostly skinny triangles: their split length {:.4g}", i, skinny);
-          e.target_faces = std::max(8, static_cast<int>(std::lround(area(p.surface) / (0.433 * L * L))));
+          // The part's area, and the spacing of the samples its retries' boundaries are measured
+          // against its surface by (p.surface stays as it is below).
+          const double part_area = area(p.surface);
+          const double part_spacing = deviation_spacing(bounding_box_diagonal(p.surface.V), {part_area});
+          e.target_faces = std::max(8, static_cast<int>(std::lround(part_area / (0.433 * L * L))));
           p.target_faces = e.target_faces;
           // The most faces a retry tetrahedralizes that are not the simplification's own choice
           // (retry 2's own surface, the skinny retry's split boundary).
@@ -1504,8 +1508,6 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // skinny triangles ran over 5 min on the knot of 12 rings; meshing version 30.)
           if (!held && !abandoned && p.offset == 0 && !p.target && opt.remesh_retry && !split_stopped) {
             const TriangleBvh own(p.surface.V, p.surface.F);
-            const double part_area = area(p.surface);
-            const double spacing = deviation_spacing(bounding_box_diagonal(p.surface.V), {part_area});
             EnvelopeOptions er = e;  // the remeshed surface's triangles are round: kept round
             er.min_triangle_angle = std::max(er.min_triangle_angle, 25.0);
             er.min_fold_angle = std::max(er.min_fold_angle, 45.0);
@@ -1542,7 +1544,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               ro.edge_length = h;
               SurfaceMesh b = remesh_isotropic(p.surface, ro);
               if (b.F.rows() == 0 || abandoned) break;
-              const auto [out, in] = farthest_both_ways(b.V, b.F, p.surface, own, spacing);
+              const auto [out, in] = farthest_both_ways(b.V, b.F, p.surface, own, part_spacing);
               spdlog::debug("part {}: retry 0 (remeshed at {:.4g}): {} faces, {:.3g} / {:.3g} off its surface (bounds "
                             "{:.3g} / {:.3g})", i, h, b.F.rows(), out, in, e.max_outside, e.max_inside);
               if (out > e.max_outside || in > e.max_inside) {
@@ -1597,7 +1599,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           auto try_solid = [&] {
             solid_tried = true;
             const double dilation = opt.winding_dilation * opt.max_deviation * diag;
-            const double growth = dilation * area(p.surface) / p.volume;  // estimated volume growth
+            const double growth = dilation * part_area / p.volume;  // estimated volume growth
             if (p.offset == 0 && !p.target && !abandoned && growth <= 0.5) {
               const double part_diag = bounding_box_diagonal(p.surface.V);
               const double shrink = target >= 1000 && growth > 0.08 ? std::max(0.4, 0.08 / growth) : 1.0;
@@ -1633,9 +1635,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               // again at 0.75 of the facet distance, kept where it holds nearer (the bust: 0.09 %;
               // forty-eighth session, meshing version 51).
               if (opt.solid_facet_retry) {
-                const double spacing = deviation_spacing(bounding_box_diagonal(p.surface.V), {area(p.surface)});
                 auto outside = [&](const TetMesh& x) {
-                  return farthest_outside(TetLocator(x), TriangleBvh(x.V, boundary_faces(x.T)), p.surface, spacing);
+                  return farthest_outside(TetLocator(x), TriangleBvh(x.V, boundary_faces(x.T)), p.surface, part_spacing);
                 };
                 const double in = outside(m);
                 if (in > e.max_inside) {
@@ -1665,7 +1666,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // edges) lost conformity in retries 1, 3 and 4 as well, 7.6 s of its 12-15 s, and its
           // solid held in 2 s; the comb of the tests (2 mm teeth, 0.33 of its edge length) holds at
           // retry 4, where its solid takes 52,073 tetrahedra.
-          const double thickness = 2 * p.volume / area(p.surface);
+          const double thickness = 2 * p.volume / part_area;
           const bool thick = opt.solid_first_thickness > 0 && first_edge_length > 0 &&
                              thickness >= opt.solid_first_thickness * first_edge_length;
           if (!first_conforming && !holds(p.tets, p.tet_stats) && opt.solid_first_faces > 0 &&
@@ -1769,8 +1770,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             bool held_now = holds(m, st);
             TwoWayDistance off;
             if (held_now) {
-              const double spacing = deviation_spacing(bounding_box_diagonal(p.surface.V), {area(p.surface)});
-              off = farthest_both_ways(m.V, boundary_faces(m.T), p.surface, TriangleBvh(p.surface.V, p.surface.F), spacing);
+              off = farthest_both_ways(m.V, boundary_faces(m.T), p.surface, TriangleBvh(p.surface.V, p.surface.F),
+                                       part_spacing);
               held_now = off.out <= e.max_outside && off.in <= e.max_inside;
             }
             spdlog::debug("part {}: retry 4 (a finer start, {:.2f} of the edge length): {} tetrahedra, conforming {}, "

@@ -26,6 +26,14 @@ double min_dihedral_of(const TetMesh& m, int t) {
   return *std::min_element(a.begin(), a.end());
 }
 
+// The smallest dihedral angle of the tetrahedron of m's vertices t, −1 if it is not positively
+// oriented (the quality flip_slivers and contract_sliver_edges compare, before and after).
+double oriented_quality(const TetMesh& m, const Eigen::Vector4i& t) {
+  if (!(tet_volume(m.V.row(t(0)), m.V.row(t(1)), m.V.row(t(2)), m.V.row(t(3))) > 0)) return -1.0;
+  const auto a = dihedral_angles(m.V.row(t(0)), m.V.row(t(1)), m.V.row(t(2)), m.V.row(t(3)));
+  return *std::min_element(a.begin(), a.end());
+}
+
 }  // namespace
 
 void remove_unused_vertices(TetMesh& m) {
@@ -317,11 +325,7 @@ int flip_slivers(TetMesh& m, double min_degrees, int max_flips) {
   // Signed volume of four vertices, and the smallest dihedral angle of a positively oriented
   // tetrahedron (−1 if it is not).
   auto orient = [&](int a, int b, int c, int d) { return tet_volume(m.V.row(a), m.V.row(b), m.V.row(c), m.V.row(d)); };
-  auto quality = [&](const Eigen::Vector4i& t) {
-    if (!(orient(t(0), t(1), t(2), t(3)) > 0)) return -1.0;
-    const auto a = dihedral_angles(m.V.row(t(0)), m.V.row(t(1)), m.V.row(t(2)), m.V.row(t(3)));
-    return *std::min_element(a.begin(), a.end());
-  };
+  auto quality = [&](const Eigen::Vector4i& t) { return oriented_quality(m, t); };
   // A tetrahedron of these vertices, positively oriented (two swapped if needed).
   auto oriented = [&](int a, int b, int c, int d) {
     return orient(a, b, c, d) > 0 ? Eigen::Vector4i(a, b, c, d) : Eigen::Vector4i(b, a, c, d);
@@ -497,11 +501,7 @@ int contract_sliver_edges(TetMesh& m, double min_degrees, double max_length, int
     for (Eigen::Index f = 0; f < B.rows(); ++f)
       for (int k = 0; k < 3; ++k) boundary[static_cast<size_t>(B(f, k))].insert(sorted3(B(f, 0), B(f, 1), B(f, 2)));
   }
-  auto quality = [&](const Eigen::Vector4i& t) {
-    if (!(tet_volume(m.V.row(t(0)), m.V.row(t(1)), m.V.row(t(2)), m.V.row(t(3))) > 0)) return -1.0;
-    const auto a = dihedral_angles(m.V.row(t(0)), m.V.row(t(1)), m.V.row(t(2)), m.V.row(t(3)));
-    return *std::min_element(a.begin(), a.end());
-  };
+  auto quality = [&](const Eigen::Vector4i& t) { return oriented_quality(m, t); };
   auto has = [&](int t, int v) { return (m.T.row(t).array() == v).any(); };
   // Each tetrahedron's quality, measured once and again where a contraction changes its row.
   std::vector<double> q(static_cast<size_t>(m.T.rows()));

@@ -1363,12 +1363,10 @@ TetMesh tetrahedralize(const SurfaceMesh& input_boundary, const TetrahedralizeOp
   if (opt.contract_max_length > 0 && st.conforming) {
     const double max_length = std::min(opt.peel_max_height, opt.contract_max_length * st.edge_length);
     auto worst = [&] {
+      const TetMesh& x = best.mesh;
       double w = 180.0;
-      for (Eigen::Index t = 0; t < best.mesh.T.rows(); ++t) {
-        const auto a = dihedral_angles(best.mesh.V.row(best.mesh.T(t, 0)), best.mesh.V.row(best.mesh.T(t, 1)),
-                                       best.mesh.V.row(best.mesh.T(t, 2)), best.mesh.V.row(best.mesh.T(t, 3)));
-        w = std::min(w, *std::min_element(a.begin(), a.end()));
-      }
+      for (Eigen::Index t = 0; t < x.T.rows(); ++t)
+        w = std::min(w, min_dihedral(x.V.row(x.T(t, 0)), x.V.row(x.T(t, 1)), x.V.row(x.T(t, 2)), x.V.row(x.T(t, 3))));
       return w;
     };
     for (int round = 0; round < 8 && worst() < opt.min_dihedral; ++round) {
