@@ -55,6 +55,8 @@
 //                             and 3 (1) or after every retry (0): seconds, retries, tetrahedra
 //  BM_ContractSlivers/<contract> the tests' urchin of 24 spikes at 1000: the slivers' edges
 //                             contracted (1) or not (0): seconds, retries, tetrahedra, contractions
+//  BM_ThickSolidFirst/<first>   the sacrum at 1000: its winding-number solid before retries 1 and
+//                             3 by its thickness (1) or after every retry (0): seconds, retries
 //  BM_SimplifyEnvelope/<no_local_crossings>  simplify_envelope() on the corpus bunny toward 1,000
 //                             faces within the default bounds, with (1) or without (0) the test for
 //                             faces crossing around each collapse: ms, faces, collapses
@@ -731,6 +733,21 @@ void BM_ContractSlivers(benchmark::State& state) {
   state.counters["contractions"] = r.tet_stats.contractions;
 }
 BENCHMARK(BM_ContractSlivers)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// The sacrum of scenes/assets at 1000, whose large part (10,818 faces, 0.64 of its edge length
+// thick) loses conformity on its first boundary and on every retry: its winding-number solid right
+// after retry 0 (1: solid_first_thickness 0.5, meshing version 53) or after retries 1, 3 and 4 (0:
+// version 52). The same mesh either way (MeshingV4.ThickPartWhose...); the retries as a counter.
+void BM_ThickSolidFirst(benchmark::State& state) {
+  static const squeeze::meshing::SurfaceMesh sacrum =
+      squeeze::meshing::load_surface(fs::path(SQUEEZE_SOURCE_DIR) / "scenes" / "assets" / "sacrum_coccyx.off");
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 1000;
+  o.solid_first_thickness = state.range(0) == 1 ? 0.5 : 0.0;
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, sacrum, o);
+  state.counters["retries"] = r.boundary_retries;
+}
+BENCHMARK(BM_ThickSolidFirst)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 // Arguments: the dense bunny (0) or the noisy one (1); planes checked one by one (1, the default
 // since meshing version 50) or the quadric's root alone (0, version 49).
