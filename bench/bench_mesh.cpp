@@ -49,6 +49,9 @@
 //                             at the default target: meshed through its quadric-decimated proxy
 //                             (1, version 49) or as it is (0: dense_faces 0); the proxy's faces,
 //                             tetrahedra and both deviations (fractions of the diagonal) as counters
+//  BM_MidDenseScan/<proxy>     the corpus bunny (75,408 faces) at the default target: meshed
+//                             through its proxy (1, version 54: dense_faces 30,000) or as it is
+//                             (0, dense_faces 100,000 as before); proxy faces, tetrahedra, deviations
 //  BM_Decimate                decimate_quadric() alone on that bunny, within 0.045 % of its
 //                             diagonal (the pipeline's default bound): faces left, collapses
 //  BM_SolidFirst/<first>       the tests' urchin at 150: its winding-number solid before retries 1
@@ -705,6 +708,19 @@ void BM_DenseScan(benchmark::State& state) {
   state.counters["deviation_in"] = r.deviation_in / diag;
 }
 BENCHMARK(BM_DenseScan)->Arg(1)->Arg(0)->Arg(2)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// The corpus bunny (75,408 faces, between version 54's dense_faces and version 53's) at the
+// default target: 1: through its proxy (the default, 30,000); 0: the input itself (100,000).
+void BM_MidDenseScan(benchmark::State& state) {
+  squeeze::meshing::MeshOptions o;
+  if (state.range(0) == 0) o.dense_faces = 100000;
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, squeeze::meshing::load_surface(data("bunny00.off")), o);
+  const double diag = squeeze::meshing::bounding_box_diagonal(r.input.V);
+  state.counters["proxy_faces"] = r.proxy_faces;
+  state.counters["deviation_out"] = r.deviation_out / diag;
+  state.counters["deviation_in"] = r.deviation_in / diag;
+}
+BENCHMARK(BM_MidDenseScan)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 // The urchin of the tests (4,992 faces) at 150, whose first boundary loses conformity and whose
 // retries do not hold: its winding-number solid tried before retries 1 and 3 (1: solid_first_faces

@@ -120,6 +120,10 @@ Runner add_mesh_command(CLI::App& app, const Global& global) {
                   "within a tenth of the inner bound of them, and measured against the input itself (the report's "
                   "proxy; 0: never)")
       ->capture_default_str();
+  cmd->add_option("--dense-min-saving", args->options.dense_min_saving,
+                  "With --dense-faces: the proxy is meshed only where it has at least this many triangles fewer "
+                  "than the input; else the input itself is")
+      ->capture_default_str();
   cmd->add_option("--tets-per-hull", args->options.tets_per_hull,
                   "The hull budget is at most target-tets / this (0: --max-hulls alone)")
       ->capture_default_str();

@@ -501,6 +501,8 @@ std::vector<BadCase> bad_cases() {
        {"at least", "> 0", "positive", "must be"}},
       {"dense_faces_negative", [=](const fs::path&) { return with({sphere_off, "--dense-faces", "-1"}); }, "--dense-faces",
        {"at least", "must be"}},
+      {"dense_min_saving_negative", [=](const fs::path&) { return with({sphere_off, "--dense-min-saving", "-1"}); },
+       "--dense-min-saving", {"at least", "must be"}},
       {"max_hulls_zero", [=](const fs::path&) { return with({sphere_off, "--max-hulls", "0"}); }, "--max-hulls",
        {"at least", "> 0", "positive", "must be"}},
       {"wrap_alpha_zero", [=](const fs::path&) { return with({sphere_off, "--wrap", "--wrap-alpha", "0"}); },

@@ -232,6 +232,45 @@ TEST(MeshingDecompose, ThickUShapeIsSplitAtBothConcaveCorners) {
   expect_split_at_notch(u, {{1.05, 1.05, 0.7}, {1.95, 1.05, 1.3}, {1.5, 2.0, 0.5}, {1.5, 2.95, 1.5}}, "thick U");
 }
 
+// hold_points (decompose.h) grows the shells of an L's decomposition to hold points just outside
+// them (a dense input's vertices around its proxy's shells, version 54): each such point is held
+// afterwards, by the shell it lay least outside of, which grows by no more than that; points
+// already held change nothing; a point outside by under the tolerance counts as held.
+TEST(MeshingDecompose, HoldPointsGrowsTheNearestShellToHoldThem) {
+  squeeze::meshing::Decomposition d = squeeze::meshing::decompose(l_shape());
+  ASSERT_GT(d.shells.size(), 1u);
+  const double diag = diagonal(l_shape().V);
+  auto least_outside = [&](const Eigen::RowVector3d& p) {
+    double best = INFINITY;
+    for (const auto& s : d.shells) best = std::min(best, s.hull.signed_value(p));
+    return best;
+  };
+  // Points on the L's outer faces, moved out by 1e-3 of the diagonal; and vertices (held).
+  const Eigen::MatrixX3d V = l_shape().V;
+  Eigen::MatrixX3d out(4, 3);
+  out << -1e-3 * diag, 0.5, 0.5,  // the x = 0 face
+      0.5, -1e-3 * diag, 0.5,      // y = 0
+      2.5, 0.5, 1 + 1e-3 * diag,   // the top
+      0.5, 2.5, -1e-3 * diag;      // the bottom, the other arm
+  for (Eigen::Index i = 0; i < out.rows(); ++i) ASSERT_GT(least_outside(out.row(i)), 0.5e-3 * diag);
+  std::vector<double> volumes;
+  for (const auto& s : d.shells) volumes.push_back(s.hull.volume);
+  const auto before = d.shells;
+  EXPECT_EQ(squeeze::meshing::hold_points(d, V, 1e-9 * diag), 0);
+  for (size_t s = 0; s < d.shells.size(); ++s) EXPECT_EQ(d.shells[s].hull.V, before[s].hull.V);
+  // Under the tolerance: held as they are.
+  EXPECT_EQ(squeeze::meshing::hold_points(d, out, 2e-3 * diag), 0);
+  EXPECT_EQ(squeeze::meshing::hold_points(d, out, 1e-9 * diag), 4);
+  for (Eigen::Index i = 0; i < out.rows(); ++i) EXPECT_LE(least_outside(out.row(i)), 1e-9 * diag) << "point " << i;
+  for (Eigen::Index i = 0; i < V.rows(); ++i) EXPECT_LE(least_outside(V.row(i)), 1e-9 * diag) << "vertex " << i;
+  for (size_t s = 0; s < d.shells.size(); ++s) {
+    EXPECT_GE(d.shells[s].hull.volume, volumes[s] - 1e-12);
+    // Each grows by at most a slab of the moved distance over its surface: far less than 1 %.
+    EXPECT_LE(d.shells[s].hull.volume, 1.01 * volumes[s]);
+  }
+  EXPECT_EQ(squeeze::meshing::hold_points(d, out, 1e-9 * diag), 0);
+}
+
 TEST(MeshingDecompose, ShellsAreInteriorDisjoint) {
   // Plane cuts: the shells of the L meet only on cutting planes, so their volumes add up to the L's.
   const auto d = squeeze::meshing::decompose(l_shape());

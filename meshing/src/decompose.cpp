@@ -833,4 +833,35 @@ Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& opt
   return result;
 }
 
+int hold_points(Decomposition& d, const Eigen::MatrixX3d& P, double tolerance) {
+  // Each point's shell: -1 where some shell holds it, else the one it lies least outside of.
+  std::vector<int> to(static_cast<size_t>(P.rows()), -1);
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, P.rows(), 1024), [&](const tbb::blocked_range<Eigen::Index>& range) {
+    for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
+      double best = INFINITY;
+      int arg = -1;
+      for (size_t s = 0; s < d.shells.size() && best > tolerance; ++s) {
+        if (!(d.shells[s].hull.volume > 0)) continue;
+        const double v = d.shells[s].hull.signed_value(P.row(i));
+        if (v < best) best = v, arg = static_cast<int>(s);
+      }
+      if (best > tolerance) to[static_cast<size_t>(i)] = arg;
+    }
+  });
+  std::vector<std::vector<Eigen::Index>> taken(d.shells.size());
+  int count = 0;
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    if (to[static_cast<size_t>(i)] >= 0) taken[static_cast<size_t>(to[static_cast<size_t>(i)])].push_back(i), ++count;
+  for (size_t s = 0; s < d.shells.size(); ++s) {
+    if (taken[s].empty()) continue;
+    ConvexHull& hull = d.shells[s].hull;
+    Eigen::MatrixX3d Q(hull.V.rows() + static_cast<Eigen::Index>(taken[s].size()), 3);
+    Q.topRows(hull.V.rows()) = hull.V;
+    for (size_t k = 0; k < taken[s].size(); ++k) Q.row(hull.V.rows() + static_cast<Eigen::Index>(k)) = P.row(taken[s][k]);
+    ConvexHull grown = convex_hull(Q);
+    if (grown.volume > 0) hull = std::move(grown);
+  }
+  return count;
+}
+
 }  // namespace squeeze::meshing

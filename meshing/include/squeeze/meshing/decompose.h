@@ -106,4 +106,16 @@ struct Decomposition {
 Decomposition decompose(const SurfaceMesh& mesh, const DecompositionOptions& options = {},
                         Progress* progress = nullptr);
 
+/// Grows the shells of `d` so that together they hold every row of P: a point outside every shell
+/// by more than `tolerance` is taken into the hull of the shell it lies least outside of (the
+/// smallest ConvexHull::signed_value), and that hull is made again. For a decomposition made of an
+/// approximation of a surface (a dense input's decimated proxy, mesh_pipeline.h) and the
+/// surface's own vertices, which lie within the approximation's error of it: the shells then grow
+/// by at most that error, and may overlap by as much across the cuts. Shells without volume are
+/// left as they are.
+///   P          #P by 3 points (model units)
+///   tolerance  how far outside a shell a point may lie and count as held (model units)
+/// Returns the number of points taken in.
+int hold_points(Decomposition& d, const Eigen::MatrixX3d& P, double tolerance);
+
 }  // namespace squeeze::meshing
