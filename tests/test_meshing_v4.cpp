@@ -1188,6 +1188,24 @@ TEST(MeshingV4, SacrumPartFallsBackToItsWindingNumberSolidWithinTheBounds) {
   }
 }
 
+// A thin CAD plate (trimesh's fixed_top.ply, tests/data/cad) at 150: its boundary is never
+// recovered conforming, and its winding-number solid, at the dilation the bound allows, grew to
+// 1.412 times its volume, over the volume bound; the part then kept its boundary that was not
+// conforming, 1.36 % of the diagonal in. Since meshing version 54 the solid is made again with the
+// dilation and facet distance scaled down (0.4 here): within every bound, by its solid.
+TEST(MeshingV4, ThinPartWhoseSolidGrewOverTheBoundIsMadeAgainThinner) {
+  const SurfaceMesh s = squeeze::meshing::load_surface(sqt::data("cad/fixed_top.ply"));
+  const double diag = bounding_box_diagonal(s.V);
+  MeshOptions o;
+  o.tetrahedralize.target_tets = 150;
+  const MeshResult r = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_EQ(r.method, "boundary");
+  EXPECT_EQ(r.parts_by_winding_number, 1);
+  expect_within(r, diag, 0.2, 0.015, 0.005, 1);  // (the bounds at 150: volume in [0.9, 1.2])
+  EXPECT_GE(*r.volume_ratio, 0.9);
+  EXPECT_LE(*r.volume_ratio, 1.2);
+}
+
 // A part whose first boundary lost conformity and whose mean thickness (twice its volume over its
 // area) is at least solid_first_thickness (0.5) of its first attempt's edge length takes its
 // winding-number solid before retries 1 and 3 (meshing version 53): the sacrum at 1000 (10,818
