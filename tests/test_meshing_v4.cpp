@@ -1206,6 +1206,24 @@ TEST(MeshingV4, ThinPartWhoseSolidGrewOverTheBoundIsMadeAgainThinner) {
   EXPECT_LE(*r.volume_ratio, 1.2);
 }
 
+// trimesh's ADIS16480.STL (a sensor housing: pockets, bosses, small fillets) at 150: its simplified
+// boundary's first recovery gives up at recovery_splits_per_face (4 per face; it went on to 21,456
+// splits for 1,614 faces before version 55), that run is not refined, and the part takes no retry
+// but its remeshed surface before its winding-number solid, which holds the bounds.
+TEST(MeshingV4, CadPartWhoseRecoveryIsHopelessGoesToItsSolidWithinTheBounds) {
+  const SurfaceMesh s = squeeze::meshing::load_surface(sqt::data("cad/ADIS16480.STL"));
+  const double diag = bounding_box_diagonal(s.V);
+  MeshOptions o;
+  o.tetrahedralize.target_tets = 150;
+  const MeshResult r = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_EQ(r.method, "boundary");
+  EXPECT_EQ(r.parts_by_winding_number, 1);
+  EXPECT_LE(r.boundary_retries, 1);  // (retry 0 only)
+  expect_within(r, diag, 0.2, 0.015, 0.005, 1);
+  EXPECT_GE(*r.volume_ratio, 0.9);
+  EXPECT_LE(*r.volume_ratio, 1.2);
+}
+
 // A part whose first boundary lost conformity and whose mean thickness (twice its volume over its
 // area) is at least solid_first_thickness (0.5) of its first attempt's edge length takes its
 // winding-number solid before retries 1 and 3 (meshing version 53): the sacrum at 1000 (10,818
@@ -2854,6 +2872,42 @@ TEST(MeshingV4, ABoundaryNotRecoveredIsRefinedWithinItsBoundAndNotExuded) {
   EXPECT_TRUE(m1.V == m2.V && m1.T == m2.T) << "exuded";
 }
 
+
+// The sacrum's own surface at 150 again: its first recovery gives up once it would split more
+// boundary edges than TetrahedralizeOptions::recovery_splits_per_face × its faces in a round that
+// does not converge (no fewer splits than 0.9 of the fewest a round so far), and that run is not
+// refined (squeeze mesh retries no such boundary but its remeshed surface; trimesh's
+// ADIS16480.STL at 150 spent 29 s in one). Its default (4) is above what the sacrum needs: the
+// same mesh as no bound.
+TEST(MeshingV4, ARecoveryOverItsSplitBudgetIsAbandonedUnrefined) {
+  const SurfaceMesh s = squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/scenes/assets/sacrum_coccyx.off");
+  auto run = [&](double per_face, squeeze::meshing::TetrahedralizeStats& st) {
+    squeeze::meshing::TetrahedralizeOptions o;
+    o.target_tets = 150;
+    o.max_attempts = 1;
+    o.recovery_splits_per_face = per_face;
+    return squeeze::meshing::tetrahedralize(s, o, &st);
+  };
+  squeeze::meshing::TetrahedralizeStats none, tight, by_default;
+  const squeeze::meshing::TetMesh m0 = run(0, none);
+  ASSERT_FALSE(none.recovered);
+  EXPECT_FALSE(none.recovery_abandoned);
+  EXPECT_GT(none.refine_work, 0.0);
+  const squeeze::meshing::TetMesh m1 = run(0.1, tight);
+  EXPECT_TRUE(tight.recovery_abandoned);
+  EXPECT_FALSE(tight.conforming);
+  EXPECT_EQ(tight.refine_work, 0.0);
+  EXPECT_EQ(tight.steiner_points, 0);
+  // (Past the budget only in rounds that still converge: 3,125 splits when written, against 5,418
+  // with refinement's.)
+  EXPECT_GT(tight.boundary_splits, static_cast<int>(0.1 * static_cast<double>(s.F.rows())));
+  EXPECT_LT(tight.boundary_splits, none.boundary_splits);
+  EXPECT_GT(m1.T.rows(), 0);
+  EXPECT_LT(m1.T.rows(), m0.T.rows());
+  const squeeze::meshing::TetMesh m2 = run(squeeze::meshing::TetrahedralizeOptions{}.recovery_splits_per_face, by_default);
+  EXPECT_FALSE(by_default.recovery_abandoned);
+  EXPECT_TRUE(m2.V == m0.V && m2.T == m0.T);
+}
 
 // A knife 1 m long and deep whose edge is 1.1° sharp (back 2 cm): a thin part whose mid-surface's
 // prisms at the edge, as thin as the slab is allowed there, needed four rounds of splits before

@@ -1437,7 +1437,10 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
           // splits for 1,744 faces), the first attempt split under twice per face; in the corpus,
           // the organs and the generated shapes the only other first attempt that did not hold
           // split under once per face (the sacrum's).
-          const bool hopeless = !first_holds && p.tet_stats.boundary_splits > 4 * static_cast<int>(p.boundary.F.rows());
+          // (Since meshing version 55 the first recovery itself gives up there, at
+          // TetrahedralizeOptions::recovery_splits_per_face, and that run is not refined.)
+          const bool hopeless = !first_holds && (p.tet_stats.recovery_abandoned ||
+                                                 p.tet_stats.boundary_splits > 4 * static_cast<int>(p.boundary.F.rows()));
           if (hopeless)
             spdlog::debug("part {}: its first attempt split {} boundary edges for {} faces and did not hold: no retry but the remeshed surface", i,
                           p.tet_stats.boundary_splits, p.boundary.F.rows());

@@ -77,6 +77,18 @@ struct TetrahedralizeOptions {
                                   // round adds (false: it counts every point, as before meshing
                                   // version 45: a plate with 3 mm ribs lost its boundary at the cap
                                   // and was remeshed; bench_mesh's A/B)
+  double recovery_splits_per_face = 4.0;  // the first conformity recovery of a run gives up once
+                                  // it would split more boundary edges than this × the boundary's
+                                  // faces (as given, before its long edges are split) in a round
+                                  // that does not converge (no fewer splits than 0.9 of the fewest
+                                  // a round so far: a plate of 60 large faces converges through
+                                  // over 1,000), and such a run is not refined (its mesh: the Delaunay tetrahedra of its
+                                  // points, classified by the winding number). squeeze mesh retries
+                                  // no such boundary but its remeshed surface (mesh_pipeline.cpp:
+                                  // a first attempt over four splits per face that does not hold),
+                                  // and trimesh's ADIS16480.STL at 150 spent 7 s in recovery, 8 s
+                                  // refining and 14 s moving slivers in one, for 21,456 splits of
+                                  // 1,614 faces (meshing version 55). 0: no bound
   double max_refine_work = 0;     // cells of the conflict zones refinement may search in all attempts
                                   // (its work, a deterministic measure of its time: about 4 million
                                   // per second here); beyond it refinement stops and no further
@@ -120,6 +132,8 @@ struct TetrahedralizeStats {
   bool recovered = true;         // ... already before refinement, in the run kept (not so: its
                                  // refinement was bounded by unrecovered_refine_work, its
                                  // tetrahedra classified by the winding number)
+  bool recovery_abandoned = false;  // ... the first recovery of the run kept gave up at
+                                 // TetrahedralizeOptions::recovery_splits_per_face (not refined)
   int exuder_nan_stops = 0;      // attempts whose CGAL exuder met a NaN weight beside a numerically flat
                                  // cell and stopped there, instead of the process dying of SIGFPE
   int exuder_pump_bounds = 0;    // attempts whose exuder stopped at exude_pumps_per_sliver
