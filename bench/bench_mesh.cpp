@@ -52,6 +52,9 @@
 //  BM_MidDenseScan/<proxy>     the corpus bunny (75,408 faces) at the default target: meshed
 //                             through its proxy (1, version 54: dense_faces 30,000) or as it is
 //                             (0, dense_faces 100,000 as before); proxy faces, tetrahedra, deviations
+//  BM_HopelessCadRecovery/<budget> trimesh's ADIS16480.STL at 150: its first recovery given up at 4
+//                             splits per face and not refined (1, version 55) or at the point cap,
+//                             refined (0): seconds, tetrahedra, volume ratio, deviations
 //  BM_Decimate                decimate_quadric() alone on that bunny, within 0.045 % of its
 //                             diagonal (the pipeline's default bound): faces left, collapses
 //  BM_SolidFirst/<first>       the tests' urchin at 150: its winding-number solid before retries 1
@@ -721,6 +724,20 @@ void BM_MidDenseScan(benchmark::State& state) {
   state.counters["deviation_in"] = r.deviation_in / diag;
 }
 BENCHMARK(BM_MidDenseScan)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+// trimesh's ADIS16480.STL (7,436 faces, tests/data/cad) at 150: the first recovery of its simplified
+// boundary (1,614 faces) gives up at 4 splits per face, unrefined (1: the default since version 55),
+// or at the point cap after 21,456 splits, refined (0: recovery_splits_per_face 0, as before).
+void BM_HopelessCadRecovery(benchmark::State& state) {
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 150;
+  if (state.range(0) == 0) o.tetrahedralize.recovery_splits_per_face = 0;
+  const squeeze::meshing::MeshResult r = mesh_each_iteration(state, squeeze::meshing::load_surface(data("cad/ADIS16480.STL")), o);
+  const double diag = squeeze::meshing::bounding_box_diagonal(r.input.V);
+  state.counters["deviation_out"] = r.deviation_out / diag;
+  state.counters["deviation_in"] = r.deviation_in / diag;
+}
+BENCHMARK(BM_HopelessCadRecovery)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 // The urchin of the tests (4,992 faces) at 150, whose first boundary loses conformity and whose
 // retries do not hold: its winding-number solid tried before retries 1 and 3 (1: solid_first_faces
