@@ -39,6 +39,17 @@
 
 namespace {
 
+// tetrahedralize() of s at `target` tetrahedra in one attempt (one interior edge length), its
+// options changed by `set` first: the tests of one option against its default or none.
+template <class Set>
+squeeze::meshing::TetMesh one_run(const squeeze::meshing::SurfaceMesh& s, int target, Set&& set, squeeze::meshing::TetrahedralizeStats& st) {
+  squeeze::meshing::TetrahedralizeOptions o;
+  o.target_tets = target;
+  o.max_attempts = 1;
+  set(o);
+  return squeeze::meshing::tetrahedralize(s, o, &st);
+}
+
 using squeeze::meshing::bounding_box_diagonal;
 using squeeze::meshing::MeshOptions;
 using squeeze::meshing::MeshResult;
@@ -2853,12 +2864,7 @@ TEST(MeshingV4, WeldedFanEnclosingNoVolumeIsAnErrorAtOnce) {
 TEST(MeshingV4, ABoundaryNotRecoveredIsRefinedWithinItsBoundAndNotExuded) {
   const SurfaceMesh s = squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/scenes/assets/sacrum_coccyx.off");
   auto run = [&](double bound, bool exude, squeeze::meshing::TetrahedralizeStats& st) {
-    squeeze::meshing::TetrahedralizeOptions o;
-    o.target_tets = 150;
-    o.max_attempts = 1;
-    o.unrecovered_refine_work = bound;
-    o.exude = exude;
-    return squeeze::meshing::tetrahedralize(s, o, &st);
+    return one_run(s, 150, [&](squeeze::meshing::TetrahedralizeOptions& o) { o.unrecovered_refine_work = bound, o.exude = exude; }, st);
   };
   squeeze::meshing::TetrahedralizeStats unbounded, bounded, bounded_not_exuded;
   const squeeze::meshing::TetMesh m0 = run(0, true, unbounded);
@@ -2882,11 +2888,7 @@ TEST(MeshingV4, ABoundaryNotRecoveredIsRefinedWithinItsBoundAndNotExuded) {
 TEST(MeshingV4, ARecoveryOverItsSplitBudgetIsAbandonedUnrefined) {
   const SurfaceMesh s = squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/scenes/assets/sacrum_coccyx.off");
   auto run = [&](double per_face, squeeze::meshing::TetrahedralizeStats& st) {
-    squeeze::meshing::TetrahedralizeOptions o;
-    o.target_tets = 150;
-    o.max_attempts = 1;
-    o.recovery_splits_per_face = per_face;
-    return squeeze::meshing::tetrahedralize(s, o, &st);
+    return one_run(s, 150, [&](squeeze::meshing::TetrahedralizeOptions& o) { o.recovery_splits_per_face = per_face; }, st);
   };
   squeeze::meshing::TetrahedralizeStats none, tight, by_default;
   const squeeze::meshing::TetMesh m0 = run(0, none);
@@ -2950,11 +2952,7 @@ TEST(MeshingV4, ThinBottleIsASlabWithinTheBounds) {
 TEST(MeshingV4, EveryRunsRefinementStopsAtItsWorkBound) {
   const SurfaceMesh s = squeeze::meshing::load_surface(std::string(SQUEEZE_SOURCE_DIR) + "/tests/data/elephant.off");
   auto run = [&](double bound, squeeze::meshing::TetrahedralizeStats& st) {
-    squeeze::meshing::TetrahedralizeOptions o;
-    o.target_tets = 1000;
-    o.max_attempts = 1;
-    o.run_refine_work = bound;
-    return squeeze::meshing::tetrahedralize(s, o, &st);
+    return one_run(s, 1000, [&](squeeze::meshing::TetrahedralizeOptions& o) { o.run_refine_work = bound; }, st);
   };
   squeeze::meshing::TetrahedralizeStats unbounded, by_default, bounded;
   const squeeze::meshing::TetMesh m0 = run(0, unbounded);
