@@ -1204,17 +1204,26 @@ TEST(MeshingV4, SacrumPartFallsBackToItsWindingNumberSolidWithinTheBounds) {
 // 1.412 times its volume, over the volume bound; the part then kept its boundary that was not
 // conforming, 1.36 % of the diagonal in. Since meshing version 54 the solid is made again with the
 // dilation and facet distance scaled down (0.4 here): within every bound, by its solid.
-TEST(MeshingV4, ThinPartWhoseSolidGrewOverTheBoundIsMadeAgainThinner) {
-  const SurfaceMesh s = squeeze::meshing::load_surface(sqt::data("cad/fixed_top.ply"));
+namespace {
+// A CAD part of tests/data/cad at 150 with the defaults: the boundary route, the part its own
+// winding-number solid, within the bounds at 150 (volume in [0.9, 1.2]).
+MeshResult expect_cad_part_held_by_its_solid(const std::string& file) {
+  const SurfaceMesh s = squeeze::meshing::load_surface(sqt::data(file));
   const double diag = bounding_box_diagonal(s.V);
   MeshOptions o;
   o.tetrahedralize.target_tets = 150;
-  const MeshResult r = squeeze::meshing::mesh_surface(s, o);
-  EXPECT_EQ(r.method, "boundary");
-  EXPECT_EQ(r.parts_by_winding_number, 1);
-  expect_within(r, diag, 0.2, 0.015, 0.005, 1);  // (the bounds at 150: volume in [0.9, 1.2])
-  EXPECT_GE(*r.volume_ratio, 0.9);
-  EXPECT_LE(*r.volume_ratio, 1.2);
+  MeshResult r = squeeze::meshing::mesh_surface(s, o);
+  EXPECT_EQ(r.method, "boundary") << file;
+  EXPECT_EQ(r.parts_by_winding_number, 1) << file;
+  expect_within(r, diag, 0.2, 0.015, 0.005, 1);
+  EXPECT_GE(*r.volume_ratio, 0.9) << file;
+  EXPECT_LE(*r.volume_ratio, 1.2) << file;
+  return r;
+}
+}  // namespace
+
+TEST(MeshingV4, ThinPartWhoseSolidGrewOverTheBoundIsMadeAgainThinner) {
+  expect_cad_part_held_by_its_solid("cad/fixed_top.ply");
 }
 
 // trimesh's ADIS16480.STL (a sensor housing: pockets, bosses, small fillets) at 150: its simplified
@@ -1222,17 +1231,8 @@ TEST(MeshingV4, ThinPartWhoseSolidGrewOverTheBoundIsMadeAgainThinner) {
 // splits for 1,614 faces before version 55), that run is not refined, and the part takes no retry
 // but its remeshed surface before its winding-number solid, which holds the bounds.
 TEST(MeshingV4, CadPartWhoseRecoveryIsHopelessGoesToItsSolidWithinTheBounds) {
-  const SurfaceMesh s = squeeze::meshing::load_surface(sqt::data("cad/ADIS16480.STL"));
-  const double diag = bounding_box_diagonal(s.V);
-  MeshOptions o;
-  o.tetrahedralize.target_tets = 150;
-  const MeshResult r = squeeze::meshing::mesh_surface(s, o);
-  EXPECT_EQ(r.method, "boundary");
-  EXPECT_EQ(r.parts_by_winding_number, 1);
+  const MeshResult r = expect_cad_part_held_by_its_solid("cad/ADIS16480.STL");
   EXPECT_LE(r.boundary_retries, 1);  // (retry 0 only)
-  expect_within(r, diag, 0.2, 0.015, 0.005, 1);
-  EXPECT_GE(*r.volume_ratio, 0.9);
-  EXPECT_LE(*r.volume_ratio, 1.2);
 }
 
 // A part whose first boundary lost conformity and whose mean thickness (twice its volume over its
