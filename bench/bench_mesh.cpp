@@ -54,7 +54,7 @@
 //                             (0, dense_faces 100,000 as before); proxy faces, tetrahedra, deviations
 //  BM_HopelessCadRecovery/<budget> trimesh's ADIS16480.STL at 150: its first recovery given up at 4
 //                             splits per face and not refined (1, version 55) or at the point cap,
-//                             refined (0): seconds, tetrahedra, volume ratio, deviations
+//                             refined (0): seconds, tetrahedra, deviations
 //  BM_Decimate                decimate_quadric() alone on that bunny, within 0.045 % of its
 //                             diagonal (the pipeline's default bound): faces left, collapses
 //  BM_SolidFirst/<first>       the tests' urchin at 150: its winding-number solid before retries 1

@@ -184,9 +184,9 @@ class Mesher {
     // diametral balls hold the other side of the wire) needed 1,042 splits for its 725 points and
     // was given up at 1.5 (meshing version 18: not conforming, 1.2 % of the diagonal in).
     conformity_cap_ = static_cast<int>(P_.size()) * 4 + 200;
-    split_budget_ = opt_.recovery_splits_per_face > 0 ? opt_.recovery_splits_per_face * static_cast<double>(input_faces_) : 0.0;
-    r.conforming = make_conforming();
-    split_budget_ = 0;  // (the recoveries after refinement rounds: the point cap only)
+    // (The split budget for this first recovery only: the recoveries after refinement rounds have
+    // the point cap alone.)
+    r.conforming = make_conforming(std::max(0.0, opt_.recovery_splits_per_face) * static_cast<double>(input_faces_));
     r.abandoned = abandoned_;
     r.recovered = r.conforming;
     classify(r.conforming);
@@ -387,9 +387,7 @@ class Mesher {
   std::unordered_map<Key3, int, Key3Hash> face_;
   int splits_ = 0, steiner_ = 0, size_driven_ = 0;
   int input_faces_ = 0;          // the boundary's faces as given (before long edges are split)
-  double split_budget_ = 0;      // make_conforming gives up beyond this many splits of its own (0: none;
-                                 // TetrahedralizeOptions::recovery_splits_per_face, first recovery only)
-  bool abandoned_ = false;       // the first recovery gave up at split_budget_: no refinement
+  bool abandoned_ = false;       // the first recovery gave up at its split budget: no refinement
   int flat_flips_ = 0;  // surface diagonals flipped to put flat cells outside (flip_flat_surface_cells)
   long conflict_cells_ = 0;  // cells of the conflict zones refinement searched (its work)
   size_t start_points_ = 0;        // P_'s points before run() (same_start)
@@ -854,8 +852,10 @@ class Mesher {
   // to split than the fewest so far, that have added a quarter more points than there were then
   // (and 200 at least, as the cap allows small surfaces; between the sheets of a 4 mm shell it
   // hovers at 100–240 edges a round, 60 points each, where a coil spring's wire goes 618, 475,
-  // 356, ..., 8, 2 and holds, and a 2 mm fin 7, 7, 6, 4, 1).
-  bool make_conforming() {
+  // 356, ..., 8, 2 and holds, and a 2 mm fin 7, 7, 6, 4, 1). split_budget: where positive, it also
+  // gives up (abandoned_) once its own splits would pass this in a round that does not converge
+  // (TetrahedralizeOptions::recovery_splits_per_face).
+  bool make_conforming(double split_budget = 0) {
     std::vector<uint64_t> flipped;  // each new diagonal once: no flipping back and forth
     size_t fewest = SIZE_MAX, points_then = 0;
     int stalled = 0;
@@ -936,11 +936,11 @@ class Mesher {
       // the fewest so far): a boundary of few large faces, whose long edges were split into many,
       // can need more splits than its faces several times over and still converge (the ribbed plate
       // of the tests: 60 faces; its splits fall round after round).
-      if (split_budget_ > 0 && static_cast<double>(split.size()) >= 0.9 * static_cast<double>(fewest) &&
-          static_cast<double>(splits_ - splits_before + static_cast<int>(split.size())) > split_budget_) {
+      if (split_budget > 0 && static_cast<double>(split.size()) >= 0.9 * static_cast<double>(fewest) &&
+          static_cast<double>(splits_ - splits_before + static_cast<int>(split.size())) > split_budget) {
         spdlog::debug("conformity round {}: gave up at the split budget ({} splits + {} > {:.0f}, {} faces given; "
                       "the fewest a round {}): not refined",
-                      round, splits_ - splits_before, split.size(), split_budget_, input_faces_, fewest);
+                      round, splits_ - splits_before, split.size(), split_budget, input_faces_, fewest);
         abandoned_ = true;
         return false;
       }
