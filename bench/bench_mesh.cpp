@@ -68,6 +68,8 @@
 //                             faces crossing around each collapse: ms, faces, collapses
 //  BM_TriangleBvh/<query>      TriangleBvh's nearest() (0 unbounded, 1 within 1 % of the diagonal)
 //                             and any_within() (2) on the heart's 40,620 triangles: ns per query
+//  BM_TetLocator              TetLocator::locate() on the tests' sphere at 1,000 tetrahedra, points
+//                             spread over its bounding box: ns per query
 //  BM_WindingNumber/<100 beta> FastWindingNumber queries on the heart's 40,620 triangles at the kind
 //                             of points the winding-number route's Mesh_3 oracle asks about: the
 //                             input's vertices moved along their normals by 0.5-8 times the
@@ -97,6 +99,7 @@
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/tet_cleanup.h"
+#include "squeeze/meshing/tet_locator.h"
 #include "squeeze/meshing/tetrahedralize.h"
 #include "squeeze/meshing/triangle_bvh.h"
 #include "squeeze/meshing/winding_number.h"
@@ -860,5 +863,33 @@ void BM_TriangleBvh(benchmark::State& state) {
   state.counters["checksum"] = sum;
 }
 BENCHMARK(BM_TriangleBvh)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+// TetLocator::locate() on the tests' sphere meshed at 1,000 tetrahedra, at points spread over its
+// bounding box (about half inside): ns per query; the tetrahedra found summed as a checksum (the
+// same before and after a change of how barycentric coordinates are computed).
+void BM_TetLocator(benchmark::State& state) {
+  squeeze::meshing::MeshOptions o;
+  o.tetrahedralize.target_tets = 1000;
+  const squeeze::meshing::TetMesh m = squeeze::meshing::mesh_surface(squeeze::meshing::load_surface(data("sphere.off")), o).tets;
+  const squeeze::meshing::TetLocator locator(m);
+  const Eigen::RowVector3d lo = m.V.colwise().minCoeff(), hi = m.V.colwise().maxCoeff();
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Eigen::RowVector3d> q(200000);
+  for (auto& p : q)
+    for (int k = 0; k < 3; ++k) p(k) = lo(k) + (hi(k) - lo(k)) * u(rng);
+  double sum = 0, seconds = 0;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    sum = 0;
+    for (const auto& p : q) sum += locator.locate(p);
+    benchmark::DoNotOptimize(sum);
+    seconds += seconds_since(t0);
+  }
+  state.counters["tets"] = static_cast<double>(m.T.rows());
+  state.counters["ns_per_query"] = 1e9 * seconds / (static_cast<double>(state.iterations()) * static_cast<double>(q.size()));
+  state.counters["checksum"] = sum;
+}
+BENCHMARK(BM_TetLocator)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 BENCHMARK_MAIN();

@@ -811,6 +811,46 @@ TEST(MeshingTetGeometry, VolumeIsTheSignedSixthOfTheTripleProduct) {
   EXPECT_NEAR(v.maxCoeff(), 1.0 / 6.0, 1e-15);
 }
 
+// TetLocator::locate() and barycentric() on a Kuhn box [0,3]³ whose interior vertices are moved
+// (irregular tetrahedra) and every third tetrahedron turned the other way (either orientation is
+// taken): every point inside the box is found, its coordinates are at least -1e-10, sum to 1 and
+// give the point back; points outside the box are not found; a tetrahedron's corners have unit
+// coordinates. (Since the fifty-second session the coordinates come from triple products, not an
+// LU solve: the same meshes in every battery.)
+TEST(MeshingTetGeometry, TetLocatorFindsEveryPointWithCoordinatesThatGiveItBack) {
+  TetMesh m = kuhn_box(3);
+  std::mt19937 g(5);
+  std::uniform_real_distribution<double> jitter(-0.15, 0.15), u(-0.3, 3.3);
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v)
+    if (m.V.row(v).minCoeff() > 0 && m.V.row(v).maxCoeff() < 3)
+      for (int k = 0; k < 3; ++k) m.V(v, k) += jitter(g);
+  ASSERT_GT(squeeze::meshing::tet_volumes(m).minCoeff(), 0.0);
+  for (Eigen::Index t = 0; t < m.T.rows(); t += 3) std::swap(m.T(t, 0), m.T(t, 1));
+  const squeeze::meshing::TetLocator locator(m);
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector4d b = locator.barycentric(static_cast<int>(t), m.V.row(m.T(t, k)));
+      EXPECT_NEAR((b - Eigen::Vector4d::Unit(k)).cwiseAbs().maxCoeff(), 0.0, 1e-12) << "tet " << t << " corner " << k;
+    }
+  int inside = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Eigen::RowVector3d p(u(g), u(g), u(g));
+    Eigen::Vector4d b;
+    const int t = locator.locate(p, &b);
+    const bool in_box = p.minCoeff() >= 0 && p.maxCoeff() <= 3;
+    ASSERT_EQ(t >= 0, in_box) << p;
+    if (t < 0) continue;
+    ++inside;
+    EXPECT_GE(b.minCoeff(), -1e-10);
+    EXPECT_NEAR(b.sum(), 1.0, 1e-12);
+    Eigen::RowVector3d back = Eigen::RowVector3d::Zero();
+    for (int k = 0; k < 4; ++k) back += b(k) * m.V.row(m.T(t, k));
+    EXPECT_NEAR((back - p).norm(), 0.0, 1e-12) << p;
+    EXPECT_EQ(b, locator.barycentric(t, p));
+  }
+  EXPECT_GT(inside, 10000);
+}
+
 TEST(MeshingTetGeometry, OrientPositivelyFlipsOnlyInvertedTetrahedra) {
   TetMesh m = kuhn_box(2);
   const Eigen::MatrixX4i T = m.T;

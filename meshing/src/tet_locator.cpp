@@ -1,6 +1,6 @@
 #include "squeeze/meshing/tet_locator.h"
 
-#include <Eigen/LU>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
@@ -89,12 +89,16 @@ Eigen::Vector4d TetLocator::barycentric(int t, const Eigen::RowVector3d& p) cons
   const auto& V = mesh_.V;
   const auto& T = mesh_.T;
   const Vec3 a = V.row(T(t, 0)).transpose();
-  Eigen::Matrix3d M;
-  M.col(0) = V.row(T(t, 1)).transpose() - a;
-  M.col(1) = V.row(T(t, 2)).transpose() - a;
-  M.col(2) = V.row(T(t, 3)).transpose() - a;
-  const Vec3 x = M.partialPivLu().solve(p.transpose() - a);
-  return Eigen::Vector4d(1.0 - x.sum(), x(0), x(1), x(2));
+  const Vec3 e1 = V.row(T(t, 1)).transpose() - a, e2 = V.row(T(t, 2)).transpose() - a,
+             e3 = V.row(T(t, 3)).transpose() - a, r = p.transpose() - a;
+  // Cramer's rule by triple products (the sub-tetrahedra's signed volumes over the
+  // tetrahedron's): the coverage measures locate millions of points, and the LU solve this
+  // replaced was 13 % of perf's samples meshing a CAD part (fifty-second session; the same meshes,
+  // bench_mesh's BM_TetLocator 0.67×).
+  const Vec3 n23 = e2.cross(e3);
+  const double det = e1.dot(n23);
+  const double x0 = r.dot(n23) / det, x1 = e1.dot(r.cross(e3)) / det, x2 = e1.dot(e2.cross(r)) / det;
+  return Eigen::Vector4d(1.0 - (x0 + x1 + x2), x0, x1, x2);
 }
 
 int TetLocator::locate(const Eigen::RowVector3d& p, Eigen::Vector4d* bary) const {

@@ -27,7 +27,8 @@ class TetLocator {
   ///   p         query point (units)
   ///   distance  optional; receives the distance from p to that tetrahedron (units)
   int nearest(const Eigen::RowVector3d& p, double* distance = nullptr) const;
-  /// Barycentric coordinates of p in tetrahedron t (negative ones outside it), 4 summing to 1.
+  /// Barycentric coordinates of p in tetrahedron t (negative ones outside it), 4 summing to 1, by
+  /// Cramer's rule (triple products); not finite for a tetrahedron of no volume.
   Eigen::Vector4d barycentric(int t, const Eigen::RowVector3d& p) const;
 
  private:
