@@ -157,11 +157,11 @@ struct RunResult {
 class Mesher {
  public:
   // work_budget: conflict-zone cells refinement may search (0: no bound; TetrahedralizeOptions::max_refine_work).
-  // input_faces: the faces of the boundary as given, before its long edges were split (0: s's).
+  // input_faces: the faces of the boundary as given, before its long edges were split.
   Mesher(const SurfaceMesh& s, const FastWindingNumber& wn, const TetrahedralizeOptions& opt, double edge_length,
-         double work_budget = 0, int input_faces = 0)
-      : opt_(opt), L_(edge_length), work_budget_(work_budget), wn_(wn), tr_(c3t3_.triangulation()) {
-    input_faces_ = input_faces > 0 ? input_faces : static_cast<int>(s.F.rows());
+         double work_budget, int input_faces)
+      : opt_(opt), L_(edge_length), work_budget_(work_budget), input_faces_(input_faces), wn_(wn),
+        tr_(c3t3_.triangulation()) {
     build_surface(s);
     start_points_ = P_.size();
   }
@@ -186,8 +186,8 @@ class Mesher {
     conformity_cap_ = static_cast<int>(P_.size()) * 4 + 200;
     // (The split budget for this first recovery only: the recoveries after refinement rounds have
     // the point cap alone.)
-    r.conforming = make_conforming(std::max(0.0, opt_.recovery_splits_per_face) * static_cast<double>(input_faces_));
-    r.abandoned = abandoned_;
+    r.conforming =
+        make_conforming(std::max(0.0, opt_.recovery_splits_per_face) * static_cast<double>(input_faces_), &r.abandoned);
     r.recovered = r.conforming;
     classify(r.conforming);
     const double t_recover = since(t_start);
@@ -212,7 +212,7 @@ class Mesher {
     // would refine a triangulation classified by the winding number, adding points without end
     // (a 4 mm hemispherical shell at 150: 2,000 → 6,000 points in six rounds, 8 s, 18,000
     // tetrahedra, still not conforming).
-    for (int round = 0; round < (r.conforming ? 200 : abandoned_ ? 0 : 8); ++round) {
+    for (int round = 0; round < (r.conforming ? 200 : r.abandoned ? 0 : 8); ++round) {
       if (progress) progress->update(round, "refinement round " + std::to_string(round + 1));
       if (static_cast<int>(P_.size()) > max_vertices_) break;
       const int points_before = static_cast<int>(P_.size());
@@ -364,6 +364,7 @@ class Mesher {
   const TetrahedralizeOptions& opt_;
   const double L_;  // interior edge length (INFINITY: quality refinement only)
   const double work_budget_;  // conflict-zone cells refinement may search (0: no bound)
+  const int input_faces_;     // the boundary's faces as given (before its long edges are split)
   const FastWindingNumber& wn_;  // of the surface (the fallback classification)
   int conformity_cap_ = 0;       // make_conforming gives up beyond this many points (raised by the
                                  // points each refinement round adds)
@@ -386,8 +387,6 @@ class Mesher {
   std::unordered_map<uint64_t, std::array<int, 2>> edge_tris_;
   std::unordered_map<Key3, int, Key3Hash> face_;
   int splits_ = 0, steiner_ = 0, size_driven_ = 0;
-  int input_faces_ = 0;          // the boundary's faces as given (before long edges are split)
-  bool abandoned_ = false;       // the first recovery gave up at its split budget: no refinement
   int flat_flips_ = 0;  // surface diagonals flipped to put flat cells outside (flip_flat_surface_cells)
   long conflict_cells_ = 0;  // cells of the conflict zones refinement searched (its work)
   size_t start_points_ = 0;        // P_'s points before run() (same_start)
@@ -853,9 +852,9 @@ class Mesher {
   // (and 200 at least, as the cap allows small surfaces; between the sheets of a 4 mm shell it
   // hovers at 100–240 edges a round, 60 points each, where a coil spring's wire goes 618, 475,
   // 356, ..., 8, 2 and holds, and a 2 mm fin 7, 7, 6, 4, 1). split_budget: where positive, it also
-  // gives up (abandoned_) once its own splits would pass this in a round that does not converge
+  // gives up (*abandoned set) once its own splits would pass this in a round that does not converge
   // (TetrahedralizeOptions::recovery_splits_per_face).
-  bool make_conforming(double split_budget = 0) {
+  bool make_conforming(double split_budget = 0, bool* abandoned = nullptr) {
     std::vector<uint64_t> flipped;  // each new diagonal once: no flipping back and forth
     size_t fewest = SIZE_MAX, points_then = 0;
     int stalled = 0;
@@ -941,7 +940,7 @@ class Mesher {
         spdlog::debug("conformity round {}: gave up at the split budget ({} splits + {} > {:.0f}, {} faces given; "
                       "the fewest a round {}): not refined",
                       round, splits_ - splits_before, split.size(), split_budget, input_faces_, fewest);
-        abandoned_ = true;
+        if (abandoned) *abandoned = true;
         return false;
       }
       if (static_cast<int>(P_.size()) + static_cast<int>(split.size()) > conformity_cap_) {
