@@ -709,6 +709,40 @@ class WindingSolid {
   double diag_ = 0, dil_ = 0, fd_ = 0, depth_ = 0;
 };
 
+// The input's points that the complex leaves outside by more than `tolerance` (sharp corners and
+// edges its facets cut off, a crest they cut across): their surface points
+// (WindingSolid::cover_seeds) as more seeds, and the refinement resumed; twice at most, the second
+// time with seeds half as far apart. Returns the seeds added; `passes` (optional) gets the resumed
+// refinements. surface_only: winding_number_surface's facets-only refinement, else
+// tetrahedralize_winding_number's cells too.
+int cover_outside(C3t3& c3t3, const Domain& domain, const WindingSolid& solid, double size, double tolerance,
+                  const WindingTetrahedralizeOptions& opt, bool surface_only, std::chrono::steady_clock::time_point t0,
+                  int* passes) {
+  const Tr& tr = c3t3.triangulation();
+  const double fd = solid.facet_distance();
+  int added = 0, resumed = 0;
+  for (int pass = 0; pass < 2 && tolerance > 0; ++pass) {
+    const TetMesh inside = to_tet_mesh(c3t3);
+    if (inside.T.rows() == 0) break;
+    const TriangleBvh boundary(inside.V, boundary_faces(inside.T));
+    Tr::Cell_handle hint;
+    auto covered = [&](const Eigen::Vector3d& x) {
+      hint = tr.locate(Tr::Point(Point(x(0), x(1), x(2))), hint);
+      return c3t3.is_in_complex(hint) || boundary.nearest(x, nullptr, nullptr, tolerance) <= tolerance;
+    };
+    const std::vector<Eigen::Vector3d> more = solid.cover_seeds(covered, fd, (pass == 0 ? 4.0 : 2.0) * fd, opt.cover_skip);
+    spdlog::debug("Mesh_3 (winding number{}): {} more seeds where the input lies outside by more than {:.3g} ({:.2f} s)",
+                  surface_only ? ", surface" : "", more.size(), tolerance,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    if (more.empty()) break;
+    added += static_cast<int>(more.size());
+    ++resumed;
+    refine_from_seeds(c3t3, domain, more, size, fd, opt.seed, opt.max_tets, surface_only);
+  }
+  if (passes) *passes = resumed;
+  return added;
+}
+
 }  // namespace
 
 TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double volume,
@@ -728,6 +762,9 @@ TetMesh tetrahedralize_winding_number(const Eigen::MatrixX3d& V, const Eigen::Ma
     C3t3 c3t3;
     const auto t0 = std::chrono::steady_clock::now();
     refine_from_seeds(c3t3, domain, seeds, size, fd, opt.seed, opt.max_tets);
+    // (As winding_number_surface's: corners and crests the facets cut off, seeded and refined again.)
+    if (opt.cover_solid)
+      st.seeds += cover_outside(c3t3, domain, solid, size, opt.cover_tolerance * diag, opt, false, t0, nullptr);
     const auto t1 = std::chrono::steady_clock::now();
     // No sliver perturbation: it moved boundary vertices enough to raise deviation_in from 0.41 to
     // 0.91 % of the diagonal on the heart, and took seconds; the exuder, then
@@ -831,25 +868,9 @@ SurfaceMesh winding_number_surface(const Eigen::MatrixX3d& V, const Eigen::Matri
   }
   // The input's points left outside the surface (sharp corners and edges cut off): their surface
   // points as more seeds, and the refinement resumed; twice at most.
-  const Tr& tr = c3t3.triangulation();
-  const double tolerance = opt.cover_tolerance * solid.diag();
-  for (int pass = 0; pass < 2 && tolerance > 0; ++pass) {
-    const TetMesh inside = to_tet_mesh(c3t3);
-    if (inside.T.rows() == 0) break;
-    const TriangleBvh boundary(inside.V, boundary_faces(inside.T));
-    Tr::Cell_handle hint;
-    auto covered = [&](const Eigen::Vector3d& x) {
-      hint = tr.locate(Tr::Point(Point(x(0), x(1), x(2))), hint);
-      return c3t3.is_in_complex(hint) || boundary.nearest(x, nullptr, nullptr, tolerance) <= tolerance;
-    };
-    const std::vector<Eigen::Vector3d> more = solid.cover_seeds(covered, fd, (pass == 0 ? 4.0 : 2.0) * fd, opt.cover_skip);
-    spdlog::debug("Mesh_3 (winding number, surface): {} more seeds where the input lies outside by more than {:.3g} "
-                  "({:.2f} s)", more.size(), tolerance, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    if (more.empty()) break;
-    st.seeds += static_cast<int>(more.size());
-    ++st.attempts;
-    refine_from_seeds(c3t3, domain, more, size, fd, opt.seed, opt.max_tets, true);
-  }
+  int passes = 0;
+  st.seeds += cover_outside(c3t3, domain, solid, size, opt.cover_tolerance * solid.diag(), opt, true, t0, &passes);
+  st.attempts += passes;
   const TetMesh cells = to_tet_mesh(c3t3);
   SurfaceMesh out;
   if (cells.T.rows() > 0) {

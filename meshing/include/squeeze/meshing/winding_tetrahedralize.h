@@ -31,6 +31,9 @@ struct WindingTetrahedralizeOptions {
   double cover_tolerance = 0.003; // fraction of the diagonal: winding_number_surface seeds the
                                  // input's points left outside its surface by more than this (sharp
                                  // corners and edges the facets cut off) and refines again (0: not)
+  bool cover_solid = true;       // tetrahedralize_winding_number does the same (meshing version 56:
+                                 // a CAD part's solid at 150 lay 0.84 % of the diagonal in where its
+                                 // facets cut off corners; false: as before, bench_mesh's A/B)
   bool seed_finer_if_no_facet = true;  // winding_number_surface: where the vertices' seeds, 8
                                  // facet distances apart, give Mesh_3 no facet (a long, thin scan),
                                  // seeds at the vertices a facet distance apart are tried (meshing
