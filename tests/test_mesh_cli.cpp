@@ -383,6 +383,36 @@ TEST(MeshCliOutputs, EveryTetFormatAndShellsAndReport) {
   EXPECT_TRUE(temporaries_in(dir.path()).empty());
 }
 
+// The summary line's volume ratio is the report's volume_ratio where the input is closed (the
+// sphere: 1.000). Where it is not, the report's is null and the line names the ratio it prints,
+// to the input's winding-number volume, or prints none: trimesh's open bunny, whose hollowed
+// mesh is a shell, read "volume ratio 0.170" as if it had lost most of its volume.
+TEST(MeshCliOutputs, SummaryVolumeRatioIsTheReportsOrNamedAsTheWindingNumbers) {
+  TempDir dir("summary");
+  auto ratio_in = [](const std::string& err) {
+    const std::string key = "volume ratio ";
+    const auto at = err.find(key);
+    return at == std::string::npos ? std::string() : err.substr(at + key.size(), err.find(',', at) - at - key.size());
+  };
+  const RunResult closed = run_squeeze({"mesh", data("sphere.off").string(), "-o", "s.mesh", "--report", "s.json"}, dir.path());
+  ASSERT_EQ(closed.code, 0) << closed.err;
+  const nlohmann::json rs = nlohmann::json::parse(read_text(dir / "s.json"));
+  ASSERT_TRUE(rs["volume_ratio"].is_number()) << rs.dump();
+  char want[32];
+  std::snprintf(want, sizeof want, "%.3f", rs["volume_ratio"].get<double>());
+  EXPECT_EQ(ratio_in(closed.err), want) << closed.err;
+  EXPECT_EQ(closed.err.find("winding-number volume ratio"), std::string::npos) << closed.err;
+
+  const RunResult open = run_squeeze({"mesh", data("ChineseDragon-10kv.off").string(), "-o", "d.mesh", "--target-tets",
+                                      "150", "--report", "d.json"},
+                                     dir.path(), 300);
+  ASSERT_EQ(open.code, 0) << open.err;
+  const nlohmann::json rd = nlohmann::json::parse(read_text(dir / "d.json"));
+  EXPECT_TRUE(rd["volume_ratio"].is_null()) << rd.dump();
+  const bool named = open.err.find("winding-number volume ratio ") != std::string::npos;
+  EXPECT_TRUE(named || ratio_in(open.err) == "n/a") << open.err;
+}
+
 TEST(MeshCliOutputs, TargetTetsRaisesTheCount) {
   TempDir dir("target");
   const RunResult a = run_squeeze({"-q", "mesh", data("sphere.off").string(), "-o", "a.mesh", "--target-tets", "300"},
