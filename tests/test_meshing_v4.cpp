@@ -2713,6 +2713,20 @@ TEST(Envelope, FirstTryInnerDeviationOutOfRangeIsRefused) {
   }
 }
 
+// MeshOptions::solid_min_scale (meshing version 56) out of (0, 1] is refused with InputError before
+// any meshing.
+TEST(Envelope, SolidMinScaleOutOfRangeIsRefused) {
+  const SurfaceMesh cube = box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  for (const double scale : {0.0, -0.2, 1.5, std::nan("")}) {
+    MeshOptions o;
+    o.solid_min_scale = scale;
+    EXPECT_THROW(squeeze::meshing::mesh_surface(cube, o), squeeze::InputError) << scale;
+  }
+  MeshOptions o;
+  o.solid_min_scale = 1.0;  // (no scaling down: allowed)
+  EXPECT_GT(squeeze::meshing::mesh_surface(cube, o).tets.T.rows(), 0);
+}
+
 // deviation_exceeded_because names each bound a result misses by over 1.5 times (deviation_in
 // since meshing version 37: the heart with holes was 1.23 % of the diagonal in, unexplained), and
 // is empty within them.

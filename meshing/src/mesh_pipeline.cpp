@@ -599,6 +599,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   if (!(opt.inner_deviation > 0 && opt.inner_deviation <= 1)) throw InputError("inner_deviation must be in (0, 1]");
   if (!(opt.first_try_inner_deviation > 0 && opt.first_try_inner_deviation <= 1))
     throw InputError("MeshOptions::first_try_inner_deviation must be in (0, 1]");
+  if (!(opt.solid_min_scale > 0 && opt.solid_min_scale <= 1)) throw InputError("MeshOptions::solid_min_scale must be in (0, 1]");
   if (!(opt.remesh_volume_loss >= 0 && opt.remesh_volume_loss < 1)) throw InputError("remesh_volume_loss must be in [0, 1)");
   if (!(opt.wrap_alpha > 0 && opt.wrap_alpha * opt.max_deviation < 1))
     throw InputError("--wrap-alpha must be positive and, times --max-deviation, below 1");
@@ -1611,7 +1612,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             if (p.offset == 0 && !p.target && !abandoned && growth <= 0.5) {
               const double part_diag = bounding_box_diagonal(p.surface.V);
               const double allowed = allowed_solid_growth(target);
-              const double shrink = target >= 1000 && growth > allowed ? std::max(0.4, allowed / growth) : 1.0;
+              const double shrink = target >= 1000 && growth > allowed ? std::max(opt.solid_min_scale, allowed / growth) : 1.0;
               double scale = shrink;  // (the dilation's and the facet distance's factor)
               // (facet: a further factor on the facet distance.)
               auto make = [&](double facet, TetrahedralizeStats* st, double* ratio) {
@@ -1643,11 +1644,12 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
               // about 3 mm thick, at 150: its dilation alone made it 1.412 times its volume, and
               // the part kept a boundary that was not conforming, 1.36 % of the diagonal in): made
               // again once with the dilation and facet distance scaled toward the growth allowed
-              // (0.15 below 1,000 tetrahedra, 0.08 from there), to no less than 0.4 of them; kept
-              // where it holds and the first did not, or nearer the volume (meshing version 54).
-              if (ratio > (target >= 1000 ? 1.1 : 1.2) && scale > 0.4) {
+              // (0.15 below 1,000 tetrahedra, 0.08 from there), to no less than solid_min_scale of
+              // them (0.4 before version 57); kept where it holds and the first did not, or nearer
+              // the volume (meshing version 54).
+              if (ratio > (target >= 1000 ? 1.1 : 1.2) && scale > opt.solid_min_scale) {
                 const double first_scale = scale;
-                scale = std::max(0.4, scale * allowed / (ratio - 1.0));
+                scale = std::max(opt.solid_min_scale, scale * allowed / (ratio - 1.0));
                 TetrahedralizeStats st2;
                 double ratio2 = 0;
                 TetMesh m2 = make(1.0, &st2, &ratio2);
@@ -2186,7 +2188,7 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
     // At 1,000 tetrahedra and more, where the volume bound on closed inputs is
     // [0.95, 1.1]: a solid the dilation grew by more than 8 % (the liver: 12.6 %, so 1.116 after
     // simplification) is made again with the dilation and the facet distance scaled down in
-    // proportion, to no less than 0.4 of them (as a part's own winding-number solid is, above).
+    // proportion, to no less than 0.4 of them a round (a part's own solid: MeshOptions::solid_min_scale).
     // Below 1,000 tetrahedra (bound [0.9, 1.2]), one grown by more than 15 % (meshing version 30:
     // a mug whose handle, a tube twisted so that it intersects itself, grew 25 %: 1.248). Again,
     // up to three rounds in all, while still over halfway from there to the bound (9 %, 17.5 %;
