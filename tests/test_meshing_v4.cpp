@@ -2702,29 +2702,24 @@ TEST(Envelope, LabelMemoSizeOutOfRangeIsRefusedAndChangesNothing) {
   EXPECT_EQ(b.V, a.V);
 }
 
-// MeshOptions::first_try_inner_deviation (meshing versions 37-38) out of (0, 1] is refused with
-// InputError before any meshing.
-TEST(Envelope, FirstTryInnerDeviationOutOfRangeIsRefused) {
+// Options that are fractions in (0, 1] are refused with InputError out of it, before any meshing:
+// MeshOptions::first_try_inner_deviation (meshing versions 37-38) and solid_min_scale (version
+// 57). At 1 each is allowed.
+TEST(Envelope, UnitIntervalOptionsOutOfRangeAreRefused) {
   const SurfaceMesh cube = box(Vec3(0, 0, 0), Vec3(1, 1, 1));
-  for (const double share : {0.0, -0.5, 1.5, std::nan("")}) {
+  const std::pair<const char*, double MeshOptions::*> options[] = {
+      {"first_try_inner_deviation", &MeshOptions::first_try_inner_deviation},
+      {"solid_min_scale", &MeshOptions::solid_min_scale}};
+  for (const auto& [name, field] : options) {
+    for (const double value : {0.0, -0.5, 1.5, std::nan("")}) {
+      MeshOptions o;
+      o.*field = value;
+      EXPECT_THROW(squeeze::meshing::mesh_surface(cube, o), squeeze::InputError) << name << " = " << value;
+    }
     MeshOptions o;
-    o.first_try_inner_deviation = share;
-    EXPECT_THROW(squeeze::meshing::mesh_surface(cube, o), squeeze::InputError) << share;
+    o.*field = 1.0;
+    EXPECT_GT(squeeze::meshing::mesh_surface(cube, o).tets.T.rows(), 0) << name;
   }
-}
-
-// MeshOptions::solid_min_scale (meshing version 56) out of (0, 1] is refused with InputError before
-// any meshing.
-TEST(Envelope, SolidMinScaleOutOfRangeIsRefused) {
-  const SurfaceMesh cube = box(Vec3(0, 0, 0), Vec3(1, 1, 1));
-  for (const double scale : {0.0, -0.2, 1.5, std::nan("")}) {
-    MeshOptions o;
-    o.solid_min_scale = scale;
-    EXPECT_THROW(squeeze::meshing::mesh_surface(cube, o), squeeze::InputError) << scale;
-  }
-  MeshOptions o;
-  o.solid_min_scale = 1.0;  // (no scaling down: allowed)
-  EXPECT_GT(squeeze::meshing::mesh_surface(cube, o).tets.T.rows(), 0);
 }
 
 // deviation_exceeded_because names each bound a result misses by over 1.5 times (deviation_in
