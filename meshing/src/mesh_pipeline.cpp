@@ -599,7 +599,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
   if (!(opt.inner_deviation > 0 && opt.inner_deviation <= 1)) throw InputError("inner_deviation must be in (0, 1]");
   if (!(opt.first_try_inner_deviation > 0 && opt.first_try_inner_deviation <= 1))
     throw InputError("MeshOptions::first_try_inner_deviation must be in (0, 1]");
-  if (!(opt.solid_min_scale > 0 && opt.solid_min_scale <= 1)) throw InputError("MeshOptions::solid_min_scale must be in (0, 1]");
+  if (!(opt.solid_min_scale > 0 && opt.solid_min_scale <= 1))
+    throw InputError("MeshOptions::solid_min_scale must be in (0, 1]");
   if (!(opt.remesh_volume_loss >= 0 && opt.remesh_volume_loss < 1)) throw InputError("remesh_volume_loss must be in [0, 1)");
   if (!(opt.wrap_alpha > 0 && opt.wrap_alpha * opt.max_deviation < 1))
     throw InputError("--wrap-alpha must be positive and, times --max-deviation, below 1");
@@ -1612,7 +1613,8 @@ MeshResult mesh_surface_once(const SurfaceMesh& surface, const MeshOptions& opt,
             if (p.offset == 0 && !p.target && !abandoned && growth <= 0.5) {
               const double part_diag = bounding_box_diagonal(p.surface.V);
               const double allowed = allowed_solid_growth(target);
-              const double shrink = target >= 1000 && growth > allowed ? std::max(opt.solid_min_scale, allowed / growth) : 1.0;
+              const double shrink =
+                  target >= 1000 && growth > allowed ? std::max(opt.solid_min_scale, allowed / growth) : 1.0;
               double scale = shrink;  // (the dilation's and the facet distance's factor)
               // (facet: a further factor on the facet distance.)
               auto make = [&](double facet, TetrahedralizeStats* st, double* ratio) {
