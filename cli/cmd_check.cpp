@@ -169,9 +169,13 @@ Runner add_check_command(CLI::App& app, const Global& global) {
       s += c.max_volume_change ? "; planner.max_volume_change " + format_g3(100 * *c.max_volume_change) + " %\n" : "\n";
     }
     s += "\n";
-    if (c.warnings.empty()) s += "no warnings\n";
-    else s += std::to_string(c.warnings.size()) + (c.warnings.size() == 1 ? " warning:\n" : " warnings:\n");
-    for (const std::string& wline : c.warnings) s += "  warning: " + wline + "\n";
+    // Building the scene's warnings (logged as it was built: more tetrahedra than asked) first, then
+    // the check's: the count says all of them.
+    std::vector<std::string> warnings = w.warnings;
+    warnings.insert(warnings.end(), c.warnings.begin(), c.warnings.end());
+    if (warnings.empty()) s += "no warnings\n";
+    else s += std::to_string(warnings.size()) + (warnings.size() == 1 ? " warning:\n" : " warnings:\n");
+    for (const std::string& wline : warnings) s += "  warning: " + wline + "\n";
     std::fputs(s.c_str(), stdout);
     std::fflush(stdout);
 
@@ -223,7 +227,7 @@ Runner add_check_command(CLI::App& app, const Global& global) {
       j["settle"] = {{"seconds", c.settle},
                      {"diverged", c.settle_diverged},
                      {"max_volume_change", c.max_volume_change ? json(*c.max_volume_change) : json(nullptr)}};
-      j["warnings"] = c.warnings;
+      j["warnings"] = warnings;
       write_atomically(a.json, [&](const fs::path& p) {
         std::ofstream f(p);
         f << j.dump(2) << '\n';

@@ -355,6 +355,27 @@ TEST(CheckCli, WarnsAboutARobotInsideAnObstacleAndObjectsBelowTheFloor) {
   EXPECT_FALSE(fs::exists(d / "bad.check.json"));
 }
 
+// Building a scene's warnings are check's too: a rigid plate 1 m by 2 cm asked for 20 tetrahedra
+// takes 360 (one layer of prisms), which building it warns about. check printed that warning, then
+// "no warnings" under its table; it now counts and lists it there, and in its JSON.
+TEST(CheckCli, CountsAndListsTheWarningsOfBuildingTheScene) {
+  const sqt::TempDir tmp("check-build-warn");
+  const fs::path& d = tmp.path();
+  std::ofstream(d / "plate.off") << "OFF\n8 12 0\n0 0 0\n0 0 1\n0 0.02 0\n0 0.02 1\n1 0 0\n1 0 1\n1 0.02 0\n1 0.02 1\n"
+                                    "3 0 1 3\n3 0 3 2\n3 4 6 7\n3 4 7 5\n3 0 4 5\n3 0 5 1\n3 2 3 7\n3 2 7 6\n"
+                                    "3 0 2 6\n3 0 6 4\n3 1 5 7\n3 1 7 3\n";
+  std::ofstream(d / "plate.json") << R"({"objects": [{"name": "plate", "mesh": "plate.off", "kind": "rigid", "tets": 20}]})";
+  const sqt::RunResult r = sqt::run_squeeze({"check", (d / "plate.json").string(), "--json", (d / "c.json").string()}, d, 600);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string line = "objects[0].tets: 20 requested, but meshing plate.off gives ";
+  EXPECT_NE(r.err.find("squeeze: warning: " + (d / "plate.json").string() + ": " + line), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("no warnings"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("1 warning:\n  warning: " + line), std::string::npos) << r.out;
+  const nlohmann::json j = read_json(d / "c.json");
+  ASSERT_EQ(j["warnings"].size(), 1u) << j.dump();
+  EXPECT_EQ(j["warnings"][0].get<std::string>().rfind(line, 0), 0u) << j.dump();
+}
+
 // check measures the meshes objects collide with: two overlapping spheres moving on their convex
 // shells with their tight meshes embedded have the coarse overlaps, rest overlaps and gaps of the
 // same spheres moving on the tight meshes themselves (the shells are larger and would overlap more).

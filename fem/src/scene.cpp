@@ -699,6 +699,13 @@ std::string simulation_mesh_route(const SceneObject& o) {
 
 SceneWorld build_scene(const Scene& scene, Progress* progress) {
   const std::string file = scene.file.string();
+  // What building the scene finds worth a warning (SceneWorld::warnings): logged at once, as
+  // "FILE: objects[i].KEY: …", and kept without the file's name.
+  std::vector<std::string> warnings;
+  auto warn = [&](const std::string& line) {
+    spdlog::warn("{}: {}", file, line);
+    warnings.push_back(line);
+  };
   WorldOptions wo;
   wo.gravity = scene.gravity;
   wo.floor = scene.floor.has_value();
@@ -727,7 +734,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
       throw InputError(file + ": " + p + ".simulation_mesh: \"convex_shells\" needs a surface to mesh; " +
                        o.mesh.filename().string() + " is a tetrahedral mesh (used as it is)");
     if (o.simulation_mesh == "convex_shells" && o.rigid)
-      spdlog::warn("{}: {}.simulation_mesh: '{}' is rigid (it never deforms): it collides with its mesh as it is", file, p, o.name);
+      warn(p + ".simulation_mesh: '" + o.name + "' is rigid (it never deforms): it collides with its mesh as it is");
     // A deformable object simulated on a cage (simulation_mesh): its convex shells at `tets`, the
     // mesh above (tight to its surface) embedded for contact and volume.
     std::optional<meshing::TetMesh> embedded;  // the mesh above in world coordinates (World::embed)
@@ -756,7 +763,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
       const std::string what = p + ".tets: " + std::to_string(o.tets) + " requested, but meshing " +
                                o.mesh.filename().string() + " gives " + std::to_string(n) + " tetrahedra (" + off_target + ")";
       if (n < 0.65 * o.tets) throw InputError(file + ": " + what + ": ask for at most about " + std::to_string(n));
-      spdlog::warn("{}: {}", file, what);
+      warn(what);
     }
     Material mat;
     mat.density = o.density;
@@ -877,6 +884,7 @@ SceneWorld build_scene(const Scene& scene, Progress* progress) {
   world.set_time_step(h);
   world.prepare();
   SceneWorld sw(scene, std::move(world));
+  sw.warnings = std::move(warnings);
   sw.time_step_choice = choice;
   sw.meshes = std::move(meshes);
   sw.rest_volume = std::move(rest_volume);

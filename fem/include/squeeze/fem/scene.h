@@ -215,6 +215,9 @@ class SceneWorld {
   std::vector<double> rest_volume;    // per object, m³
   TimeStepChoice time_step_choice;    // what chose the time step (h = the scene's time_step if it gives one)
   std::vector<std::vector<int>> pin_counts;  // per object, per objects[].pinned entry: the vertices it holds
+  std::vector<std::string> warnings;  // what building it warned about, one line each ("objects[i].tets: …":
+                                      // more tetrahedra than asked, and why), already logged; `squeeze
+                                      // check` lists them with its own
 
   SceneWorld(Scene s, World w) : scene(std::move(s)), world(std::move(w)) {}
   /// The time step (s): the world's.
