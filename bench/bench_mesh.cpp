@@ -96,6 +96,7 @@
 #include "squeeze/meshing/decimate.h"
 #include "squeeze/meshing/envelope.h"
 #include "squeeze/meshing/mesh_pipeline.h"
+#include "squeeze/meshing/surface.h"
 #include "squeeze/meshing/surface_io.h"
 #include "squeeze/meshing/surface_normals.h"
 #include "squeeze/meshing/tet_cleanup.h"
@@ -412,7 +413,7 @@ void BM_FewDigitRod(benchmark::State& state) {
   o.tetrahedralize.target_tets = 1000;
   o.skinny_split_keeps_first_that_holds = state.range(0) != 0;
   const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
-  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  const double diag = squeeze::meshing::bounding_box_diagonal(m.V);
   state.counters["tets"] = static_cast<double>(r.quality.tets);
   state.counters["boundary_faces"] = static_cast<double>(r.boundary.F.rows());
   state.counters["conforming"] = r.tet_stats.conforming ? 1 : 0;
@@ -431,7 +432,7 @@ void scan_with_holes(benchmark::State& state, bool slab_first) {
   o.tetrahedralize.target_tets = static_cast<int>(state.range(0));
   o.slab_first_for_wide_holes = slab_first;
   const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
-  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  const double diag = squeeze::meshing::bounding_box_diagonal(m.V);
   state.counters["sheets"] = r.sheets;
   state.counters["deviation_out"] = r.deviation_out / diag;
   state.counters["deviation_in"] = r.deviation_in / diag;
@@ -453,7 +454,7 @@ void BM_LiverWithHoles(benchmark::State& state) {
   o.tetrahedralize.target_tets = 300;
   o.hollow_first = state.range(0) != 0;
   const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
-  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  const double diag = squeeze::meshing::bounding_box_diagonal(m.V);
   int surfaces = 0;
   for (const auto& [stage, seconds] : r.seconds) surfaces += stage == "winding-number surface";
   state.counters["tets"] = r.quality.tets;
@@ -485,7 +486,7 @@ void BM_HeartWithHoles(benchmark::State& state) {
     if (stage == "winding-number surface") state.counters["surface_s"] = seconds;
     if (stage == "tetrahedralizing") state.counters["tetrahedralizing_s"] = seconds;
   }
-  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  const double diag = squeeze::meshing::bounding_box_diagonal(m.V);
   state.counters["deviation_out"] = r.deviation_out / diag;
   state.counters["deviation_in"] = r.deviation_in / diag;
 }
@@ -548,7 +549,7 @@ void BM_WindingSolidCoverPass(benchmark::State& state) {
   o.winding = model == nullptr;
   o.winding_mesh.cover_solid = state.range(0) != 0;
   const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
-  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  const double diag = squeeze::meshing::bounding_box_diagonal(m.V);
   state.counters["tets"] = r.quality.tets;
   state.counters["deviation_in"] = r.deviation_in / diag;
   state.counters["deviation_out"] = r.deviation_out / diag;
@@ -565,7 +566,7 @@ void heart_shells(benchmark::State& state, bool perturb) {
   o.shells_fallback = true;
   o.shells.perturb = perturb;
   const squeeze::meshing::MeshResult r = mesh_each_iteration(state, m, o);
-  const double diag = (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  const double diag = squeeze::meshing::bounding_box_diagonal(m.V);
   state.counters["attempts"] = r.shell_stats.attempts;
   state.counters["covered"] = r.shell_stats.covered;
   state.counters["deviation_out"] = r.deviation_out / diag;
